@@ -1,0 +1,54 @@
+//! Acceleration structures. A run builds each distinct (kind, parameters) structure once per frame
+//! and only for the tracers that need it (see `experiment::plan`).
+
+pub mod bvh;
+
+use std::sync::Arc;
+
+use crate::error::Result;
+use crate::scene::Mesh;
+use crate::tracers::Params;
+
+pub use bvh::{Bvh, BvhConfig, BvhNode};
+
+/// Which structure a tracer traverses.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum AccelKind {
+    /// Our binned-SAH binary BVH.
+    Bvh,
+}
+
+impl AccelKind {
+    pub fn name(self) -> &'static str {
+        match self {
+            AccelKind::Bvh => "bvh",
+        }
+    }
+
+    /// The parameters that change how this structure is built.
+    pub fn params(self) -> &'static [&'static str] {
+        match self {
+            AccelKind::Bvh => BvhConfig::PARAMS,
+        }
+    }
+
+    pub fn build(self, mesh: &Mesh, params: &Params) -> Result<Accel> {
+        Ok(match self {
+            AccelKind::Bvh => Accel::Bvh(Arc::new(Bvh::build(&mesh.triangles, BvhConfig::from_params(params)?))),
+        })
+    }
+}
+
+/// A built structure, shared by every tracer that traverses it.
+#[derive(Clone, Debug)]
+pub enum Accel {
+    Bvh(Arc<Bvh>),
+}
+
+impl Accel {
+    pub fn build_seconds(&self) -> f64 {
+        match self {
+            Accel::Bvh(b) => b.build_seconds,
+        }
+    }
+}

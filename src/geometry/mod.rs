@@ -1,0 +1,9 @@
+//! Rays, boxes and triangles: the geometric primitives every tracer shares.
+
+pub mod aabb;
+pub mod ray;
+pub mod triangle;
+
+pub use aabb::{Aabb, RayBoxTest};
+pub use ray::{Hit, Ray, RayBatch, RayKind, Rays};
+pub use triangle::{Triangle, WatertightRay};

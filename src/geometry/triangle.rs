@@ -1,0 +1,211 @@
+//! Triangles and the watertight ray–triangle test of Woop, Benthin and Wald (JCGT 2013,
+//! "Watertight Ray/Triangle Intersection"). Rays that pass through a shared edge or vertex hit
+//! at least one of the triangles meeting there; degenerate triangles never hit and never make NaN.
+
+use glam::Vec3;
+
+use super::Aabb;
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Triangle {
+    pub v: [Vec3; 3],
+}
+
+impl Triangle {
+    pub fn new(a: Vec3, b: Vec3, c: Vec3) -> Self {
+        Triangle { v: [a, b, c] }
+    }
+
+    pub fn bounds(&self) -> Aabb {
+        Aabb::from_points(&self.v)
+    }
+
+    pub fn centroid(&self) -> Vec3 {
+        (self.v[0] + self.v[1] + self.v[2]) / 3.0
+    }
+
+    /// Unnormalised geometric normal (v1 − v0) × (v2 − v0).
+    pub fn normal(&self) -> Vec3 {
+        (self.v[1] - self.v[0]).cross(self.v[2] - self.v[0])
+    }
+
+    pub fn area(&self) -> f32 {
+        0.5 * self.normal().length()
+    }
+
+    pub fn is_finite(&self) -> bool {
+        self.v.iter().all(|p| p.is_finite())
+    }
+
+    /// The point with Embree-convention barycentrics: `(1 − u − v)·v0 + u·v1 + v·v2`.
+    pub fn point(&self, u: f32, v: f32) -> Vec3 {
+        self.v[0] * (1.0 - u - v) + self.v[1] * u + self.v[2] * v
+    }
+}
+
+/// A ray transformed once for many watertight triangle tests (Woop et al. §3, "pre-computation"):
+/// the axis `kz` of largest |dir| becomes z, and a shear maps the direction onto +z.
+#[derive(Clone, Copy, Debug)]
+pub struct WatertightRay {
+    origin: [f32; 3],
+    k: [usize; 3],
+    shear: [f32; 3],
+}
+
+impl WatertightRay {
+    #[inline(always)]
+    pub fn new(origin: Vec3, dir: Vec3) -> Self {
+        let a = dir.abs();
+        let kz = if a.x >= a.y && a.x >= a.z {
+            0
+        } else if a.y >= a.z {
+            1
+        } else {
+            2
+        };
+        let mut kx = (kz + 1) % 3;
+        let mut ky = (kx + 1) % 3;
+        let d = dir.to_array();
+        // Swap to keep the winding of the triangle when dir[kz] is negative.
+        if d[kz] < 0.0 {
+            std::mem::swap(&mut kx, &mut ky);
+        }
+        WatertightRay {
+            origin: origin.to_array(),
+            k: [kx, ky, kz],
+            shear: [d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]],
+        }
+    }
+
+    /// `(t, u, v)` if the ray hits `tri` with `tmin <= t <= tmax`; both faces count.
+    #[inline(always)]
+    pub fn intersect(&self, tri: &Triangle, tmin: f32, tmax: f32) -> Option<(f32, f32, f32)> {
+        let [kx, ky, kz] = self.k;
+        let [sx, sy, sz] = self.shear;
+        let o = self.origin;
+        let rel = |p: Vec3| {
+            let p = p.to_array();
+            [p[0] - o[0], p[1] - o[1], p[2] - o[2]]
+        };
+        let (a, b, c) = (rel(tri.v[0]), rel(tri.v[1]), rel(tri.v[2]));
+        let (ax, ay) = (a[kx] - sx * a[kz], a[ky] - sy * a[kz]);
+        let (bx, by) = (b[kx] - sx * b[kz], b[ky] - sy * b[kz]);
+        let (cx, cy) = (c[kx] - sx * c[kz], c[ky] - sy * c[kz]);
+        let mut u = cx * by - cy * bx;
+        let mut v = ax * cy - ay * cx;
+        let mut w = bx * ay - by * ax;
+        // Exactly zero edge functions are ambiguous in f32: redo them in f64 (Woop et al. §4).
+        if u == 0.0 || v == 0.0 || w == 0.0 {
+            let f = |x: f32| x as f64;
+            u = (f(cx) * f(by) - f(cy) * f(bx)) as f32;
+            v = (f(ax) * f(cy) - f(ay) * f(cx)) as f32;
+            w = (f(bx) * f(ay) - f(by) * f(ax)) as f32;
+        }
+        if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
+            return None;
+        }
+        let det = u + v + w;
+        if det == 0.0 {
+            return None;
+        }
+        let t_scaled = u * sz * a[kz] + v * sz * b[kz] + w * sz * c[kz];
+        // Compare before dividing: t = t_scaled / det lies in [tmin, tmax].
+        let (t_scaled, abs_det) = if det < 0.0 { (-t_scaled, -det) } else { (t_scaled, det) };
+        if t_scaled < tmin * abs_det || t_scaled > tmax * abs_det {
+            return None;
+        }
+        let inv = 1.0 / det;
+        let t = t_scaled / abs_det;
+        if !t.is_finite() {
+            return None;
+        }
+        // Embree convention: u weights v1, v weights v2.
+        Some((t, v * inv, w * inv))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tri() -> Triangle {
+        Triangle::new(Vec3::ZERO, Vec3::X, Vec3::Y)
+    }
+
+    fn shoot(o: Vec3, d: Vec3, t: &Triangle) -> Option<(f32, f32, f32)> {
+        WatertightRay::new(o, d).intersect(t, 0.0, f32::INFINITY)
+    }
+
+    #[test]
+    fn interior_hit_has_distance_and_barycentrics() {
+        let (t, u, v) = shoot(Vec3::new(0.25, 0.5, 1.0), -Vec3::Z, &tri()).unwrap();
+        assert!((t - 1.0).abs() < 1e-6);
+        assert!((u - 0.25).abs() < 1e-6 && (v - 0.5).abs() < 1e-6);
+        assert!(tri().point(u, v).distance(Vec3::new(0.25, 0.5, 0.0)) < 1e-6);
+        // Back face counts too.
+        assert!(shoot(Vec3::new(0.25, 0.25, -1.0), Vec3::Z, &tri()).is_some());
+    }
+
+    #[test]
+    fn edges_and_vertices_are_hit() {
+        for p in [
+            Vec3::new(0.5, 0.0, 0.0), // edge v0-v1
+            Vec3::new(0.0, 0.5, 0.0), // edge v0-v2
+            Vec3::new(0.5, 0.5, 0.0), // hypotenuse
+            Vec3::ZERO,
+            Vec3::X,
+            Vec3::Y,
+        ] {
+            assert!(shoot(p + Vec3::Z, -Vec3::Z, &tri()).is_some(), "point {p:?}");
+        }
+        assert!(shoot(Vec3::new(0.6, 0.6, 1.0), -Vec3::Z, &tri()).is_none());
+    }
+
+    #[test]
+    fn shared_edge_is_hit_by_at_least_one_of_two_triangles() {
+        // Two triangles sharing the diagonal of the unit square; rays along the diagonal.
+        let a = Triangle::new(Vec3::ZERO, Vec3::X, Vec3::new(1.0, 1.0, 0.0));
+        let b = Triangle::new(Vec3::ZERO, Vec3::new(1.0, 1.0, 0.0), Vec3::Y);
+        for i in 1..100 {
+            let s = i as f32 / 100.0;
+            // Aim exactly at a point of the shared diagonal.
+            let d = Vec3::new(0.013, -0.007, -1.0);
+            let o = Vec3::new(s, s, 0.0) - d;
+            assert!(
+                shoot(o, d, &a).is_some() || shoot(o, d, &b).is_some(),
+                "ray {i} fell through the shared edge"
+            );
+        }
+    }
+
+    #[test]
+    fn degenerate_triangles_never_hit_and_never_nan() {
+        let degenerate = [
+            Triangle::new(Vec3::ZERO, Vec3::X, Vec3::X * 2.0), // collinear
+            Triangle::new(Vec3::ZERO, Vec3::ZERO, Vec3::ZERO), // a point
+            Triangle::new(Vec3::ONE, Vec3::ONE, Vec3::Y),      // two equal vertices
+        ];
+        for t in &degenerate {
+            for d in [-Vec3::Z, Vec3::new(0.3, 0.1, -1.0), -Vec3::Y, Vec3::new(-0.0, -1.0, 0.0)] {
+                let o = Vec3::new(0.5, 0.5, 1.0);
+                let r = shoot(o, d, t);
+                assert!(r.is_none(), "degenerate {t:?} hit by {d:?}: {r:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn distance_range_is_respected() {
+        let r = WatertightRay::new(Vec3::new(0.2, 0.2, 1.0), -Vec3::Z);
+        assert!(r.intersect(&tri(), 0.0, 0.5).is_none());
+        assert!(r.intersect(&tri(), 1.5, 9.0).is_none());
+        assert!(r.intersect(&tri(), 1.0, 1.0).is_some());
+    }
+
+    #[test]
+    fn axis_parallel_and_negative_zero_directions() {
+        let t = Triangle::new(Vec3::new(0.0, 0.0, 0.0), Vec3::new(0.0, 1.0, 0.0), Vec3::new(0.0, 0.0, 1.0));
+        assert!(shoot(Vec3::new(1.0, 0.2, 0.2), Vec3::new(-1.0, 0.0, -0.0), &t).is_some());
+        assert!(shoot(Vec3::new(-1.0, 0.2, 0.2), Vec3::new(1.0, -0.0, -0.0), &t).is_some());
+    }
+}

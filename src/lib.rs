@@ -1,0 +1,13 @@
+//! raylab: a research testbed for coherent ray tracing. See README.md for the map.
+//!
+//! Data flows one way: experiment → plan → scene → acceleration structure → ray batches →
+//! tracer → stats → CSV → plots.
+
+pub mod accel;
+pub mod error;
+pub mod geometry;
+pub mod scene;
+pub mod stats;
+pub mod tracers;
+
+pub use error::{Error, Result};

@@ -1,0 +1,5 @@
+//! The `raylab` command line: run, render, verify, scenes.
+
+fn main() {
+    println!("raylab");
+}

@@ -1,0 +1,115 @@
+//! Counters as a type parameter. Kernels are generic over `S: Stats` and guard every count with
+//! `if S::ENABLED`, so `NoStats` compiles every count away and timing runs pay nothing, while
+//! `Counters` records exact AABB tests, triangle tests and nodes visited, per BVH depth.
+
+pub trait Stats: Default + Send {
+    const ENABLED: bool;
+    fn ray(&mut self);
+    fn node(&mut self, depth: usize);
+    fn aabb_test(&mut self, depth: usize);
+    fn triangle_test(&mut self, depth: usize);
+}
+
+/// Counts nothing; every method is empty and inlined away.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct NoStats;
+
+impl Stats for NoStats {
+    const ENABLED: bool = false;
+    #[inline(always)]
+    fn ray(&mut self) {}
+    #[inline(always)]
+    fn node(&mut self, _: usize) {}
+    #[inline(always)]
+    fn aabb_test(&mut self, _: usize) {}
+    #[inline(always)]
+    fn triangle_test(&mut self, _: usize) {}
+}
+
+/// Exact counts for one tracer on one ray kind. Depth-indexed vectors grow on demand; depth is the
+/// BVH depth of the node whose box is tested (the root is depth 0) or of the leaf holding the
+/// triangle.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Counters {
+    pub rays: u64,
+    pub nodes_visited: u64,
+    pub aabb_tests: u64,
+    pub triangle_tests: u64,
+    pub aabb_by_depth: Vec<u64>,
+    pub triangle_by_depth: Vec<u64>,
+}
+
+fn bump(by_depth: &mut Vec<u64>, depth: usize) {
+    if by_depth.len() <= depth {
+        by_depth.resize(depth + 1, 0);
+    }
+    by_depth[depth] += 1;
+}
+
+impl Stats for Counters {
+    const ENABLED: bool = true;
+    #[inline]
+    fn ray(&mut self) {
+        self.rays += 1;
+    }
+    #[inline]
+    fn node(&mut self, _depth: usize) {
+        self.nodes_visited += 1;
+    }
+    #[inline]
+    fn aabb_test(&mut self, depth: usize) {
+        self.aabb_tests += 1;
+        bump(&mut self.aabb_by_depth, depth);
+    }
+    #[inline]
+    fn triangle_test(&mut self, depth: usize) {
+        self.triangle_tests += 1;
+        bump(&mut self.triangle_by_depth, depth);
+    }
+}
+
+impl Counters {
+    pub fn merge(&mut self, other: &Counters) {
+        self.rays += other.rays;
+        self.nodes_visited += other.nodes_visited;
+        self.aabb_tests += other.aabb_tests;
+        self.triangle_tests += other.triangle_tests;
+        for (mine, theirs) in [
+            (&mut self.aabb_by_depth, &other.aabb_by_depth),
+            (&mut self.triangle_by_depth, &other.triangle_by_depth),
+        ] {
+            if mine.len() < theirs.len() {
+                mine.resize(theirs.len(), 0);
+            }
+            for (m, t) in mine.iter_mut().zip(theirs) {
+                *m += t;
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn counters_merge_adds_and_extends_depths() {
+        let mut a = Counters::default();
+        a.ray();
+        a.aabb_test(0);
+        a.triangle_test(2);
+        let mut b = Counters::default();
+        b.ray();
+        b.aabb_test(3);
+        b.node(1);
+        a.merge(&b);
+        assert_eq!((a.rays, a.aabb_tests, a.triangle_tests, a.nodes_visited), (2, 2, 1, 1));
+        assert_eq!(a.aabb_by_depth, vec![1, 0, 0, 1]);
+        assert_eq!(a.triangle_by_depth, vec![0, 0, 1]);
+    }
+
+    #[test]
+    fn no_stats_is_zero_sized() {
+        assert_eq!(std::mem::size_of::<NoStats>(), 0);
+    }
+}

@@ -1,0 +1,52 @@
+//! Every tracer — from-scratch or baseline — behind one trait, so the runner, the verifier and
+//! the benchmarks treat them alike. Adding a tracer is adding a file and one line in `registry.rs`.
+
+pub mod params;
+pub mod reference;
+pub mod registry;
+
+use crate::geometry::{Hit, Rays};
+use crate::stats::{Counters, NoStats, Stats};
+
+pub use params::Params;
+pub use registry::{build_tracer, TracerInfo, TRACERS};
+
+/// What an algorithm implements: closest hit and occlusion over a chunk of rays, generic over the
+/// counters so counting compiles away in timing runs.
+pub trait Kernel: Send + Sync {
+    /// Whether the kernel counts its own box/triangle tests (Embree cannot; it only counts rays).
+    const COUNTS_INTERNALS: bool = true;
+
+    /// `hits[i]` becomes the closest hit of ray `i` in `[tmin, tmax]`, or `Hit::MISS`.
+    fn intersect_with<S: Stats>(&self, rays: Rays<'_>, hits: &mut [Hit], stats: &mut S);
+
+    /// `occluded[i]` becomes whether anything lies on ray `i` within `[tmin, tmax]`.
+    fn occluded_with<S: Stats>(&self, rays: Rays<'_>, occluded: &mut [bool], stats: &mut S);
+}
+
+/// The object-safe face of a `Kernel`: the runner holds `Box<dyn Tracer>`.
+pub trait Tracer: Send + Sync {
+    fn counts_internals(&self) -> bool;
+    fn intersect(&self, rays: Rays<'_>, hits: &mut [Hit]);
+    fn occluded(&self, rays: Rays<'_>, occluded: &mut [bool]);
+    fn intersect_counted(&self, rays: Rays<'_>, hits: &mut [Hit], counters: &mut Counters);
+    fn occluded_counted(&self, rays: Rays<'_>, occluded: &mut [bool], counters: &mut Counters);
+}
+
+impl<K: Kernel> Tracer for K {
+    fn counts_internals(&self) -> bool {
+        K::COUNTS_INTERNALS
+    }
+    fn intersect(&self, rays: Rays<'_>, hits: &mut [Hit]) {
+        self.intersect_with(rays, hits, &mut NoStats)
+    }
+    fn occluded(&self, rays: Rays<'_>, occluded: &mut [bool]) {
+        self.occluded_with(rays, occluded, &mut NoStats)
+    }
+    fn intersect_counted(&self, rays: Rays<'_>, hits: &mut [Hit], counters: &mut Counters) {
+        self.intersect_with(rays, hits, counters)
+    }
+    fn occluded_counted(&self, rays: Rays<'_>, occluded: &mut [bool], counters: &mut Counters) {
+        self.occluded_with(rays, occluded, counters)
+    }
+}
