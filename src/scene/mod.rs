@@ -2,6 +2,7 @@
 //! built-in generators, and name lookup through `scenes/` and `$RAYLAB_SCENES`.
 
 pub mod camera;
+pub mod loaders;
 pub mod model;
 
 pub use camera::{Camera, CameraKey, CameraPath};
