@@ -5,6 +5,7 @@
 
 pub mod accel;
 pub mod error;
+pub mod experiment;
 pub mod geometry;
 pub mod scene;
 pub mod stats;

@@ -1,0 +1,511 @@
+//! The experiment file: which scenes, which tracers over which parameter grid, which rays, how
+//! many frames, threads and repeats. Parsing checks every name (tracer, ray kind, parameter) and
+//! expands the grid into the exact list of tracer instances, so nothing unknown reaches the run.
+//!
+//! ```toml
+//! name = "quick"
+//! description = "built-in scenes, all ray kinds"
+//! scenes = ["room", { name = "balls", size = 3 }]
+//! tracers = ["reference", { name = "embree16", params = { quality = ["low", "high"] } }]
+//! params = { leaf_size = [2, 4] }      # shared grid: applies to every tracer that reads the key
+//! rays = ["primary", "shadow", "diffuse"]
+//! resolution = { width = 1024, height = 1024 }
+//! frames = 2
+//! threads = [1, 2]
+//! warmup = 1
+//! repeats = 3
+//! seed = 1
+//! output = "results"                   # relative to the working directory
+//! ```
+
+use std::collections::BTreeMap;
+use std::fmt;
+use std::marker::PhantomData;
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+
+use serde::de::{self, MapAccess, Visitor};
+use serde::{Deserialize, Deserializer, Serialize};
+use toml::Spanned;
+
+use crate::accel::AccelKind;
+use crate::error::{Error, Result};
+use crate::geometry::RayKind;
+use crate::tracers::{Params, TracerInfo};
+
+/// A parsed, checked experiment with its tracer grid expanded.
+#[derive(Clone, Debug)]
+pub struct Experiment {
+    /// The file it was read from (for messages and meta.json).
+    pub path: PathBuf,
+    pub name: String,
+    pub description: String,
+    pub scenes: Vec<SceneSpec>,
+    /// Every (tracer, parameter combination) to measure, in file order, grid in key order.
+    pub instances: Vec<TracerInstance>,
+    pub ray_kinds: Vec<RayKind>,
+    pub width: u32,
+    pub height: u32,
+    pub frames: usize,
+    pub threads: Vec<usize>,
+    pub warmup: usize,
+    pub repeats: usize,
+    pub seed: u64,
+    /// Results go to `<output>/<name>/<run-id>/`.
+    pub output: PathBuf,
+}
+
+/// A scene by name, with the size for generated scenes (`None`: the generator's default).
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneSpec {
+    pub name: String,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub size: Option<u32>,
+}
+
+/// One tracer with one combination of parameters: one column of every comparison.
+#[derive(Clone)]
+pub struct TracerInstance {
+    pub info: &'static TracerInfo,
+    /// The tracer's and its structure's parameters (the structure reads its own subset).
+    pub params: Params,
+}
+
+/// The structure a tracer instance traverses: instances with equal keys share one build.
+#[derive(Clone, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct StructureKey {
+    pub kind: AccelKind,
+    pub params: Params,
+}
+
+impl TracerInstance {
+    pub fn structure(&self) -> StructureKey {
+        StructureKey {
+            kind: self.info.accel,
+            params: self.params.subset(self.info.accel.params()),
+        }
+    }
+}
+
+impl fmt::Debug for TracerInstance {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        fmt::Display::fmt(self, f)
+    }
+}
+
+impl fmt::Display for TracerInstance {
+    /// `name` or `name[key=value;...]`: the label in the plan, the plots and the progress bar.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.params.0.is_empty() {
+            f.write_str(self.info.name)
+        } else {
+            write!(f, "{}[{}]", self.info.name, self.params)
+        }
+    }
+}
+
+impl fmt::Display for StructureKey {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.params.0.is_empty() {
+            f.write_str(self.kind.name())
+        } else {
+            write!(f, "{}[{}]", self.kind.name(), self.params)
+        }
+    }
+}
+
+/// The file as written, before names are checked and the grid expanded.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ExperimentFile {
+    name: String,
+    #[serde(default)]
+    description: String,
+    scenes: Spanned<Vec<NameOr<SceneSpec>>>,
+    tracers: Spanned<Vec<Spanned<NameOr<TracerTable>>>>,
+    /// The shared grid.
+    #[serde(default)]
+    params: Option<Spanned<BTreeMap<String, toml::Value>>>,
+    rays: Spanned<Vec<Spanned<String>>>,
+    resolution: Spanned<Resolution>,
+    #[serde(default = "one")]
+    frames: Spanned<usize>,
+    #[serde(default = "one_thread")]
+    threads: Spanned<Vec<usize>>,
+    #[serde(default = "one")]
+    warmup: Spanned<usize>,
+    #[serde(default = "three")]
+    repeats: Spanned<usize>,
+    #[serde(default)]
+    seed: u64,
+    #[serde(default = "default_output")]
+    output: PathBuf,
+}
+
+fn one() -> Spanned<usize> {
+    Spanned::new(0..0, 1)
+}
+fn three() -> Spanned<usize> {
+    Spanned::new(0..0, 3)
+}
+fn one_thread() -> Spanned<Vec<usize>> {
+    Spanned::new(0..0, vec![1])
+}
+fn default_output() -> PathBuf {
+    PathBuf::from("results")
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Resolution {
+    width: u32,
+    height: u32,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct TracerTable {
+    name: String,
+    #[serde(default)]
+    params: Option<Spanned<BTreeMap<String, toml::Value>>>,
+}
+
+impl From<String> for SceneSpec {
+    fn from(name: String) -> Self {
+        SceneSpec { name, size: None }
+    }
+}
+
+impl From<String> for TracerTable {
+    fn from(name: String) -> Self {
+        TracerTable { name, params: None }
+    }
+}
+
+/// A list entry written either as a bare name or as a table with more fields. Hand-written rather
+/// than `#[serde(untagged)]` so a mistake inside the table reports the real error (an unknown
+/// field, a wrong type) instead of "did not match any variant".
+struct NameOr<T>(T);
+
+impl<'de, T: Deserialize<'de> + From<String>> Deserialize<'de> for NameOr<T> {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        struct NameOrVisitor<T>(PhantomData<T>);
+        impl<'de, T: Deserialize<'de> + From<String>> Visitor<'de> for NameOrVisitor<T> {
+            type Value = NameOr<T>;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("a name or a table with a `name` key")
+            }
+            fn visit_str<E: de::Error>(self, name: &str) -> std::result::Result<Self::Value, E> {
+                Ok(NameOr(T::from(name.to_string())))
+            }
+            fn visit_map<M: MapAccess<'de>>(self, map: M) -> std::result::Result<Self::Value, M::Error> {
+                T::deserialize(de::value::MapAccessDeserializer::new(map)).map(NameOr)
+            }
+        }
+        d.deserialize_any(NameOrVisitor(PhantomData))
+    }
+}
+
+/// Where a span starts, as a 1-based line of `text`.
+fn line_of(text: &str, span: &Range<usize>) -> usize {
+    text[..span.start.min(text.len())].matches('\n').count() + 1
+}
+
+/// Everything needed to point at a place in the experiment file.
+struct Source<'a> {
+    path: &'a Path,
+    text: &'a str,
+}
+
+impl Source<'_> {
+    fn input_error(&self, span: &Range<usize>, message: impl Into<String>) -> Error {
+        Error::at_line(self.path, line_of(self.text, span), message)
+    }
+
+    /// A bad name: a usage error (exit code 2) that still says where in which file.
+    fn usage_error(&self, span: &Range<usize>, message: impl fmt::Display) -> Error {
+        Error::usage(format!("{}:{}: {message}", self.path.display(), line_of(self.text, span)))
+    }
+
+    /// A parameter table as name → list of values (a single value is a one-value list).
+    fn param_axes(&self, table: &Spanned<BTreeMap<String, toml::Value>>) -> Result<BTreeMap<String, Vec<String>>> {
+        let span = table.span();
+        let scalar = |key: &str, v: &toml::Value| -> Result<String> {
+            match v {
+                toml::Value::String(s) => Ok(s.clone()),
+                toml::Value::Integer(i) => Ok(i.to_string()),
+                toml::Value::Float(x) => Ok(x.to_string()),
+                toml::Value::Boolean(b) => Ok(b.to_string()),
+                other => Err(self.input_error(
+                    &span,
+                    format!("parameter {key}: expected a number, string or boolean, found {}", other.type_str()),
+                )),
+            }
+        };
+        table
+            .get_ref()
+            .iter()
+            .map(|(key, value)| {
+                let values = match value {
+                    toml::Value::Array(list) if list.is_empty() => {
+                        return Err(self.input_error(&span, format!("parameter {key}: empty list of values")))
+                    }
+                    toml::Value::Array(list) => list.iter().map(|v| scalar(key, v)).collect::<Result<_>>()?,
+                    single => vec![scalar(key, single)?],
+                };
+                Ok((key.clone(), values))
+            })
+            .collect()
+    }
+}
+
+impl Experiment {
+    /// Reads and checks an experiment file.
+    pub fn load(path: &Path) -> Result<Experiment> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        Experiment::parse(path, &text)
+    }
+
+    /// Parses `text` (the contents of `path`): syntax and type errors name the line; unknown
+    /// tracers, ray kinds and parameters are usage errors naming the file and line.
+    pub fn parse(path: &Path, text: &str) -> Result<Experiment> {
+        let src = Source { path, text };
+        let file: ExperimentFile = toml::from_str(text).map_err(|e| {
+            let line = e.span().map_or(1, |s| line_of(text, &s));
+            Error::at_line(path, line, e.message().trim_end())
+        })?;
+
+        let positive = |field: &str, value: &Spanned<usize>| -> Result<usize> {
+            match *value.get_ref() {
+                0 => Err(src.input_error(&value.span(), format!("{field} must be at least 1"))),
+                n => Ok(n),
+            }
+        };
+        let frames = positive("frames", &file.frames)?;
+        let repeats = positive("repeats", &file.repeats)?;
+        let resolution = file.resolution.get_ref();
+        if resolution.width == 0 || resolution.height == 0 {
+            return Err(src.input_error(&file.resolution.span(), "resolution must be at least 1×1"));
+        }
+        let threads = file.threads.get_ref().clone();
+        if threads.is_empty() || threads.contains(&0) {
+            return Err(src.input_error(&file.threads.span(), "threads must be a non-empty list of counts ≥ 1"));
+        }
+        if file.scenes.get_ref().is_empty() {
+            return Err(src.input_error(&file.scenes.span(), "no scenes"));
+        }
+
+        let mut ray_kinds = Vec::new();
+        for name in file.rays.get_ref() {
+            let kind = RayKind::parse(name.get_ref()).ok_or_else(|| {
+                let known: Vec<&str> = RayKind::ALL.iter().map(|k| k.name()).collect();
+                src.usage_error(
+                    &name.span(),
+                    format!("unknown ray kind {:?} (known: {})", name.get_ref(), known.join(", ")),
+                )
+            })?;
+            if !ray_kinds.contains(&kind) {
+                ray_kinds.push(kind);
+            }
+        }
+        if ray_kinds.is_empty() {
+            return Err(src.input_error(&file.rays.span(), "no ray kinds"));
+        }
+
+        let instances = expand_tracers(&src, &file)?;
+        Ok(Experiment {
+            path: path.to_path_buf(),
+            name: file.name,
+            description: file.description,
+            scenes: file.scenes.into_inner().into_iter().map(|s| s.0).collect(),
+            instances,
+            ray_kinds,
+            width: resolution.width,
+            height: resolution.height,
+            frames,
+            threads,
+            warmup: *file.warmup.get_ref(),
+            repeats,
+            seed: file.seed,
+            output: file.output,
+        })
+    }
+}
+
+/// Each tracer × the cartesian product of its parameter lists: its own `params` table plus every
+/// shared-grid key it reads (its own table wins where both give a key).
+fn expand_tracers(src: &Source, file: &ExperimentFile) -> Result<Vec<TracerInstance>> {
+    let shared = match &file.params {
+        Some(table) => src.param_axes(table)?,
+        None => BTreeMap::new(),
+    };
+    let mut used_shared = vec![false; shared.len()];
+    let mut instances: Vec<TracerInstance> = Vec::new();
+    for entry in file.tracers.get_ref() {
+        let table = &entry.get_ref().0;
+        let info = TracerInfo::find(&table.name).map_err(|e| src.usage_error(&entry.span(), e))?;
+        let accepts = info.accepts();
+        let mut axes = match &table.params {
+            Some(params) => src.param_axes(params)?,
+            None => BTreeMap::new(),
+        };
+        if let Some(unknown) = axes.keys().find(|k| !accepts.contains(&k.as_str())) {
+            return Err(src.usage_error(
+                &entry.span(),
+                format!("unknown parameter {unknown:?} for tracer {} (known: {})", info.name, accepts.join(", ")),
+            ));
+        }
+        for (i, (key, values)) in shared.iter().enumerate() {
+            if accepts.contains(&key.as_str()) {
+                used_shared[i] = true;
+                axes.entry(key.clone()).or_insert_with(|| values.clone());
+            }
+        }
+        for params in cartesian(&axes) {
+            let instance = TracerInstance { info, params };
+            if instances.iter().any(|i| i.info.name == info.name && i.params == instance.params) {
+                return Err(src.usage_error(&entry.span(), format!("tracer instance {instance} is listed twice")));
+            }
+            instances.push(instance);
+        }
+    }
+    if instances.is_empty() {
+        return Err(src.input_error(&file.tracers.span(), "no tracers"));
+    }
+    if let Some((key, _)) = shared.keys().zip(&used_shared).find(|(_, used)| !**used) {
+        let span = file.params.as_ref().map(|p| p.span()).unwrap_or(0..0);
+        return Err(src.usage_error(&span, format!("shared parameter {key:?} is read by none of the tracers")));
+    }
+    Ok(instances)
+}
+
+/// All combinations of one value per key, the first key varying slowest.
+fn cartesian(axes: &BTreeMap<String, Vec<String>>) -> Vec<Params> {
+    axes.iter().fold(vec![Params::new()], |partial, (key, values)| {
+        partial
+            .iter()
+            .flat_map(|p| values.iter().map(move |v| p.clone().with(key, v)))
+            .collect()
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(text: &str) -> Result<Experiment> {
+        Experiment::parse(Path::new("exp.toml"), text)
+    }
+
+    const BASE: &str = "name = \"t\"\nscenes = [\"room\"]\nrays = [\"primary\"]\nresolution = { width = 8, height = 4 }\n";
+
+    #[test]
+    fn grid_expands_to_every_combination() {
+        // reference reads the BVH's leaf_size, max_depth and bins. Its own table gives leaf_size
+        // (2 values) and max_depth (1); the shared grid gives bins (2) and a leaf_size that the
+        // own table overrides: 2 × 1 × 2 = 4 instances, then the bare entry takes the shared
+        // leaf_size (3) × bins (2) = 6 more.
+        let text = format!(
+            "{BASE}tracers = [{{ name = \"reference\", params = {{ leaf_size = [1, 2], max_depth = 20 }} }}, \
+             {{ name = \"reference\" }}]\nparams = {{ bins = [8, 16], leaf_size = [4, 6, 8] }}\n"
+        );
+        let exp = parse(&text).unwrap();
+        let labels: Vec<String> = exp.instances.iter().map(|i| i.to_string()).collect();
+        assert_eq!(
+            labels,
+            [
+                "reference[bins=8;leaf_size=1;max_depth=20]",
+                "reference[bins=8;leaf_size=2;max_depth=20]",
+                "reference[bins=16;leaf_size=1;max_depth=20]",
+                "reference[bins=16;leaf_size=2;max_depth=20]",
+                "reference[bins=8;leaf_size=4]",
+                "reference[bins=8;leaf_size=6]",
+                "reference[bins=8;leaf_size=8]",
+                "reference[bins=16;leaf_size=4]",
+                "reference[bins=16;leaf_size=6]",
+                "reference[bins=16;leaf_size=8]",
+            ]
+        );
+        // Instances differing only in tracer-side parameters would share the structure; these
+        // all differ in BVH parameters.
+        assert_eq!(exp.instances[0].structure().params, exp.instances[0].params);
+    }
+
+    #[test]
+    fn defaults_and_explicit_fields() {
+        let exp = parse(&format!("{BASE}tracers = [\"reference\"]\n")).unwrap();
+        assert_eq!((exp.width, exp.height, exp.frames, exp.warmup, exp.repeats, exp.seed), (8, 4, 1, 1, 3, 0));
+        assert_eq!(exp.threads, vec![1]);
+        assert_eq!(exp.output, PathBuf::from("results"));
+        assert_eq!(exp.scenes, vec![SceneSpec { name: "room".into(), size: None }]);
+
+        let text = "name = \"t\"\ntracers = [\"reference\"]\nrays = [\"shadow\", \"primary\", \"shadow\"]\n\
+                    scenes = [\"room\", { name = \"balls\", size = 3 }]\nresolution = { width = 2, height = 2 }\n\
+                    frames = 5\nthreads = [1, 2, 4]\nwarmup = 0\nrepeats = 7\nseed = 42\noutput = \"out\"\n";
+        let exp = parse(text).unwrap();
+        assert_eq!(exp.ray_kinds, vec![RayKind::Shadow, RayKind::Primary]);
+        assert_eq!(exp.scenes[1], SceneSpec { name: "balls".into(), size: Some(3) });
+        assert_eq!((exp.frames, exp.warmup, exp.repeats, exp.seed), (5, 0, 7, 42));
+        assert_eq!(exp.threads, vec![1, 2, 4]);
+        assert_eq!(exp.output, PathBuf::from("out"));
+    }
+
+    fn line_of_error(e: Error) -> (Option<usize>, String) {
+        match e {
+            Error::Input { line, message, .. } => (line, message),
+            other => panic!("expected an input error, got {other:?}"),
+        }
+    }
+
+    #[test]
+    fn invalid_toml_names_the_line() {
+        let (line, _) = line_of_error(parse(&format!("{BASE}tracers = [\"reference\" \"obvhs\"]\nframes = 2\n")).unwrap_err());
+        assert_eq!(line, Some(5));
+        // A wrong type on line 6.
+        let (line, msg) =
+            line_of_error(parse(&format!("{BASE}tracers = [\"reference\"]\nframes = \"two\"\n")).unwrap_err());
+        assert_eq!(line, Some(6), "{msg}");
+        // An unknown key inside a scene table, line 1.
+        let (line, msg) = line_of_error(
+            parse("scenes = [{ name = \"room\", sise = 2 }]\nname = \"t\"\ntracers = [\"reference\"]\nrays = [\"primary\"]\nresolution = { width = 8, height = 4 }\n")
+                .unwrap_err(),
+        );
+        assert_eq!(line, Some(1));
+        assert!(msg.contains("sise"), "{msg}");
+        // A semantic error with its line: zero repeats on line 6.
+        let (line, _) =
+            line_of_error(parse(&format!("{BASE}tracers = [\"reference\"]\nrepeats = 0\n")).unwrap_err());
+        assert_eq!(line, Some(6));
+    }
+
+    fn usage_message(e: Error) -> String {
+        match e {
+            Error::Usage(m) => m,
+            other => panic!("expected a usage error, got {other:?}"),
+        }
+    }
+
+    #[test]
+    fn unknown_names_are_usage_errors_naming_file_and_line() {
+        let msg = usage_message(parse(&format!("{BASE}tracers = [\"reference\", \"nope\"]\n")).unwrap_err());
+        assert!(msg.starts_with("exp.toml:5: unknown tracer \"nope\""), "{msg}");
+
+        let msg = usage_message(
+            parse("name = \"t\"\nscenes = [\"room\"]\nrays = [\"primary\",\n \"glossy\"]\nresolution = { width = 8, height = 4 }\ntracers = [\"reference\"]\n")
+                .unwrap_err(),
+        );
+        assert!(msg.starts_with("exp.toml:4: unknown ray kind \"glossy\""), "{msg}");
+
+        let msg = usage_message(
+            parse(&format!("{BASE}tracers = [{{ name = \"reference\", params = {{ leafsize = 2 }} }}]\n")).unwrap_err(),
+        );
+        assert!(msg.starts_with("exp.toml:5: unknown parameter \"leafsize\" for tracer reference"), "{msg}");
+
+        let msg = usage_message(parse(&format!("{BASE}tracers = [\"reference\"]\nparams = {{ width = [1] }}\n")).unwrap_err());
+        assert!(msg.starts_with("exp.toml:6: shared parameter \"width\" is read by none"), "{msg}");
+
+        let msg = usage_message(parse(&format!("{BASE}tracers = [\"reference\", \"reference\"]\n")).unwrap_err());
+        assert!(msg.contains("listed twice"), "{msg}");
+    }
+}
