@@ -6,6 +6,7 @@
 pub mod accel;
 pub mod error;
 pub mod geometry;
+pub mod render;
 pub mod scene;
 pub mod stats;
 pub mod tracers;

@@ -1,0 +1,1 @@
+//! Images: linear RGB buffers and PNG output.
