@@ -10,5 +10,6 @@ pub mod render;
 pub mod scene;
 pub mod stats;
 pub mod tracers;
+pub mod verify;
 
 pub use error::{Error, Result};
