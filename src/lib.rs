@@ -7,8 +7,10 @@ pub mod accel;
 pub mod error;
 pub mod experiment;
 pub mod geometry;
+pub mod render;
 pub mod scene;
 pub mod stats;
 pub mod tracers;
+pub mod verify;
 
 pub use error::{Error, Result};

@@ -103,7 +103,10 @@ mod tests {
         b.aabb_test(3);
         b.node(1);
         a.merge(&b);
-        assert_eq!((a.rays, a.aabb_tests, a.triangle_tests, a.nodes_visited), (2, 2, 1, 1));
+        assert_eq!(
+            (a.rays, a.aabb_tests, a.triangle_tests, a.nodes_visited),
+            (2, 2, 1, 1)
+        );
         assert_eq!(a.aabb_by_depth, vec![1, 0, 0, 1]);
         assert_eq!(a.triangle_by_depth, vec![0, 0, 1]);
     }

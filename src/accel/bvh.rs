@@ -154,7 +154,9 @@ impl Bvh {
             for (offset, len) in [(0, mid), (mid, count - mid)] {
                 let sub = &order[first + offset..first + offset + len];
                 nodes.push(BvhNode {
-                    bounds: sub.iter().fold(Aabb::EMPTY, |b, &i| b.union(boxes[i as usize])),
+                    bounds: sub
+                        .iter()
+                        .fold(Aabb::EMPTY, |b, &i| b.union(boxes[i as usize])),
                     first: (first + offset) as u32,
                     count: len as u32,
                 });
@@ -294,12 +296,19 @@ mod tests {
                 assert_eq!(bvh.triangles[i as usize], tris[id as usize]);
             }
         }
-        assert!(seen.iter().all(|&c| c == 1), "a triangle is in {:?} leaves", seen.iter().find(|&&c| c != 1));
+        assert!(
+            seen.iter().all(|&c| c == 1),
+            "a triangle is in {:?} leaves",
+            seen.iter().find(|&&c| c != 1)
+        );
         // Boxes contain their children; depths increase by one.
         for (i, node) in bvh.nodes.iter().enumerate() {
             if !node.is_leaf() {
                 for c in [node.first as usize, node.first as usize + 1] {
-                    assert!(node.bounds.contains(&bvh.nodes[c].bounds), "node {i} does not contain child {c}");
+                    assert!(
+                        node.bounds.contains(&bvh.nodes[c].bounds),
+                        "node {i} does not contain child {c}"
+                    );
                     assert_eq!(bvh.depth[c], bvh.depth[i] + 1);
                 }
             }
@@ -312,15 +321,34 @@ mod tests {
         let tris = grid_of_triangles(5000);
         for config in [
             BvhConfig::default(),
-            BvhConfig { max_leaf_size: 1, ..BvhConfig::default() },
-            BvhConfig { max_leaf_size: 16, bins: 4, ..BvhConfig::default() },
-            BvhConfig { max_depth: 6, ..BvhConfig::default() },
+            BvhConfig {
+                max_leaf_size: 1,
+                ..BvhConfig::default()
+            },
+            BvhConfig {
+                max_leaf_size: 16,
+                bins: 4,
+                ..BvhConfig::default()
+            },
+            BvhConfig {
+                max_depth: 6,
+                ..BvhConfig::default()
+            },
         ] {
             let bvh = Bvh::build(&tris, config);
             check_invariants(&tris, &bvh);
             if config.max_depth > 20 {
-                let largest = bvh.nodes.iter().filter(|n| n.is_leaf()).map(|n| n.count).max().unwrap();
-                assert!(largest as usize <= config.max_leaf_size, "{config:?}: leaf of {largest}");
+                let largest = bvh
+                    .nodes
+                    .iter()
+                    .filter(|n| n.is_leaf())
+                    .map(|n| n.count)
+                    .max()
+                    .unwrap();
+                assert!(
+                    largest as usize <= config.max_leaf_size,
+                    "{config:?}: leaf of {largest}"
+                );
             }
         }
     }
@@ -331,7 +359,11 @@ mod tests {
         let tris = vec![t; 100];
         let bvh = Bvh::build(&tris, BvhConfig::default());
         check_invariants(&tris, &bvh);
-        assert!(bvh.nodes.iter().filter(|n| n.is_leaf()).all(|n| n.count <= 4));
+        assert!(bvh
+            .nodes
+            .iter()
+            .filter(|n| n.is_leaf())
+            .all(|n| n.count <= 4));
     }
 
     #[test]

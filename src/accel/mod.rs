@@ -34,7 +34,10 @@ impl AccelKind {
 
     pub fn build(self, mesh: &Mesh, params: &Params) -> Result<Accel> {
         Ok(match self {
-            AccelKind::Bvh => Accel::Bvh(Arc::new(Bvh::build(&mesh.triangles, BvhConfig::from_params(params)?))),
+            AccelKind::Bvh => Accel::Bvh(Arc::new(Bvh::build(
+                &mesh.triangles,
+                BvhConfig::from_params(params)?,
+            ))),
         })
     }
 }

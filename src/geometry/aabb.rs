@@ -86,7 +86,8 @@ impl Aabb {
 
 /// `1 + 2γ(3)`, γ(n) = nε/(1 − nε) with ε = 2⁻²⁴: scaling the far slab distance by it makes the
 /// slab test conservative under f32 rounding (Ize 2013, §3; pbrt-v4 `Bounds3::IntersectP`).
-const FAR_SCALE: f32 = 1.0 + 2.0 * (3.0 * (f32::EPSILON * 0.5) / (1.0 - 3.0 * (f32::EPSILON * 0.5)));
+const FAR_SCALE: f32 =
+    1.0 + 2.0 * (3.0 * (f32::EPSILON * 0.5) / (1.0 - 3.0 * (f32::EPSILON * 0.5)));
 
 /// A ray prepared for many box tests: reciprocal direction and which box corner is near per axis.
 ///
@@ -118,9 +119,21 @@ impl RayBoxTest {
     /// Entry distance of the ray into `b` clipped to `[tmin, tmax]`, or `None` when it misses.
     #[inline(always)]
     pub fn hit(&self, b: &Aabb, tmin: f32, tmax: f32) -> Option<f32> {
-        let (nx, fx) = if self.neg[0] { (b.max.x, b.min.x) } else { (b.min.x, b.max.x) };
-        let (ny, fy) = if self.neg[1] { (b.max.y, b.min.y) } else { (b.min.y, b.max.y) };
-        let (nz, fz) = if self.neg[2] { (b.max.z, b.min.z) } else { (b.min.z, b.max.z) };
+        let (nx, fx) = if self.neg[0] {
+            (b.max.x, b.min.x)
+        } else {
+            (b.min.x, b.max.x)
+        };
+        let (ny, fy) = if self.neg[1] {
+            (b.max.y, b.min.y)
+        } else {
+            (b.min.y, b.max.y)
+        };
+        let (nz, fz) = if self.neg[2] {
+            (b.max.z, b.min.z)
+        } else {
+            (b.min.z, b.max.z)
+        };
         let o = self.origin;
         let i = self.inv_dir;
         let enter = tmin
@@ -157,20 +170,35 @@ mod tests {
 
     #[test]
     fn negative_zero_components_behave_like_zero() {
-        for d in [Vec3::new(0.0, -0.0, 1.0), Vec3::new(-0.0, 0.0, 1.0), Vec3::new(-0.0, -0.0, 1.0)] {
+        for d in [
+            Vec3::new(0.0, -0.0, 1.0),
+            Vec3::new(-0.0, 0.0, 1.0),
+            Vec3::new(-0.0, -0.0, 1.0),
+        ] {
             assert_eq!(hit(Vec3::new(0.5, 0.5, -1.0), d), Some(1.0), "dir {d:?}");
             assert_eq!(hit(Vec3::new(1.5, 0.5, -1.0), d), None, "dir {d:?}");
         }
         // −0.0 in the travel axis: a ray pointing down −x with zero y/z.
-        assert_eq!(hit(Vec3::new(2.0, 0.5, 0.5), Vec3::new(-1.0, -0.0, 0.0)), Some(1.0));
+        assert_eq!(
+            hit(Vec3::new(2.0, 0.5, 0.5), Vec3::new(-1.0, -0.0, 0.0)),
+            Some(1.0)
+        );
     }
 
     #[test]
     fn origin_on_slab_plane_with_zero_component_is_conservative() {
         // The ray runs inside the box's y = 0 face plane: it must not be culled, whatever the sign of zero.
         for d in [Vec3::new(0.0, 0.0, 1.0), Vec3::new(0.0, -0.0, 1.0)] {
-            assert_eq!(hit(Vec3::new(0.5, 0.0, -1.0), d), Some(1.0), "min plane, dir {d:?}");
-            assert_eq!(hit(Vec3::new(0.5, 1.0, -1.0), d), Some(1.0), "max plane, dir {d:?}");
+            assert_eq!(
+                hit(Vec3::new(0.5, 0.0, -1.0), d),
+                Some(1.0),
+                "min plane, dir {d:?}"
+            );
+            assert_eq!(
+                hit(Vec3::new(0.5, 1.0, -1.0), d),
+                Some(1.0),
+                "max plane, dir {d:?}"
+            );
         }
     }
 

@@ -110,7 +110,11 @@ impl WatertightRay {
         }
         let t_scaled = u * sz * a[kz] + v * sz * b[kz] + w * sz * c[kz];
         // Compare before dividing: t = t_scaled / det lies in [tmin, tmax].
-        let (t_scaled, abs_det) = if det < 0.0 { (-t_scaled, -det) } else { (t_scaled, det) };
+        let (t_scaled, abs_det) = if det < 0.0 {
+            (-t_scaled, -det)
+        } else {
+            (t_scaled, det)
+        };
         if t_scaled < tmin * abs_det || t_scaled > tmax * abs_det {
             return None;
         }
@@ -156,7 +160,10 @@ mod tests {
             Vec3::X,
             Vec3::Y,
         ] {
-            assert!(shoot(p + Vec3::Z, -Vec3::Z, &tri()).is_some(), "point {p:?}");
+            assert!(
+                shoot(p + Vec3::Z, -Vec3::Z, &tri()).is_some(),
+                "point {p:?}"
+            );
         }
         assert!(shoot(Vec3::new(0.6, 0.6, 1.0), -Vec3::Z, &tri()).is_none());
     }
@@ -186,7 +193,12 @@ mod tests {
             Triangle::new(Vec3::ONE, Vec3::ONE, Vec3::Y),      // two equal vertices
         ];
         for t in &degenerate {
-            for d in [-Vec3::Z, Vec3::new(0.3, 0.1, -1.0), -Vec3::Y, Vec3::new(-0.0, -1.0, 0.0)] {
+            for d in [
+                -Vec3::Z,
+                Vec3::new(0.3, 0.1, -1.0),
+                -Vec3::Y,
+                Vec3::new(-0.0, -1.0, 0.0),
+            ] {
                 let o = Vec3::new(0.5, 0.5, 1.0);
                 let r = shoot(o, d, t);
                 assert!(r.is_none(), "degenerate {t:?} hit by {d:?}: {r:?}");
@@ -204,7 +216,11 @@ mod tests {
 
     #[test]
     fn axis_parallel_and_negative_zero_directions() {
-        let t = Triangle::new(Vec3::new(0.0, 0.0, 0.0), Vec3::new(0.0, 1.0, 0.0), Vec3::new(0.0, 0.0, 1.0));
+        let t = Triangle::new(
+            Vec3::new(0.0, 0.0, 0.0),
+            Vec3::new(0.0, 1.0, 0.0),
+            Vec3::new(0.0, 0.0, 1.0),
+        );
         assert!(shoot(Vec3::new(1.0, 0.2, 0.2), Vec3::new(-1.0, 0.0, -0.0), &t).is_some());
         assert!(shoot(Vec3::new(-1.0, 0.2, 0.2), Vec3::new(1.0, -0.0, -0.0), &t).is_some());
     }

@@ -81,7 +81,11 @@ impl CameraPath {
             let (a, b) = (&pair[0], &pair[1]);
             if time <= b.time {
                 let span = b.time - a.time;
-                let s = if span > 0.0 { (time - a.time) / span } else { 1.0 };
+                let s = if span > 0.0 {
+                    (time - a.time) / span
+                } else {
+                    1.0
+                };
                 return Some(a.camera.lerp(&b.camera, s));
             }
         }
@@ -101,9 +105,21 @@ mod tests {
             ..a
         };
         let path = CameraPath {
-            keys: vec![CameraKey { time: 0.0, camera: a }, CameraKey { time: 2.0, camera: b }],
+            keys: vec![
+                CameraKey {
+                    time: 0.0,
+                    camera: a,
+                },
+                CameraKey {
+                    time: 2.0,
+                    camera: b,
+                },
+            ],
         };
-        assert_eq!(path.camera_at(1.0).unwrap().position, Vec3::new(5.0, 0.0, 5.0));
+        assert_eq!(
+            path.camera_at(1.0).unwrap().position,
+            Vec3::new(5.0, 0.0, 5.0)
+        );
         assert_eq!(path.camera_at(-1.0).unwrap().position, a.position);
         assert_eq!(path.camera_at(9.0).unwrap().position, b.position);
         assert_eq!(path.duration(), 2.0);

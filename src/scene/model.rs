@@ -114,7 +114,9 @@ impl Mesh {
     }
 
     pub fn bounds(&self) -> Aabb {
-        self.triangles.iter().fold(Aabb::EMPTY, |b, t| b.union(t.bounds()))
+        self.triangles
+            .iter()
+            .fold(Aabb::EMPTY, |b, t| b.union(t.bounds()))
     }
 }
 

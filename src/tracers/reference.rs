@@ -37,7 +37,10 @@ impl ReferenceTracer {
         if S::ENABLED {
             stats.aabb_test(0);
         }
-        if boxes.hit(&bvh.nodes[Bvh::ROOT].bounds, tmin, tmax).is_none() {
+        if boxes
+            .hit(&bvh.nodes[Bvh::ROOT].bounds, tmin, tmax)
+            .is_none()
+        {
             return best;
         }
         // Far children wait here with their entry distance, so a pop can skip boxes that now lie
@@ -56,7 +59,12 @@ impl ReferenceTracer {
                         stats.triangle_test(depth(index));
                     }
                     if let Some((t, u, v)) = tris.intersect(&bvh.triangles[i], tmin, tmax) {
-                        best = Hit { t, prim: bvh.prim_ids[i], u, v };
+                        best = Hit {
+                            t,
+                            prim: bvh.prim_ids[i],
+                            u,
+                            v,
+                        };
                         if ANY {
                             return best;
                         }

@@ -24,13 +24,20 @@ impl TracerInfo {
     pub fn find(name: &str) -> Result<&'static TracerInfo> {
         TRACERS.iter().find(|t| t.name == name).ok_or_else(|| {
             let known: Vec<&str> = TRACERS.iter().map(|t| t.name).collect();
-            Error::usage(format!("unknown tracer {name:?} (known: {})", known.join(", ")))
+            Error::usage(format!(
+                "unknown tracer {name:?} (known: {})",
+                known.join(", ")
+            ))
         })
     }
 
     /// Every parameter this tracer accepts: its own and its structure's.
     pub fn accepts(&self) -> Vec<&'static str> {
-        self.params.iter().chain(self.accel.params()).copied().collect()
+        self.params
+            .iter()
+            .chain(self.accel.params())
+            .copied()
+            .collect()
     }
 }
 
@@ -39,6 +46,8 @@ pub fn build_tracer(info: &TracerInfo, params: &Params, accel: &Accel) -> Result
     params.check_known(info.name, &info.accepts())?;
     match (info.name, accel) {
         ("reference", Accel::Bvh(bvh)) => Ok(Box::new(ReferenceTracer::new(bvh.clone()))),
-        (name, _) => Err(Error::runtime(format!("tracer {name} was given the wrong structure"))),
+        (name, _) => Err(Error::runtime(format!(
+            "tracer {name} was given the wrong structure"
+        ))),
     }
 }

@@ -1,0 +1,7 @@
+//! From scene to rays and back: camera rays, secondary-ray generation, shading, images.
+
+pub mod image;
+pub mod offset;
+pub mod raycast;
+pub mod rays;
+pub mod sampling;

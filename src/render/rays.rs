@@ -1,0 +1,255 @@
+//! The ray batches every tracer is given: camera rays, and the shadow and diffuse rays that leave
+//! their hit points. Generated once per frame and handed unchanged to each tracer.
+
+use glam::Vec3;
+
+use crate::geometry::{Hit, Ray, RayBatch, RayKind};
+use crate::render::offset::offset_ray_origin;
+use crate::render::sampling::{concentric_disk, cosine_hemisphere, uniform};
+use crate::scene::{Camera, Light, Mesh, Scene};
+
+/// Side of the square screen tiles rays are ordered by.
+pub const TILE: u32 = 32;
+
+/// Seed of the lens samples of thin-lens primary rays (primary rays take no seed of their own so
+/// that every run of a scene sees the same camera rays).
+const LENS_SEED: u64 = 0x5EED_1E45;
+
+/// Precomputed pinhole / thin-lens projection of one camera at one resolution.
+pub struct CameraProjection {
+    camera: Camera,
+    right: Vec3,
+    up: Vec3,
+    forward: Vec3,
+    half_width: f32,
+    half_height: f32,
+    width: u32,
+    height: u32,
+}
+
+impl CameraProjection {
+    pub fn new(camera: &Camera, width: u32, height: u32) -> Self {
+        let (right, up, forward) = camera.basis();
+        let half_height = (camera.fov_y_deg.to_radians() * 0.5).tan();
+        CameraProjection {
+            camera: *camera,
+            right,
+            up,
+            forward,
+            half_width: half_height * width as f32 / height as f32,
+            half_height,
+            width,
+            height,
+        }
+    }
+
+    /// The ray through image position `(x, y)` in pixels (pixel centres at +0.5), `lens` a sample
+    /// in [0,1)² used only when the camera has an aperture.
+    pub fn ray(&self, x: f32, y: f32, lens: (f32, f32)) -> Ray {
+        let sx = (2.0 * x / self.width as f32 - 1.0) * self.half_width;
+        let sy = (1.0 - 2.0 * y / self.height as f32) * self.half_height;
+        let dir = (self.forward + self.right * sx + self.up * sy).normalize();
+        let c = &self.camera;
+        if c.aperture <= 0.0 {
+            return Ray::new(c.position, dir, 0.0, f32::INFINITY);
+        }
+        // Thin lens: every ray through the pixel meets the others on the plane in focus.
+        let focus = c.position + dir * (c.focus_distance / dir.dot(self.forward));
+        let (lx, ly) = concentric_disk(lens.0, lens.1);
+        let origin = c.position + (self.right * lx + self.up * ly) * c.aperture;
+        Ray::new(origin, (focus - origin).normalize(), 0.0, f32::INFINITY)
+    }
+
+    /// Camera rays of the pixels of one tile, Morton order inside the tile.
+    pub fn tile_rays(&self, tile_x: u32, tile_y: u32, batch: &mut RayBatch) {
+        for code in 0..TILE * TILE {
+            let (dx, dy) = morton_decode(code);
+            let (x, y) = (tile_x * TILE + dx, tile_y * TILE + dy);
+            if x < self.width && y < self.height {
+                let pixel = y * self.width + x;
+                let lens = (
+                    uniform(LENS_SEED, pixel as u64, 0),
+                    uniform(LENS_SEED, pixel as u64, 1),
+                );
+                batch.push(self.ray(x as f32 + 0.5, y as f32 + 0.5, lens), pixel);
+            }
+        }
+    }
+
+    pub fn tiles(&self) -> (u32, u32) {
+        (self.width.div_ceil(TILE), self.height.div_ceil(TILE))
+    }
+}
+
+/// Splits a Morton code into its (x, y): x takes the even bits, y the odd ones.
+pub fn morton_decode(code: u32) -> (u32, u32) {
+    let compact = |mut v: u32| {
+        v &= 0x5555_5555;
+        v = (v | (v >> 1)) & 0x3333_3333;
+        v = (v | (v >> 2)) & 0x0F0F_0F0F;
+        v = (v | (v >> 4)) & 0x00FF_00FF;
+        (v | (v >> 8)) & 0x0000_FFFF
+    };
+    (compact(code), compact(code >> 1))
+}
+
+/// Camera rays, one per pixel centre, in 32×32 tiles (row-major) with Morton order inside each
+/// tile, so every aligned n×n block (n a power of two ≤ 32) of a full tile is a contiguous range
+/// of the batch — the packets of the packet tracers. `pixel` = y·width + x.
+pub fn primary_rays(camera: &Camera, width: u32, height: u32) -> RayBatch {
+    let projection = CameraProjection::new(camera, width, height);
+    let mut batch = RayBatch::with_capacity(RayKind::Primary, (width * height) as usize);
+    let (tiles_x, tiles_y) = projection.tiles();
+    for ty in 0..tiles_y {
+        for tx in 0..tiles_x {
+            projection.tile_rays(tx, ty, &mut batch);
+        }
+    }
+    batch
+}
+
+/// The surface point of a hit, and the geometric normal turned to face the incoming ray.
+pub fn hit_point(mesh: &Mesh, ray: &Ray, hit: &Hit) -> (Vec3, Vec3) {
+    let tri = &mesh.triangles[hit.prim as usize];
+    let p = tri.point(hit.u, hit.v);
+    let n = tri.normal().normalize_or_zero();
+    (p, if n.dot(ray.dir) > 0.0 { -n } else { n })
+}
+
+/// A shadow ray from `p` (facing normal `n`) towards `target`, or `None` when the target is behind
+/// the surface (the renderer would not cast it: the point is in its own shadow).
+pub fn shadow_ray(p: Vec3, n: Vec3, target: Vec3) -> Option<Ray> {
+    if (target - p).dot(n) <= 0.0 {
+        return None;
+    }
+    let origin = offset_ray_origin(p, n);
+    let to_light = target - origin;
+    let distance = to_light.length();
+    // Stop just short of the light so a light sample lying on geometry does not shadow itself.
+    Some(Ray::new(
+        origin,
+        to_light / distance,
+        0.0,
+        distance * (1.0 - 1e-4),
+    ))
+}
+
+/// One shadow ray per primary hit per light (quad lights: one seeded sample point).
+pub fn shadow_rays(
+    scene: &Scene,
+    mesh: &Mesh,
+    primary: &RayBatch,
+    hits: &[Hit],
+    seed: u64,
+) -> RayBatch {
+    let mut batch = RayBatch::new(RayKind::Shadow);
+    for (i, hit) in hits.iter().enumerate().filter(|(_, h)| h.is_hit()) {
+        let (p, n) = hit_point(mesh, &primary.ray(i), hit);
+        for (l, light) in scene.lights.iter().enumerate() {
+            let sample = i as u64 * scene.lights.len() as u64 + l as u64;
+            let target = match light {
+                Light::Point { .. } => light.sample_point(0.0, 0.0),
+                Light::Quad { .. } => {
+                    light.sample_point(uniform(seed, sample, 0), uniform(seed, sample, 1))
+                }
+            };
+            if let Some(ray) = shadow_ray(p, n, target) {
+                batch.push(ray, primary.pixel[i]);
+            }
+        }
+    }
+    batch
+}
+
+/// One cosine-weighted diffuse bounce per primary hit, seeded per ray.
+pub fn diffuse_rays(mesh: &Mesh, primary: &RayBatch, hits: &[Hit], seed: u64) -> RayBatch {
+    let mut batch = RayBatch::new(RayKind::Diffuse);
+    for (i, hit) in hits.iter().enumerate().filter(|(_, h)| h.is_hit()) {
+        let (p, n) = hit_point(mesh, &primary.ray(i), hit);
+        let dir = cosine_hemisphere(n, uniform(seed, i as u64, 0), uniform(seed, i as u64, 1));
+        batch.push(
+            Ray::new(offset_ray_origin(p, n), dir, 0.0, f32::INFINITY),
+            primary.pixel[i],
+        );
+    }
+    batch
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn morton_tiles_make_aligned_blocks_contiguous() {
+        let cam = Camera::default();
+        let batch = primary_rays(&cam, 64, 64);
+        assert_eq!(batch.len(), 64 * 64);
+        // Every aligned 4×4 block is 16 consecutive rays.
+        for block in batch.pixel.chunks(16) {
+            let xs: Vec<u32> = block.iter().map(|p| p % 64).collect();
+            let ys: Vec<u32> = block.iter().map(|p| p / 64).collect();
+            let (x0, y0) = (xs.iter().min().unwrap(), ys.iter().min().unwrap());
+            assert_eq!(x0 % 4, 0);
+            assert_eq!(y0 % 4, 0);
+            assert!(xs.iter().all(|x| x - x0 < 4) && ys.iter().all(|y| y - y0 < 4));
+        }
+        // Every pixel exactly once.
+        let mut seen = batch.pixel.clone();
+        seen.sort();
+        assert!(seen.iter().enumerate().all(|(i, &p)| i as u32 == p));
+    }
+
+    #[test]
+    fn partial_tiles_cover_odd_resolutions() {
+        let batch = primary_rays(&Camera::default(), 50, 37);
+        let mut seen = batch.pixel.clone();
+        seen.sort();
+        assert_eq!(seen, (0..50 * 37).collect::<Vec<u32>>());
+    }
+
+    #[test]
+    fn centre_pixel_looks_at_the_target_and_corners_span_the_fov() {
+        let cam = Camera {
+            position: Vec3::ZERO,
+            target: -Vec3::Z,
+            up: Vec3::Y,
+            fov_y_deg: 90.0,
+            ..Camera::default()
+        };
+        let proj = CameraProjection::new(&cam, 100, 100);
+        let centre = proj.ray(50.0, 50.0, (0.5, 0.5));
+        assert!(centre.dir.distance(-Vec3::Z) < 1e-6);
+        let top = proj.ray(50.0, 0.0, (0.5, 0.5));
+        // 90° vertical fov: the top edge ray is 45° up.
+        assert!((top.dir.y - std::f32::consts::FRAC_1_SQRT_2).abs() < 1e-5);
+        let right = proj.ray(100.0, 50.0, (0.5, 0.5));
+        assert!(right.dir.x > 0.7, "x grows to the right");
+    }
+
+    #[test]
+    fn thin_lens_rays_converge_on_the_focus_plane() {
+        let cam = Camera {
+            position: Vec3::ZERO,
+            target: -Vec3::Z,
+            aperture: 0.5,
+            focus_distance: 4.0,
+            ..Camera::default()
+        };
+        let proj = CameraProjection::new(&cam, 64, 64);
+        let a = proj.ray(10.5, 20.5, (0.1, 0.9));
+        let b = proj.ray(10.5, 20.5, (0.8, 0.3));
+        assert!(a.origin.distance(b.origin) > 0.1);
+        let pa = a.at(4.0 / -a.dir.z);
+        let pb = b.at(4.0 / -b.dir.z);
+        assert!(pa.distance(pb) < 1e-4, "{pa:?} vs {pb:?}");
+    }
+
+    #[test]
+    fn shadow_ray_is_skipped_behind_the_surface_and_stops_short_of_the_light() {
+        let p = Vec3::ZERO;
+        let n = Vec3::Y;
+        assert!(shadow_ray(p, n, Vec3::new(0.0, -1.0, 0.0)).is_none());
+        let r = shadow_ray(p, n, Vec3::new(0.0, 2.0, 0.0)).unwrap();
+        assert!(r.origin.y > 0.0 && r.tmax < 2.0 && r.tmax > 1.99);
+    }
+}

@@ -1,0 +1,147 @@
+//! Verification against Embree: identical rays (primary, shadow, diffuse bounce) traced by a tracer
+//! under test and by Embree in robust mode, compared ray by ray. Disagreements that are ties —
+//! shared edges or vertices, coplanar triangles at the same distance, rays grazing an edge, hits on
+//! the boundary of the ray's interval — are classified and counted, never hidden; the rest are
+//! "unexplained", and any unexplained disagreement fails verification.
+
+pub mod compare;
+pub mod report;
+
+use rayon::prelude::*;
+
+use crate::error::Result;
+use crate::geometry::{Hit, RayBatch, RayKind};
+use crate::render::rays::{diffuse_rays, primary_rays, shadow_rays};
+use crate::scene::{Frame, Scene};
+use crate::tracers::{build_tracer, Params, Tracer, TracerInfo};
+
+pub use compare::{Agreement, Mismatch, Tie};
+pub use report::{format_table, write_csv, KindReport, Tolerance};
+
+/// The tracer verification compares against: Embree's single-ray call on a robust, high-quality scene.
+pub const ORACLE: &str = "embree1";
+
+pub fn oracle_params() -> Params {
+    Params::new().with("robust", "true").with("quality", "high")
+}
+
+/// Builds `name` with `params` over `frame`'s geometry (its own structure, built here).
+pub fn tracer_for_frame(name: &str, params: &Params, frame: &Frame) -> Result<Box<dyn Tracer>> {
+    let info = TracerInfo::find(name)?;
+    let accel = info
+        .accel
+        .build(&frame.mesh, &params.subset(info.accel.params()))?;
+    build_tracer(info, params, &accel)
+}
+
+/// Closest hits of a whole batch, chunks spread over the current rayon pool.
+pub fn trace_hits(tracer: &dyn Tracer, batch: &RayBatch) -> Vec<Hit> {
+    let mut hits = vec![Hit::MISS; batch.len()];
+    let rays = batch.view();
+    hits.par_chunks_mut(CHUNK).enumerate().for_each(|(c, out)| {
+        let start = c * CHUNK;
+        tracer.intersect(rays.slice(start..start + out.len()), out);
+    });
+    hits
+}
+
+/// Occlusion flags of a whole batch.
+pub fn trace_occlusion(tracer: &dyn Tracer, batch: &RayBatch) -> Vec<bool> {
+    let mut flags = vec![false; batch.len()];
+    let rays = batch.view();
+    flags
+        .par_chunks_mut(CHUNK)
+        .enumerate()
+        .for_each(|(c, out)| {
+            let start = c * CHUNK;
+            tracer.occluded(rays.slice(start..start + out.len()), out);
+        });
+    flags
+}
+
+const CHUNK: usize = 4096;
+
+/// The verification batches of one frame: camera rays, and the shadow and diffuse rays leaving the
+/// oracle's primary hits (so the rays do not depend on the tracer under test). No shadow rays
+/// when the scene has no lights.
+pub fn verification_batches(
+    scene: &Scene,
+    frame: &Frame,
+    oracle: &dyn Tracer,
+    width: u32,
+    height: u32,
+    seed: u64,
+) -> Vec<RayBatch> {
+    let primary = primary_rays(&frame.camera, width, height);
+    let hits = trace_hits(oracle, &primary);
+    let mut batches = vec![];
+    if !scene.lights.is_empty() {
+        batches.push(shadow_rays(scene, &frame.mesh, &primary, &hits, seed));
+    }
+    batches.push(diffuse_rays(&frame.mesh, &primary, &hits, seed));
+    batches.insert(0, primary);
+    batches
+}
+
+/// Compares `tracer` with `oracle` on every batch, one report per ray kind.
+pub fn compare_batches(
+    frame: &Frame,
+    tracer: &dyn Tracer,
+    oracle: &dyn Tracer,
+    batches: &[RayBatch],
+) -> Vec<KindReport> {
+    batches
+        .iter()
+        .map(|batch| {
+            let kind = batch.kind();
+            let tested = trace_hits(tracer, batch);
+            let reference = trace_hits(oracle, batch);
+            let agreements: Vec<Agreement> = if kind == RayKind::Shadow {
+                let tested_flags = trace_occlusion(tracer, batch);
+                let reference_flags = trace_occlusion(oracle, batch);
+                (0..batch.len())
+                    .into_par_iter()
+                    .map(|i| {
+                        compare::occlusion(
+                            &frame.mesh,
+                            &batch.ray(i),
+                            tested_flags[i],
+                            reference_flags[i],
+                            &tested[i],
+                            &reference[i],
+                        )
+                    })
+                    .collect()
+            } else {
+                (0..batch.len())
+                    .into_par_iter()
+                    .map(|i| {
+                        compare::closest(&frame.mesh, &batch.ray(i), &tested[i], &reference[i])
+                    })
+                    .collect()
+            };
+            KindReport::from_agreements(kind, batch, &agreements, &tested, &reference)
+        })
+        .collect()
+}
+
+/// Everything `raylab verify` does short of printing and writing files.
+pub fn verify_frame(
+    scene: &Scene,
+    frame: &Frame,
+    tracer: &str,
+    params: &Params,
+    width: u32,
+    height: u32,
+    seed: u64,
+) -> Result<Vec<KindReport>> {
+    let oracle = tracer_for_frame(ORACLE, &oracle_params(), frame)?;
+    let tested = tracer_for_frame(tracer, params, frame)?;
+    let batches = verification_batches(scene, frame, oracle.as_ref(), width, height, seed);
+    Ok(compare_batches(
+        frame,
+        tested.as_ref(),
+        oracle.as_ref(),
+        &batches,
+    ))
+}
