@@ -119,7 +119,7 @@ impl fmt::Display for StructureKey {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct ExperimentFile {
-    name: String,
+    name: Spanned<String>,
     #[serde(default)]
     description: String,
     scenes: Spanned<Vec<NameOr<SceneSpec>>>,
@@ -199,7 +199,10 @@ impl<'de, T: Deserialize<'de> + From<String>> Deserialize<'de> for NameOr<T> {
             fn visit_str<E: de::Error>(self, name: &str) -> std::result::Result<Self::Value, E> {
                 Ok(NameOr(T::from(name.to_string())))
             }
-            fn visit_map<M: MapAccess<'de>>(self, map: M) -> std::result::Result<Self::Value, M::Error> {
+            fn visit_map<M: MapAccess<'de>>(
+                self,
+                map: M,
+            ) -> std::result::Result<Self::Value, M::Error> {
                 T::deserialize(de::value::MapAccessDeserializer::new(map)).map(NameOr)
             }
         }
@@ -225,11 +228,18 @@ impl Source<'_> {
 
     /// A bad name: a usage error (exit code 2) that still says where in which file.
     fn usage_error(&self, span: &Range<usize>, message: impl fmt::Display) -> Error {
-        Error::usage(format!("{}:{}: {message}", self.path.display(), line_of(self.text, span)))
+        Error::usage(format!(
+            "{}:{}: {message}",
+            self.path.display(),
+            line_of(self.text, span)
+        ))
     }
 
     /// A parameter table as name → list of values (a single value is a one-value list).
-    fn param_axes(&self, table: &Spanned<BTreeMap<String, toml::Value>>) -> Result<BTreeMap<String, Vec<String>>> {
+    fn param_axes(
+        &self,
+        table: &Spanned<BTreeMap<String, toml::Value>>,
+    ) -> Result<BTreeMap<String, Vec<String>>> {
         let span = table.span();
         let scalar = |key: &str, v: &toml::Value| -> Result<String> {
             match v {
@@ -239,7 +249,10 @@ impl Source<'_> {
                 toml::Value::Boolean(b) => Ok(b.to_string()),
                 other => Err(self.input_error(
                     &span,
-                    format!("parameter {key}: expected a number, string or boolean, found {}", other.type_str()),
+                    format!(
+                        "parameter {key}: expected a number, string or boolean, found {}",
+                        other.type_str()
+                    ),
                 )),
             }
         };
@@ -249,9 +262,12 @@ impl Source<'_> {
             .map(|(key, value)| {
                 let values = match value {
                     toml::Value::Array(list) if list.is_empty() => {
-                        return Err(self.input_error(&span, format!("parameter {key}: empty list of values")))
+                        return Err(self
+                            .input_error(&span, format!("parameter {key}: empty list of values")))
                     }
-                    toml::Value::Array(list) => list.iter().map(|v| scalar(key, v)).collect::<Result<_>>()?,
+                    toml::Value::Array(list) => {
+                        list.iter().map(|v| scalar(key, v)).collect::<Result<_>>()?
+                    }
                     single => vec![scalar(key, single)?],
                 };
                 Ok((key.clone(), values))
@@ -290,10 +306,43 @@ impl Experiment {
         }
         let threads = file.threads.get_ref().clone();
         if threads.is_empty() || threads.contains(&0) {
-            return Err(src.input_error(&file.threads.span(), "threads must be a non-empty list of counts ≥ 1"));
+            return Err(src.input_error(
+                &file.threads.span(),
+                "threads must be a non-empty list of counts ≥ 1",
+            ));
         }
-        if file.scenes.get_ref().is_empty() {
+        // The name becomes a directory: one plain path component.
+        let name = file.name.get_ref();
+        let name_ok = !name.is_empty()
+            && !name.starts_with('.')
+            && name
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || "-_.".contains(c));
+        if !name_ok {
+            return Err(src.input_error(
+                &file.name.span(),
+                format!(
+                    "experiment name {name:?} must be letters, digits, '-', '_' or '.' (not first)"
+                ),
+            ));
+        }
+        let scenes: Vec<SceneSpec> = file.scenes.get_ref().iter().map(|s| s.0.clone()).collect();
+        if scenes.is_empty() {
             return Err(src.input_error(&file.scenes.span(), "no scenes"));
+        }
+        if let Some(twice) = scenes
+            .iter()
+            .enumerate()
+            .find(|(i, s)| scenes[..*i].contains(s))
+        {
+            let size = twice
+                .1
+                .size
+                .map_or(String::new(), |s| format!(" at size {s}"));
+            return Err(src.input_error(
+                &file.scenes.span(),
+                format!("scene {}{size} is listed twice", twice.1.name),
+            ));
         }
 
         let mut ray_kinds = Vec::new();
@@ -302,7 +351,11 @@ impl Experiment {
                 let known: Vec<&str> = RayKind::ALL.iter().map(|k| k.name()).collect();
                 src.usage_error(
                     &name.span(),
-                    format!("unknown ray kind {:?} (known: {})", name.get_ref(), known.join(", ")),
+                    format!(
+                        "unknown ray kind {:?} (known: {})",
+                        name.get_ref(),
+                        known.join(", ")
+                    ),
                 )
             })?;
             if !ray_kinds.contains(&kind) {
@@ -316,9 +369,9 @@ impl Experiment {
         let instances = expand_tracers(&src, &file)?;
         Ok(Experiment {
             path: path.to_path_buf(),
-            name: file.name,
+            name: file.name.into_inner(),
             description: file.description,
-            scenes: file.scenes.into_inner().into_iter().map(|s| s.0).collect(),
+            scenes,
             instances,
             ray_kinds,
             width: resolution.width,
@@ -353,7 +406,11 @@ fn expand_tracers(src: &Source, file: &ExperimentFile) -> Result<Vec<TracerInsta
         if let Some(unknown) = axes.keys().find(|k| !accepts.contains(&k.as_str())) {
             return Err(src.usage_error(
                 &entry.span(),
-                format!("unknown parameter {unknown:?} for tracer {} (known: {})", info.name, accepts.join(", ")),
+                format!(
+                    "unknown parameter {unknown:?} for tracer {} (known: {})",
+                    info.name,
+                    accepts.join(", ")
+                ),
             ));
         }
         for (i, (key, values)) in shared.iter().enumerate() {
@@ -364,8 +421,14 @@ fn expand_tracers(src: &Source, file: &ExperimentFile) -> Result<Vec<TracerInsta
         }
         for params in cartesian(&axes) {
             let instance = TracerInstance { info, params };
-            if instances.iter().any(|i| i.info.name == info.name && i.params == instance.params) {
-                return Err(src.usage_error(&entry.span(), format!("tracer instance {instance} is listed twice")));
+            if instances
+                .iter()
+                .any(|i| i.info.name == info.name && i.params == instance.params)
+            {
+                return Err(src.usage_error(
+                    &entry.span(),
+                    format!("tracer instance {instance} is listed twice"),
+                ));
             }
             instances.push(instance);
         }
@@ -375,19 +438,23 @@ fn expand_tracers(src: &Source, file: &ExperimentFile) -> Result<Vec<TracerInsta
     }
     if let Some((key, _)) = shared.keys().zip(&used_shared).find(|(_, used)| !**used) {
         let span = file.params.as_ref().map(|p| p.span()).unwrap_or(0..0);
-        return Err(src.usage_error(&span, format!("shared parameter {key:?} is read by none of the tracers")));
+        return Err(src.usage_error(
+            &span,
+            format!("shared parameter {key:?} is read by none of the tracers"),
+        ));
     }
     Ok(instances)
 }
 
 /// All combinations of one value per key, the first key varying slowest.
 fn cartesian(axes: &BTreeMap<String, Vec<String>>) -> Vec<Params> {
-    axes.iter().fold(vec![Params::new()], |partial, (key, values)| {
-        partial
-            .iter()
-            .flat_map(|p| values.iter().map(move |v| p.clone().with(key, v)))
-            .collect()
-    })
+    axes.iter()
+        .fold(vec![Params::new()], |partial, (key, values)| {
+            partial
+                .iter()
+                .flat_map(|p| values.iter().map(move |v| p.clone().with(key, v)))
+                .collect()
+        })
 }
 
 #[cfg(test)]
@@ -435,18 +502,43 @@ mod tests {
     #[test]
     fn defaults_and_explicit_fields() {
         let exp = parse(&format!("{BASE}tracers = [\"reference\"]\n")).unwrap();
-        assert_eq!((exp.width, exp.height, exp.frames, exp.warmup, exp.repeats, exp.seed), (8, 4, 1, 1, 3, 0));
+        assert_eq!(
+            (
+                exp.width,
+                exp.height,
+                exp.frames,
+                exp.warmup,
+                exp.repeats,
+                exp.seed
+            ),
+            (8, 4, 1, 1, 3, 0)
+        );
         assert_eq!(exp.threads, vec![1]);
         assert_eq!(exp.output, PathBuf::from("results"));
-        assert_eq!(exp.scenes, vec![SceneSpec { name: "room".into(), size: None }]);
+        assert_eq!(
+            exp.scenes,
+            vec![SceneSpec {
+                name: "room".into(),
+                size: None
+            }]
+        );
 
         let text = "name = \"t\"\ntracers = [\"reference\"]\nrays = [\"shadow\", \"primary\", \"shadow\"]\n\
                     scenes = [\"room\", { name = \"balls\", size = 3 }]\nresolution = { width = 2, height = 2 }\n\
                     frames = 5\nthreads = [1, 2, 4]\nwarmup = 0\nrepeats = 7\nseed = 42\noutput = \"out\"\n";
         let exp = parse(text).unwrap();
         assert_eq!(exp.ray_kinds, vec![RayKind::Shadow, RayKind::Primary]);
-        assert_eq!(exp.scenes[1], SceneSpec { name: "balls".into(), size: Some(3) });
-        assert_eq!((exp.frames, exp.warmup, exp.repeats, exp.seed), (5, 0, 7, 42));
+        assert_eq!(
+            exp.scenes[1],
+            SceneSpec {
+                name: "balls".into(),
+                size: Some(3)
+            }
+        );
+        assert_eq!(
+            (exp.frames, exp.warmup, exp.repeats, exp.seed),
+            (5, 0, 7, 42)
+        );
         assert_eq!(exp.threads, vec![1, 2, 4]);
         assert_eq!(exp.output, PathBuf::from("out"));
     }
@@ -460,11 +552,20 @@ mod tests {
 
     #[test]
     fn invalid_toml_names_the_line() {
-        let (line, _) = line_of_error(parse(&format!("{BASE}tracers = [\"reference\" \"obvhs\"]\nframes = 2\n")).unwrap_err());
+        let (line, _) = line_of_error(
+            parse(&format!(
+                "{BASE}tracers = [\"reference\" \"obvhs\"]\nframes = 2\n"
+            ))
+            .unwrap_err(),
+        );
         assert_eq!(line, Some(5));
         // A wrong type on line 6.
-        let (line, msg) =
-            line_of_error(parse(&format!("{BASE}tracers = [\"reference\"]\nframes = \"two\"\n")).unwrap_err());
+        let (line, msg) = line_of_error(
+            parse(&format!(
+                "{BASE}tracers = [\"reference\"]\nframes = \"two\"\n"
+            ))
+            .unwrap_err(),
+        );
         assert_eq!(line, Some(6), "{msg}");
         // An unknown key inside a scene table, line 1.
         let (line, msg) = line_of_error(
@@ -474,8 +575,9 @@ mod tests {
         assert_eq!(line, Some(1));
         assert!(msg.contains("sise"), "{msg}");
         // A semantic error with its line: zero repeats on line 6.
-        let (line, _) =
-            line_of_error(parse(&format!("{BASE}tracers = [\"reference\"]\nrepeats = 0\n")).unwrap_err());
+        let (line, _) = line_of_error(
+            parse(&format!("{BASE}tracers = [\"reference\"]\nrepeats = 0\n")).unwrap_err(),
+        );
         assert_eq!(line, Some(6));
     }
 
@@ -488,24 +590,48 @@ mod tests {
 
     #[test]
     fn unknown_names_are_usage_errors_naming_file_and_line() {
-        let msg = usage_message(parse(&format!("{BASE}tracers = [\"reference\", \"nope\"]\n")).unwrap_err());
-        assert!(msg.starts_with("exp.toml:5: unknown tracer \"nope\""), "{msg}");
+        let msg = usage_message(
+            parse(&format!("{BASE}tracers = [\"reference\", \"nope\"]\n")).unwrap_err(),
+        );
+        assert!(
+            msg.starts_with("exp.toml:5: unknown tracer \"nope\""),
+            "{msg}"
+        );
 
         let msg = usage_message(
             parse("name = \"t\"\nscenes = [\"room\"]\nrays = [\"primary\",\n \"glossy\"]\nresolution = { width = 8, height = 4 }\ntracers = [\"reference\"]\n")
                 .unwrap_err(),
         );
-        assert!(msg.starts_with("exp.toml:4: unknown ray kind \"glossy\""), "{msg}");
+        assert!(
+            msg.starts_with("exp.toml:4: unknown ray kind \"glossy\""),
+            "{msg}"
+        );
 
         let msg = usage_message(
-            parse(&format!("{BASE}tracers = [{{ name = \"reference\", params = {{ leafsize = 2 }} }}]\n")).unwrap_err(),
+            parse(&format!(
+                "{BASE}tracers = [{{ name = \"reference\", params = {{ leafsize = 2 }} }}]\n"
+            ))
+            .unwrap_err(),
         );
-        assert!(msg.starts_with("exp.toml:5: unknown parameter \"leafsize\" for tracer reference"), "{msg}");
+        assert!(
+            msg.starts_with("exp.toml:5: unknown parameter \"leafsize\" for tracer reference"),
+            "{msg}"
+        );
 
-        let msg = usage_message(parse(&format!("{BASE}tracers = [\"reference\"]\nparams = {{ width = [1] }}\n")).unwrap_err());
-        assert!(msg.starts_with("exp.toml:6: shared parameter \"width\" is read by none"), "{msg}");
+        let msg = usage_message(
+            parse(&format!(
+                "{BASE}tracers = [\"reference\"]\nparams = {{ width = [1] }}\n"
+            ))
+            .unwrap_err(),
+        );
+        assert!(
+            msg.starts_with("exp.toml:6: shared parameter \"width\" is read by none"),
+            "{msg}"
+        );
 
-        let msg = usage_message(parse(&format!("{BASE}tracers = [\"reference\", \"reference\"]\n")).unwrap_err());
+        let msg = usage_message(
+            parse(&format!("{BASE}tracers = [\"reference\", \"reference\"]\n")).unwrap_err(),
+        );
         assert!(msg.contains("listed twice"), "{msg}");
     }
 }

@@ -1,2 +1,378 @@
-//! Experiments.
+//! Experiments: a TOML file of scenes × tracers × parameter grid × ray kinds × frames × threads,
+//! turned into a plan, run, and written to `results/<experiment>/<run-id>/` as runs.csv,
+//! histograms.csv, PNG plots and meta.json — all at once or not at all.
+
 pub mod config;
+pub mod measure;
+pub mod meta;
+pub mod output;
+pub mod plan;
+pub mod plots;
+pub mod results_dir;
+pub mod runner;
+pub mod utc;
+
+use std::path::{Path, PathBuf};
+
+use serde::Serialize;
+
+use crate::error::{Error, Result};
+
+pub use config::{Experiment, SceneSpec, StructureKey, TracerInstance};
+pub use plan::{Plan, SceneLoader};
+
+/// Command-line replacements for experiment settings, for quick or scaled-down runs. Recorded in
+/// meta.json, since they change what the numbers mean.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct RunOverrides {
+    pub output: Option<PathBuf>,
+    pub threads: Option<Vec<usize>>,
+    /// (width, height).
+    pub resolution: Option<(u32, u32)>,
+    pub frames: Option<usize>,
+    pub warmup: Option<usize>,
+    pub repeats: Option<usize>,
+}
+
+impl RunOverrides {
+    pub fn apply(&self, exp: &mut Experiment) -> Result<()> {
+        let at_least_one = |what: &str, n: usize| match n {
+            0 => Err(Error::usage(format!("{what} must be at least 1"))),
+            n => Ok(n),
+        };
+        if let Some(output) = &self.output {
+            exp.output = output.clone();
+        }
+        if let Some(threads) = &self.threads {
+            if threads.is_empty() || threads.contains(&0) {
+                return Err(Error::usage(
+                    "threads must be a non-empty list of counts ≥ 1",
+                ));
+            }
+            exp.threads = threads.clone();
+        }
+        if let Some((width, height)) = self.resolution {
+            exp.width = at_least_one("width", width as usize)? as u32;
+            exp.height = at_least_one("height", height as usize)? as u32;
+        }
+        if let Some(frames) = self.frames {
+            exp.frames = at_least_one("frames", frames)?;
+        }
+        if let Some(warmup) = self.warmup {
+            exp.warmup = warmup;
+        }
+        if let Some(repeats) = self.repeats {
+            exp.repeats = at_least_one("repeats", repeats)?;
+        }
+        Ok(())
+    }
+}
+
+/// Runs a parsed experiment (`file_text`: its file as written, for meta.json) with scenes from
+/// `load`: plans, prints the plan, measures, and writes every output into a temporary directory
+/// that becomes the results directory only when all is written.
+pub fn run(
+    exp: &Experiment,
+    file_text: &str,
+    overrides: &RunOverrides,
+    load: SceneLoader,
+) -> Result<PathBuf> {
+    // A missing font would otherwise only show after the whole run.
+    plots::register_font()?;
+    let started = utc::UtcTime::now();
+    let plan = Plan::derive(exp, load)?;
+    println!("{plan}");
+    let results = results_dir::PendingResults::create(&exp.output, &exp.name, &started.compact())?;
+
+    let progress = runner::progress_bar(plan.measurements());
+    let cases = runner::run_plan(exp, &plan, load, &progress);
+    progress.finish_and_clear();
+    let cases = cases?;
+
+    let dir = results.dir();
+    output::write_runs(&dir.join(output::RUNS_CSV), &plan, &cases)?;
+    output::write_histograms(&dir.join(output::HISTOGRAMS_CSV), &plan, &cases)?;
+    plots::write_plots(dir, &plan, &cases)?;
+    let meta = meta::gather(
+        &plan,
+        &exp.threads,
+        results.run_id(),
+        started,
+        (&exp.path, file_text),
+        overrides,
+    );
+    let meta_path = dir.join(meta::META_JSON);
+    let json = serde_json::to_string_pretty(&meta)
+        .map_err(|e| Error::runtime(format!("meta.json: {e}")))?;
+    std::fs::write(&meta_path, json + "\n").map_err(|e| Error::io(&meta_path, e))?;
+    results.commit()
+}
+
+#[cfg(test)]
+mod tests {
+    use std::cell::Cell;
+    use std::collections::HashMap;
+    use std::fs;
+
+    use super::*;
+    use crate::scene::Scene;
+
+    fn scratch(name: &str) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!("raylab-run-{name}-{}", std::process::id()));
+        let _ = fs::remove_dir_all(&dir);
+        dir
+    }
+
+    const TEXT: &str = "name = \"t\"\nscenes = [\"lit\", \"dark\", \"moving\"]\n\
+        tracers = [\"reference\", { name = \"reference\", params = { leaf_size = 1 } }]\n\
+        rays = [\"primary\", \"shadow\", \"diffuse\"]\nresolution = { width = 32, height = 32 }\n\
+        frames = 3\nthreads = [1, 2]\nwarmup = 0\nrepeats = 2\n";
+
+    fn experiment(output: &Path) -> Experiment {
+        let mut exp = Experiment::parse(Path::new("t.toml"), TEXT).unwrap();
+        exp.output = output.to_path_buf();
+        exp
+    }
+
+    fn read_csv(path: &Path) -> (Vec<String>, Vec<HashMap<String, String>>) {
+        let mut reader = csv::Reader::from_path(path).unwrap();
+        let header: Vec<String> = reader.headers().unwrap().iter().map(String::from).collect();
+        let rows = reader
+            .records()
+            .map(|r| {
+                header
+                    .iter()
+                    .cloned()
+                    .zip(r.unwrap().iter().map(String::from))
+                    .collect()
+            })
+            .collect();
+        (header, rows)
+    }
+
+    /// The unit quad seen from z = 4 with a 30° field of view at 32×32: pixel centres at
+    /// (2x − 31)/32 · tan 15° · distance hit when that is below 1. At distance 4 (frame 0, and
+    /// every frame of the static scenes) x = 1..=30: 900 hits; the moving quad is at distance 5
+    /// then 6: x = 4..=27 (576 hits), x = 6..=25 (400 hits).
+    fn expected_primary_hits(scene: &str, frame: usize) -> usize {
+        match (scene, frame) {
+            ("moving", 1) => 576,
+            ("moving", 2) => 400,
+            _ => 900,
+        }
+    }
+
+    #[test]
+    fn end_to_end_on_hand_made_scenes() {
+        let out = scratch("e2e");
+        let exp = experiment(&out);
+        let dir = run(
+            &exp,
+            TEXT,
+            &RunOverrides::default(),
+            &plan::tests::load_quads,
+        )
+        .unwrap();
+        assert_eq!(dir.parent().unwrap(), out.join("t"));
+
+        let (header, runs) = read_csv(&dir.join(output::RUNS_CSV));
+        assert_eq!(header, output::RUNS_COLUMNS);
+        // frames 3 × instances 2 × threads 2 × kinds (lit 3 + dark 2 + moving 3).
+        assert_eq!(runs.len(), 3 * 2 * 2 * (3 + 2 + 3));
+        assert!(runs.iter().all(|r| r.len() == 23));
+        for r in &runs {
+            let (scene, frame, kind) = (
+                r["scene"].as_str(),
+                r["frame"].parse::<usize>().unwrap(),
+                r["ray_kind"].as_str(),
+            );
+            let hits = expected_primary_hits(scene, frame);
+            // Shadow and diffuse rays leave every primary hit (the light is in front of the quad);
+            // nothing blocks the light and a bounce off a lone plane hits nothing.
+            let (rays, hit) = match kind {
+                "primary" => (1024, hits),
+                "shadow" | "diffuse" => (hits, 0),
+                other => panic!("{other}"),
+            };
+            assert_eq!(
+                (
+                    r["rays"].parse::<usize>().unwrap(),
+                    r["hits"].parse::<usize>().unwrap()
+                ),
+                (rays, hit),
+                "{r:?}"
+            );
+            // The reference tracer counts every ray it is given, once.
+            assert_eq!(r["counted_rays"], r["rays"]);
+            assert!(
+                r["seconds_min"].parse::<f64>().unwrap()
+                    <= r["seconds_median"].parse::<f64>().unwrap()
+            );
+            let static_scene = scene != "moving";
+            let reused = static_scene && frame > 0;
+            assert_eq!(r["build"], if reused { "reused" } else { "built" });
+            assert_eq!(r["build_seconds"] == "0", reused, "{r:?}");
+            assert_eq!(
+                r["structure"],
+                if r["parameters"].is_empty() {
+                    "bvh"
+                } else {
+                    "bvh[leaf_size=1]"
+                }
+            );
+        }
+        assert!(runs
+            .iter()
+            .all(|r| r["scene"] != "dark" || r["ray_kind"] != "shadow"));
+
+        // Per-depth counts add up to the totals of the same case.
+        let (header, histograms) = read_csv(&dir.join(output::HISTOGRAMS_CSV));
+        assert_eq!(header, output::HISTOGRAM_COLUMNS);
+        let mut sums: HashMap<(String, String, String, String), (u64, u64)> = HashMap::new();
+        for h in &histograms {
+            let key = (
+                h["scene"].clone(),
+                h["frame"].clone(),
+                h["parameters"].clone(),
+                h["ray_kind"].clone(),
+            );
+            let sum = sums.entry(key).or_default();
+            sum.0 += h["aabb_tests"].parse::<u64>().unwrap();
+            sum.1 += h["triangle_tests"].parse::<u64>().unwrap();
+        }
+        // One histogram per (scene, frame, instance, kind): 3 × 2 × 8.
+        assert_eq!(sums.len(), 48);
+        for r in runs.iter().filter(|r| r["threads"] == "1") {
+            let key = (
+                r["scene"].clone(),
+                r["frame"].clone(),
+                r["parameters"].clone(),
+                r["ray_kind"].clone(),
+            );
+            let totals = (
+                r["aabb_tests"].parse().unwrap(),
+                r["triangle_tests"].parse().unwrap(),
+            );
+            assert_eq!(sums[&key], totals, "{key:?}");
+        }
+        // The quad's two triangles both span its whole box. Default parameters: the root is one
+        // leaf; all 1024 rays test its box, the 900 that hit it visit it and test both triangles.
+        let counts = |parameters: &str| {
+            let r = runs
+                .iter()
+                .find(|r| {
+                    r["scene"] == "lit"
+                        && r["parameters"] == parameters
+                        && r["ray_kind"] == "primary"
+                })
+                .unwrap();
+            [
+                r["aabb_tests"].clone(),
+                r["nodes_visited"].clone(),
+                r["triangle_tests"].clone(),
+            ]
+        };
+        assert_eq!(counts(""), ["1024", "900", "1800"]);
+        // leaf_size = 1: a root over two leaves. The 124 rays that miss test the root box only;
+        // the 900 that hit test it and both children.
+        assert_eq!(counts("leaf_size=1")[0], (900 * 3 + 124).to_string());
+
+        let meta: serde_json::Value =
+            serde_json::from_str(&fs::read_to_string(dir.join(meta::META_JSON)).unwrap()).unwrap();
+        assert_eq!(meta["experiment_file"]["contents"], TEXT);
+        assert_eq!(
+            meta["plan"]["scenes"][1]["ray_kinds"],
+            serde_json::json!(["primary", "diffuse"])
+        );
+        assert_eq!(meta["threads"], serde_json::json!([1, 2]));
+        assert_eq!(meta["run_id"], dir.file_name().unwrap().to_str().unwrap());
+
+        let mut pngs: Vec<String> = fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().into_string().unwrap())
+            .filter(|n| n.ends_with(".png"))
+            .collect();
+        pngs.sort();
+        assert_eq!(pngs.len(), 3 * 3, "{pngs:?}");
+        fs::remove_dir_all(&out).unwrap();
+    }
+
+    /// Nothing but the (empty) experiment directory may remain.
+    fn assert_no_results(out: &Path) {
+        let left: Vec<_> = fs::read_dir(out.join("t"))
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        assert!(left.is_empty(), "left behind: {left:?}");
+    }
+
+    #[test]
+    fn a_scene_failing_mid_run_leaves_no_results() {
+        let out = scratch("scene-fails");
+        let exp = experiment(&out);
+        // The plan loads each scene once; the run loads them again, and "moving" is gone by then.
+        let loads = Cell::new(0);
+        let load = |spec: &SceneSpec| -> Result<Scene> {
+            loads.set(loads.get() + 1);
+            if spec.name == "moving" && loads.get() > 3 {
+                return Err(Error::usage("unknown scene \"moving\""));
+            }
+            plan::tests::load_quads(spec)
+        };
+        let err = run(&exp, TEXT, &RunOverrides::default(), &load).unwrap_err();
+        assert_eq!(err.to_string(), "unknown scene \"moving\"");
+        assert_eq!(loads.get(), 6);
+        assert_no_results(&out);
+        fs::remove_dir_all(&out).unwrap();
+    }
+
+    #[test]
+    fn a_write_error_leaves_no_results() {
+        let out = scratch("write-fails");
+        let exp = experiment(&out);
+        // Once the run has started, a directory squats on runs.csv inside the partial results.
+        let load = |spec: &SceneSpec| -> Result<Scene> {
+            if let Ok(entries) = fs::read_dir(out.join("t")) {
+                for partial in entries.map(|e| e.unwrap().path()) {
+                    let _ = fs::create_dir(partial.join(output::RUNS_CSV));
+                }
+            }
+            plan::tests::load_quads(spec)
+        };
+        let err = run(&exp, TEXT, &RunOverrides::default(), &load).unwrap_err();
+        assert!(err.to_string().contains(output::RUNS_CSV), "{err}");
+        assert_no_results(&out);
+        fs::remove_dir_all(&out).unwrap();
+    }
+
+    #[test]
+    fn overrides_replace_settings_and_reject_zeros() {
+        let mut exp = experiment(Path::new("x"));
+        let overrides = RunOverrides {
+            output: Some("elsewhere".into()),
+            threads: Some(vec![4]),
+            resolution: Some((16, 8)),
+            frames: Some(1),
+            warmup: Some(2),
+            repeats: Some(5),
+        };
+        overrides.apply(&mut exp).unwrap();
+        assert_eq!(
+            (
+                exp.output.to_str().unwrap(),
+                exp.threads.as_slice(),
+                exp.width,
+                exp.height,
+                exp.frames,
+                exp.warmup,
+                exp.repeats
+            ),
+            ("elsewhere", &[4][..], 16, 8, 1, 2, 5)
+        );
+        let zero = RunOverrides {
+            repeats: Some(0),
+            ..RunOverrides::default()
+        };
+        assert!(matches!(zero.apply(&mut exp), Err(Error::Usage(_))));
+    }
+}

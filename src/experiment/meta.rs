@@ -1,0 +1,218 @@
+//! meta.json: everything needed to know what produced a run's numbers — code version, machine,
+//! ISA, library versions, the experiment file as written, the overrides and the plan.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+use std::process::Command;
+
+use serde::Serialize;
+
+use super::plan::Plan;
+use super::utc::UtcTime;
+use super::RunOverrides;
+
+pub const META_JSON: &str = "meta.json";
+
+#[derive(Debug, Serialize)]
+pub struct Meta<'a> {
+    pub experiment: &'a str,
+    pub run_id: String,
+    /// Start of the run, UTC, ISO-8601.
+    pub date: String,
+    pub commit: Commit,
+    pub hostname: String,
+    pub cpu: Cpu,
+    pub threads: &'a [usize],
+    /// Versions of the libraries measured against, and of raylab itself.
+    pub versions: BTreeMap<&'static str, String>,
+    pub experiment_file: ExperimentFile<'a>,
+    pub overrides: &'a RunOverrides,
+    pub plan: &'a Plan,
+}
+
+#[derive(Debug, Serialize)]
+pub struct Commit {
+    /// `git rev-parse HEAD` of the source tree, or "unknown" outside git.
+    pub hash: String,
+    /// Uncommitted changes to tracked files; `None` when unknown.
+    pub dirty: Option<bool>,
+}
+
+#[derive(Debug, Serialize)]
+pub struct Cpu {
+    pub model: String,
+    pub logical_cores: usize,
+    /// SIMD extensions this CPU has.
+    pub features_detected: Vec<&'static str>,
+    /// SIMD extensions the binary was compiled to use unconditionally.
+    pub features_compiled: Vec<&'static str>,
+}
+
+#[derive(Debug, Serialize)]
+pub struct ExperimentFile<'a> {
+    pub path: String,
+    pub contents: &'a str,
+}
+
+/// The facts of this machine and this build, gathered now.
+pub fn gather<'a>(
+    plan: &'a Plan,
+    threads: &'a [usize],
+    run_id: String,
+    started: UtcTime,
+    (path, contents): (&Path, &'a str),
+    overrides: &'a RunOverrides,
+) -> Meta<'a> {
+    Meta {
+        experiment: &plan.experiment,
+        run_id,
+        date: started.iso8601(),
+        commit: commit(),
+        hostname: hostname(),
+        cpu: Cpu {
+            model: cpu_model(),
+            logical_cores: std::thread::available_parallelism().map_or(0, |n| n.get()),
+            features_detected: features_detected(),
+            features_compiled: features_compiled(),
+        },
+        threads,
+        versions: versions(),
+        experiment_file: ExperimentFile {
+            path: path.display().to_string(),
+            contents,
+        },
+        overrides,
+        plan,
+    }
+}
+
+/// The commit of the source tree this binary was built from, read when the run starts.
+fn commit() -> Commit {
+    let git = |args: &[&str]| -> Option<String> {
+        let out = Command::new("git")
+            .arg("-C")
+            .arg(env!("CARGO_MANIFEST_DIR"))
+            .args(args)
+            .output()
+            .ok()?;
+        out.status
+            .success()
+            .then(|| String::from_utf8_lossy(&out.stdout).trim().to_string())
+    };
+    match git(&["rev-parse", "HEAD"]) {
+        Some(hash) => Commit {
+            hash,
+            dirty: git(&["status", "--porcelain", "--untracked-files=no"]).map(|s| !s.is_empty()),
+        },
+        None => Commit {
+            hash: "unknown".into(),
+            dirty: None,
+        },
+    }
+}
+
+fn hostname() -> String {
+    std::fs::read_to_string("/proc/sys/kernel/hostname")
+        .or_else(|_| std::fs::read_to_string("/etc/hostname"))
+        .map(|s| s.trim().to_string())
+        .ok()
+        .filter(|s| !s.is_empty())
+        .or_else(|| std::env::var("HOSTNAME").ok())
+        .unwrap_or_else(|| "unknown".into())
+}
+
+fn cpu_model() -> String {
+    std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|info| {
+            info.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split_once(':'))
+                .map(|(_, model)| model.trim().to_string())
+        })
+        .unwrap_or_else(|| "unknown".into())
+}
+
+#[cfg(target_arch = "x86_64")]
+fn features_detected() -> Vec<&'static str> {
+    [
+        ("sse4.2", is_x86_feature_detected!("sse4.2")),
+        ("avx", is_x86_feature_detected!("avx")),
+        ("avx2", is_x86_feature_detected!("avx2")),
+        ("fma", is_x86_feature_detected!("fma")),
+        ("avx512f", is_x86_feature_detected!("avx512f")),
+    ]
+    .into_iter()
+    .filter_map(|(name, present)| present.then_some(name))
+    .collect()
+}
+
+#[cfg(not(target_arch = "x86_64"))]
+fn features_detected() -> Vec<&'static str> {
+    Vec::new()
+}
+
+fn features_compiled() -> Vec<&'static str> {
+    [
+        ("sse4.2", cfg!(target_feature = "sse4.2")),
+        ("avx", cfg!(target_feature = "avx")),
+        ("avx2", cfg!(target_feature = "avx2")),
+        ("fma", cfg!(target_feature = "fma")),
+        ("avx512f", cfg!(target_feature = "avx512f")),
+        ("neon", cfg!(target_feature = "neon")),
+    ]
+    .into_iter()
+    .filter_map(|(name, on)| on.then_some(name))
+    .collect()
+}
+
+/// The lock file the binary was built with: the exact versions of its dependencies.
+const CARGO_LOCK: &str = include_str!("../../Cargo.lock");
+
+/// The locked version of `package`, if it is a dependency.
+fn locked_version(lock: &str, package: &str) -> Option<String> {
+    let name_line = format!("name = \"{package}\"");
+    let mut lines = lock.lines();
+    lines.find(|l| l.trim() == name_line)?;
+    let version = lines
+        .next()?
+        .trim()
+        .strip_prefix("version = \"")?
+        .strip_suffix('"')?;
+    Some(version.to_string())
+}
+
+fn versions() -> BTreeMap<&'static str, String> {
+    let mut v = BTreeMap::new();
+    v.insert("raylab", env!("CARGO_PKG_VERSION").to_string());
+    v.insert(
+        "obvhs",
+        locked_version(CARGO_LOCK, "obvhs").unwrap_or_else(|| "unknown".into()),
+    );
+    v
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn locked_versions_come_from_the_lock_file() {
+        let lock = "[[package]]\nname = \"obvhs\"\nversion = \"0.4.0\"\n\n[[package]]\nname = \"obvhs-extra\"\nversion = \"9\"\n";
+        assert_eq!(locked_version(lock, "obvhs").as_deref(), Some("0.4.0"));
+        assert_eq!(locked_version(lock, "glam"), None);
+        assert_eq!(
+            locked_version(CARGO_LOCK, "obvhs").as_deref(),
+            Some("0.4.0")
+        );
+    }
+
+    #[test]
+    fn compiled_features_are_detected_too() {
+        // Whatever the binary assumes, the CPU running it must have.
+        let detected = features_detected();
+        for f in features_compiled().into_iter().filter(|f| *f != "neon") {
+            assert!(detected.contains(&f), "{f} compiled in but not detected");
+        }
+    }
+}

@@ -1,0 +1,146 @@
+//! The tidy CSV files of a run. runs.csv: one row per (scene, frame, tracer, parameters, ray kind,
+//! threads). histograms.csv: one row per (scene, frame, tracer, parameters, ray kind, BVH depth).
+//! Counts a tracer cannot measure (Embree's box and triangle tests) are empty cells, not zeros.
+
+use std::path::Path;
+
+use crate::error::{Error, Result};
+
+use super::plan::Plan;
+use super::runner::Case;
+
+pub const RUNS_CSV: &str = "runs.csv";
+pub const HISTOGRAMS_CSV: &str = "histograms.csv";
+
+pub const RUNS_COLUMNS: &[&str] = &[
+    "experiment",
+    "scene",
+    "triangles",
+    "frame",
+    "tracer",
+    "parameters",
+    "structure",
+    "ray_kind",
+    "threads",
+    "rays",
+    "hits",
+    "seconds_min",
+    "seconds_median",
+    "mrays_per_s",
+    "build_seconds",
+    "build",
+    "counted_rays",
+    "nodes_visited",
+    "aabb_tests",
+    "triangle_tests",
+    "nodes_per_ray",
+    "aabb_tests_per_ray",
+    "triangle_tests_per_ray",
+];
+
+pub const HISTOGRAM_COLUMNS: &[&str] = &[
+    "experiment",
+    "scene",
+    "frame",
+    "tracer",
+    "parameters",
+    "ray_kind",
+    "depth",
+    "aabb_tests",
+    "triangle_tests",
+];
+
+/// Millions of rays per second from the fastest pass; `None` for an empty batch.
+pub fn mrays_per_s(rays: usize, seconds: f64) -> Option<f64> {
+    (rays > 0 && seconds > 0.0).then(|| rays as f64 / seconds / 1e6)
+}
+
+fn cell<T: ToString>(value: Option<T>) -> String {
+    value.map_or(String::new(), |v| v.to_string())
+}
+
+fn per_ray(count: u64, rays: u64) -> Option<f64> {
+    (rays > 0).then(|| count as f64 / rays as f64)
+}
+
+fn csv_error(path: &Path, e: csv::Error) -> Error {
+    Error::input(path, None, e.to_string())
+}
+
+pub fn write_runs(path: &Path, plan: &Plan, cases: &[Case]) -> Result<()> {
+    let mut w = csv::Writer::from_path(path).map_err(|e| csv_error(path, e))?;
+    w.write_record(RUNS_COLUMNS)
+        .map_err(|e| csv_error(path, e))?;
+    for case in cases {
+        let instance = &plan.instances[case.instance];
+        let c = &case.counted.counters;
+        let internal = |v: u64| case.counts_internals.then_some(v);
+        let internal_per_ray = |v: u64| {
+            if case.counts_internals {
+                per_ray(v, c.rays)
+            } else {
+                None
+            }
+        };
+        for timing in &case.timings {
+            let row = [
+                plan.experiment.clone(),
+                plan.scenes[case.scene].name.clone(),
+                case.triangles.to_string(),
+                case.frame.to_string(),
+                instance.tracer.clone(),
+                instance.params.to_string(),
+                instance.structure.to_string(),
+                case.kind.name().to_string(),
+                timing.threads.to_string(),
+                case.rays.to_string(),
+                case.counted.hits.to_string(),
+                timing.seconds_min.to_string(),
+                timing.seconds_median.to_string(),
+                cell(mrays_per_s(case.rays, timing.seconds_min)),
+                case.build_seconds.to_string(),
+                if case.built { "built" } else { "reused" }.to_string(),
+                c.rays.to_string(),
+                cell(internal(c.nodes_visited)),
+                cell(internal(c.aabb_tests)),
+                cell(internal(c.triangle_tests)),
+                cell(internal_per_ray(c.nodes_visited)),
+                cell(internal_per_ray(c.aabb_tests)),
+                cell(internal_per_ray(c.triangle_tests)),
+            ];
+            w.write_record(&row).map_err(|e| csv_error(path, e))?;
+        }
+    }
+    w.flush().map_err(|e| Error::io(path, e))
+}
+
+/// Tests per BVH depth, for the tracers that count them; depths past the deepest count are omitted.
+pub fn write_histograms(path: &Path, plan: &Plan, cases: &[Case]) -> Result<()> {
+    let mut w = csv::Writer::from_path(path).map_err(|e| csv_error(path, e))?;
+    w.write_record(HISTOGRAM_COLUMNS)
+        .map_err(|e| csv_error(path, e))?;
+    for case in cases.iter().filter(|c| c.counts_internals) {
+        let instance = &plan.instances[case.instance];
+        let c = &case.counted.counters;
+        let depths = c.aabb_by_depth.len().max(c.triangle_by_depth.len());
+        for depth in 0..depths {
+            let row = [
+                plan.experiment.clone(),
+                plan.scenes[case.scene].name.clone(),
+                case.frame.to_string(),
+                instance.tracer.clone(),
+                instance.params.to_string(),
+                case.kind.name().to_string(),
+                depth.to_string(),
+                c.aabb_by_depth.get(depth).copied().unwrap_or(0).to_string(),
+                c.triangle_by_depth
+                    .get(depth)
+                    .copied()
+                    .unwrap_or(0)
+                    .to_string(),
+            ];
+            w.write_record(&row).map_err(|e| csv_error(path, e))?;
+        }
+    }
+    w.flush().map_err(|e| Error::io(path, e))
+}

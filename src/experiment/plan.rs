@@ -1,0 +1,491 @@
+//! What a run needs, and only that, derived before anything is timed: per scene, which ray kinds
+//! make sense (no shadow rays without lights), which acceleration structures to build (one per
+//! distinct kind and structure parameters among the requested tracers, plus our BVH when secondary
+//! rays must be generated), and whether geometry changes per frame (rebuild) or not (build once,
+//! reuse). Printed before the run and stored in meta.json.
+
+use std::collections::BTreeMap;
+use std::fmt;
+
+use serde::ser::SerializeMap;
+use serde::{Serialize, Serializer};
+
+use crate::accel::AccelKind;
+use crate::error::{Error, Result};
+use crate::geometry::{RayKind, Triangle};
+use crate::scene::{Mesh, Scene};
+use crate::tracers::{build_tracer, Params};
+
+use super::config::{Experiment, SceneSpec, StructureKey};
+
+/// Finds a scene by its experiment entry. The run uses `scene::library::load_scene`; tests hand in
+/// scenes of their own.
+pub type SceneLoader<'a> = &'a dyn Fn(&SceneSpec) -> Result<Scene>;
+
+/// The tracer that traces primary rays to find where secondary rays start.
+pub const SECONDARY_RAY_TRACER: &str = "reference";
+
+#[derive(Debug, Serialize)]
+pub struct Plan {
+    pub experiment: String,
+    pub description: String,
+    pub width: u32,
+    pub height: u32,
+    pub frames: usize,
+    pub threads: Vec<usize>,
+    pub warmup: usize,
+    pub repeats: usize,
+    pub seed: u64,
+    pub instances: Vec<InstancePlan>,
+    pub scenes: Vec<ScenePlan>,
+}
+
+#[derive(Debug, Serialize)]
+pub struct InstancePlan {
+    /// `name[params]`, as in the plots.
+    pub label: String,
+    pub tracer: String,
+    #[serde(serialize_with = "params_map")]
+    pub params: Params,
+    /// The structure it traverses.
+    pub structure: StructureKey,
+    /// Whether the tracer counts its box and triangle tests (Embree counts only rays).
+    pub counts_internals: bool,
+}
+
+#[derive(Debug, Serialize)]
+pub struct ScenePlan {
+    pub name: String,
+    pub size: Option<u32>,
+    pub source: String,
+    pub triangles: usize,
+    pub lights: usize,
+    pub animated: bool,
+    pub camera_path: bool,
+    /// The requested kinds this scene can have.
+    #[serde(serialize_with = "kind_names")]
+    pub ray_kinds: Vec<RayKind>,
+    pub structures: Vec<StructurePlan>,
+    /// Animated geometry: every structure is rebuilt each frame. Otherwise built at frame 0 only.
+    pub rebuild_per_frame: bool,
+    /// Decisions worth reading: what was left out and why.
+    pub notes: Vec<String>,
+}
+
+#[derive(Debug, Serialize)]
+pub struct StructurePlan {
+    pub key: StructureKey,
+    /// Indices of the tracer instances that traverse it.
+    pub used_by: Vec<usize>,
+    /// The reference tracer traces primary rays over it to generate the secondary rays.
+    pub generates_secondary_rays: bool,
+}
+
+fn kind_names<S: Serializer>(kinds: &[RayKind], s: S) -> std::result::Result<S::Ok, S::Error> {
+    s.collect_seq(kinds.iter().map(|k| k.name()))
+}
+
+fn params_map<S: Serializer>(params: &Params, s: S) -> std::result::Result<S::Ok, S::Error> {
+    params.0.serialize(s)
+}
+
+impl Serialize for StructureKey {
+    fn serialize<S: Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        let mut map = s.serialize_map(Some(2))?;
+        map.serialize_entry("kind", self.kind.name())?;
+        map.serialize_entry("params", &self.params.0)?;
+        map.end()
+    }
+}
+
+/// The structure secondary rays are generated with: our BVH with default parameters.
+pub fn secondary_ray_structure() -> StructureKey {
+    StructureKey {
+        kind: AccelKind::Bvh,
+        params: Params::new(),
+    }
+}
+
+impl ScenePlan {
+    /// Whether structures are built at `frame` (otherwise those of frame 0 are reused).
+    pub fn builds_at(&self, frame: usize) -> bool {
+        frame == 0 || self.rebuild_per_frame
+    }
+
+    pub fn needs_secondary_rays(&self) -> bool {
+        self.ray_kinds.iter().any(|&k| k != RayKind::Primary)
+    }
+}
+
+impl Plan {
+    /// Loads every scene once to learn what it needs, and builds every tracer instance once on a
+    /// one-triangle mesh so bad parameter values fail now, not an hour into the run.
+    pub fn derive(exp: &Experiment, load: SceneLoader) -> Result<Plan> {
+        let instances = plan_instances(exp)?;
+        let mut scenes = Vec::with_capacity(exp.scenes.len());
+        for spec in &exp.scenes {
+            let scene = load(spec)?;
+            scenes.push(plan_scene(exp, spec, &scene));
+        }
+        Ok(Plan {
+            experiment: exp.name.clone(),
+            description: exp.description.clone(),
+            width: exp.width,
+            height: exp.height,
+            frames: exp.frames,
+            threads: exp.threads.clone(),
+            warmup: exp.warmup,
+            repeats: exp.repeats,
+            seed: exp.seed,
+            instances,
+            scenes,
+        })
+    }
+
+    /// Timed measurements (one per scene × frame × instance × ray kind × thread count): the
+    /// progress bar's length.
+    pub fn measurements(&self) -> usize {
+        let per_kind = self.frames * self.instances.len() * self.threads.len();
+        self.scenes
+            .iter()
+            .map(|s| s.ray_kinds.len() * per_kind)
+            .sum()
+    }
+}
+
+fn plan_instances(exp: &Experiment) -> Result<Vec<InstancePlan>> {
+    let mut probe = Mesh::default();
+    probe.push(
+        Triangle {
+            v: [glam::Vec3::ZERO, glam::Vec3::X, glam::Vec3::Y],
+        },
+        0,
+    );
+    let mut built = BTreeMap::new();
+    exp.instances
+        .iter()
+        .map(|instance| {
+            let fail =
+                |e: Error| Error::usage(format!("{}: tracer {instance}: {e}", exp.path.display()));
+            let key = instance.structure();
+            if !built.contains_key(&key) {
+                let accel = key.kind.build(&probe, &key.params).map_err(fail)?;
+                built.insert(key.clone(), accel);
+            }
+            let tracer =
+                build_tracer(instance.info, &instance.params, &built[&key]).map_err(fail)?;
+            Ok(InstancePlan {
+                label: instance.to_string(),
+                tracer: instance.info.name.to_string(),
+                params: instance.params.clone(),
+                structure: key,
+                counts_internals: tracer.counts_internals(),
+            })
+        })
+        .collect()
+}
+
+fn plan_scene(exp: &Experiment, spec: &SceneSpec, scene: &Scene) -> ScenePlan {
+    let mut notes = Vec::new();
+    let ray_kinds: Vec<RayKind> = exp
+        .ray_kinds
+        .iter()
+        .copied()
+        .filter(|&k| k != RayKind::Shadow || !scene.lights.is_empty())
+        .collect();
+    if ray_kinds.len() < exp.ray_kinds.len() {
+        notes.push("no shadow rays: the scene has no lights".to_string());
+    }
+
+    let mut structures: Vec<StructurePlan> = Vec::new();
+    for (i, instance) in exp.instances.iter().enumerate() {
+        let key = instance.structure();
+        match structures.iter_mut().find(|s| s.key == key) {
+            Some(s) => s.used_by.push(i),
+            None => structures.push(StructurePlan {
+                key,
+                used_by: vec![i],
+                generates_secondary_rays: false,
+            }),
+        }
+    }
+    if ray_kinds.iter().any(|&k| k != RayKind::Primary) {
+        let key = secondary_ray_structure();
+        let shared = structures.iter().any(|s| s.key == key);
+        notes.push(format!(
+            "secondary rays start at the primary hits of the {SECONDARY_RAY_TRACER} tracer on {key}{}",
+            if shared { " (shared with the tracers using it)" } else { ", built for that alone" }
+        ));
+        match structures.iter_mut().find(|s| s.key == key) {
+            Some(s) => s.generates_secondary_rays = true,
+            None => structures.push(StructurePlan {
+                key,
+                used_by: vec![],
+                generates_secondary_rays: true,
+            }),
+        }
+    }
+
+    let rebuild_per_frame = scene.is_animated();
+    if exp.frames > 1 {
+        notes.push(if rebuild_per_frame {
+            format!(
+                "animated geometry: structures rebuilt for each of {} frames",
+                exp.frames
+            )
+        } else {
+            format!(
+                "static geometry: structures built at frame 0, reused for {} frames",
+                exp.frames
+            )
+        });
+        if !rebuild_per_frame && scene.camera_path.is_none() {
+            notes.push(format!(
+                "nothing moves: the {} frames trace the same rays",
+                exp.frames
+            ));
+        }
+    }
+    ScenePlan {
+        name: spec.name.clone(),
+        size: spec.size,
+        source: scene.source.clone(),
+        triangles: scene.triangle_count(),
+        lights: scene.lights.len(),
+        animated: scene.is_animated(),
+        camera_path: scene.camera_path.is_some(),
+        ray_kinds,
+        structures,
+        rebuild_per_frame,
+        notes,
+    }
+}
+
+impl fmt::Display for Plan {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        writeln!(f, "experiment {}: {}", self.experiment, self.description)?;
+        writeln!(
+            f,
+            "  {}×{} pixels, {} frame(s), threads {:?}, {} warm-up + {} timed pass(es), seed {}",
+            self.width,
+            self.height,
+            self.frames,
+            self.threads,
+            self.warmup,
+            self.repeats,
+            self.seed
+        )?;
+        writeln!(f, "  tracers:")?;
+        for (i, instance) in self.instances.iter().enumerate() {
+            let counts = if instance.counts_internals {
+                ""
+            } else {
+                " (counts rays only)"
+            };
+            writeln!(
+                f,
+                "    [{i}] {} on {}{counts}",
+                instance.label, instance.structure
+            )?;
+        }
+        for scene in &self.scenes {
+            let size = scene.size.map_or(String::new(), |s| format!(" size {s}"));
+            writeln!(
+                f,
+                "  scene {}{size} ({}): {} triangles, {} light(s), {}{}",
+                scene.name,
+                scene.source,
+                scene.triangles,
+                scene.lights,
+                if scene.animated { "animated" } else { "static" },
+                if scene.camera_path {
+                    ", camera path"
+                } else {
+                    ""
+                },
+            )?;
+            let kinds: Vec<&str> = scene.ray_kinds.iter().map(|k| k.name()).collect();
+            writeln!(f, "    rays: {}", kinds.join(", "))?;
+            for s in &scene.structures {
+                let users: Vec<String> = s.used_by.iter().map(|i| format!("[{i}]")).collect();
+                let secondary = if s.generates_secondary_rays {
+                    "; generates secondary rays"
+                } else {
+                    ""
+                };
+                writeln!(
+                    f,
+                    "    build {}: used by {}{secondary}",
+                    s.key,
+                    users.join(" ")
+                )?;
+            }
+            for note in &scene.notes {
+                writeln!(f, "    note: {note}")?;
+            }
+        }
+        write!(f, "  {} timed measurements", self.measurements())
+    }
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use std::path::Path;
+    use std::sync::Arc;
+
+    use glam::Vec3;
+
+    use super::*;
+    use crate::scene::{Animation, Camera, Light, Material};
+
+    /// A unit quad at z = 0 facing +z (two triangles), lit or not, static or spinning.
+    pub fn quad_scene(name: &str, lit: bool, animated: bool) -> Scene {
+        let mesh = quad_mesh(0.0);
+        Scene {
+            name: name.into(),
+            source: "test".into(),
+            mesh,
+            materials: vec![Material::default()],
+            lights: if lit {
+                vec![Light::Point {
+                    position: Vec3::new(0.0, 0.0, 3.0),
+                    intensity: Vec3::ONE,
+                }]
+            } else {
+                vec![]
+            },
+            camera: Camera {
+                position: Vec3::new(0.0, 0.0, 4.0),
+                fov_y_deg: 30.0,
+                ..Camera::default()
+            },
+            camera_path: None,
+            animation: animated.then(|| Arc::new(Sliding) as Arc<dyn Animation>),
+        }
+    }
+
+    fn quad_mesh(z: f32) -> Mesh {
+        let (a, b, c, d) = (
+            Vec3::new(-1.0, -1.0, z),
+            Vec3::new(1.0, -1.0, z),
+            Vec3::new(1.0, 1.0, z),
+            Vec3::new(-1.0, 1.0, z),
+        );
+        let mut mesh = Mesh::default();
+        mesh.push(Triangle { v: [a, b, c] }, 0);
+        mesh.push(Triangle { v: [a, c, d] }, 0);
+        mesh
+    }
+
+    /// The quad sliding back along −z, one unit per second.
+    #[derive(Debug)]
+    struct Sliding;
+    impl Animation for Sliding {
+        fn duration(&self) -> f32 {
+            2.0
+        }
+        fn mesh_at(&self, time: f32) -> Mesh {
+            quad_mesh(-time)
+        }
+    }
+
+    pub fn load_quads(spec: &SceneSpec) -> Result<Scene> {
+        match spec.name.as_str() {
+            "lit" => Ok(quad_scene("lit", true, false)),
+            "dark" => Ok(quad_scene("dark", false, false)),
+            "moving" => Ok(quad_scene("moving", true, true)),
+            other => Err(Error::usage(format!("unknown scene {other:?}"))),
+        }
+    }
+
+    pub fn experiment(body: &str) -> Experiment {
+        let text = format!("name = \"t\"\nresolution = {{ width = 8, height = 8 }}\n{body}");
+        Experiment::parse(Path::new("t.toml"), &text).unwrap()
+    }
+
+    #[test]
+    fn a_scene_without_lights_gets_no_shadow_rays() {
+        let exp = experiment(
+            "scenes = [\"dark\", \"lit\"]\ntracers = [\"reference\"]\nrays = [\"primary\", \"shadow\", \"diffuse\"]\n",
+        );
+        let plan = Plan::derive(&exp, &load_quads).unwrap();
+        assert_eq!(
+            plan.scenes[0].ray_kinds,
+            vec![RayKind::Primary, RayKind::Diffuse]
+        );
+        assert_eq!(
+            plan.scenes[0].notes[0],
+            "no shadow rays: the scene has no lights"
+        );
+        assert_eq!(plan.scenes[1].ray_kinds, RayKind::ALL.to_vec());
+        // 1 frame × 1 instance × 1 thread count × (2 + 3) kinds.
+        assert_eq!(plan.measurements(), 5);
+        assert!(plan
+            .to_string()
+            .contains("note: no shadow rays: the scene has no lights"));
+    }
+
+    #[test]
+    fn static_scene_builds_once_animated_scene_every_frame() {
+        let exp = experiment("scenes = [\"lit\", \"moving\"]\ntracers = [\"reference\"]\nrays = [\"primary\"]\nframes = 3\n");
+        let plan = Plan::derive(&exp, &load_quads).unwrap();
+        let builds = |s: &ScenePlan| {
+            (0..exp.frames).filter(|&f| s.builds_at(f)).count() * s.structures.len()
+        };
+        assert_eq!(builds(&plan.scenes[0]), 1);
+        assert!(!plan.scenes[0].rebuild_per_frame);
+        assert_eq!(builds(&plan.scenes[1]), 3);
+        assert!(plan.scenes[1].rebuild_per_frame && plan.scenes[1].animated);
+        assert_eq!(plan.measurements(), 6);
+    }
+
+    #[test]
+    fn tracers_sharing_a_structure_share_its_build() {
+        // Two instances on different BVHs, plus the secondary-ray BVH. Keys compare parameters as
+        // written, so {leaf_size=4} is not the default-parameter key {} even though 4 is the
+        // default: 3 structures.
+        let exp = experiment(
+            "scenes = [\"lit\"]\ntracers = [{ name = \"reference\", params = { leaf_size = [2, 4] } }]\n\
+             rays = [\"primary\", \"diffuse\"]\n",
+        );
+        let plan = Plan::derive(&exp, &load_quads).unwrap();
+        let keys: Vec<String> = plan.scenes[0]
+            .structures
+            .iter()
+            .map(|s| s.key.to_string())
+            .collect();
+        assert_eq!(keys, ["bvh[leaf_size=2]", "bvh[leaf_size=4]", "bvh"]);
+        assert!(plan.scenes[0].structures[2].generates_secondary_rays);
+        assert!(plan.scenes[0].structures[2].used_by.is_empty());
+
+        // The bare reference tracer uses the default BVH: one structure, shared with secondary rays.
+        let exp = experiment(
+            "scenes = [\"lit\"]\ntracers = [\"reference\"]\nrays = [\"primary\", \"diffuse\"]\n",
+        );
+        let plan = Plan::derive(&exp, &load_quads).unwrap();
+        assert_eq!(plan.scenes[0].structures.len(), 1);
+        assert_eq!(plan.scenes[0].structures[0].used_by, vec![0]);
+        assert!(plan.scenes[0].structures[0].generates_secondary_rays);
+
+        // Primary rays only: no secondary-ray structure at all.
+        let exp = experiment(
+            "scenes = [\"lit\"]\ntracers = [{ name = \"reference\", params = { leaf_size = 2 } }]\nrays = [\"primary\"]\n",
+        );
+        let plan = Plan::derive(&exp, &load_quads).unwrap();
+        assert_eq!(plan.scenes[0].structures.len(), 1);
+    }
+
+    #[test]
+    fn bad_parameter_values_fail_before_the_run() {
+        let exp = experiment(
+            "scenes = [\"lit\"]\ntracers = [{ name = \"reference\", params = { leaf_size = 0 } }]\nrays = [\"primary\"]\n",
+        );
+        match Plan::derive(&exp, &load_quads).unwrap_err() {
+            Error::Usage(m) => assert!(
+                m.starts_with("t.toml: tracer reference[leaf_size=0]: BVH parameters"),
+                "{m}"
+            ),
+            e => panic!("{e:?}"),
+        }
+    }
+}

@@ -1,0 +1,255 @@
+//! Executes a plan: per scene and frame, build the structures the plan lists (timed), generate the
+//! ray batches once (primary, then shadow and diffuse rays from the reference tracer's primary
+//! hits), and measure every tracer instance on every ray kind at every thread count. Every tracer
+//! gets the very same batch.
+
+use std::collections::BTreeMap;
+use std::io::IsTerminal;
+use std::time::{Duration, Instant};
+
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use rayon::{ThreadPool, ThreadPoolBuilder};
+
+use crate::accel::Accel;
+use crate::error::{Error, Result};
+use crate::geometry::{RayBatch, RayKind};
+use crate::render::rays::{diffuse_rays, primary_rays, shadow_rays};
+use crate::render::sampling::mix64;
+use crate::scene::{Frame, Scene};
+use crate::tracers::{build_tracer, Params, Tracer, TracerInfo};
+use crate::verify::trace_hits;
+
+use super::config::{Experiment, StructureKey};
+use super::measure::{count_pass, time_passes, Counted, Timing};
+use super::plan::{secondary_ray_structure, Plan, SceneLoader, ScenePlan, SECONDARY_RAY_TRACER};
+
+/// One tracer instance on one ray kind of one frame of one scene: its counts and its timing at
+/// every thread count. One row of runs.csv per timing.
+#[derive(Clone, Debug)]
+pub struct Case {
+    /// Index into `Plan::scenes`.
+    pub scene: usize,
+    pub triangles: usize,
+    pub frame: usize,
+    /// Index into `Plan::instances`.
+    pub instance: usize,
+    pub kind: RayKind,
+    pub rays: usize,
+    /// From the one counting pass (the same at every thread count).
+    pub counted: Counted,
+    /// False for tracers that count rays only: their box and triangle counts are not measured.
+    pub counts_internals: bool,
+    /// Seconds to build the instance's structure for this frame; 0 when reused.
+    pub build_seconds: f64,
+    /// Whether the structure was built this frame (false: reused from frame 0 of a static scene).
+    pub built: bool,
+    pub timings: Vec<Timing>,
+}
+
+/// A built structure with its build time.
+struct Built {
+    accel: Accel,
+    seconds: f64,
+}
+
+/// The structures and tracers of the current frame (or of frame 0, for static scenes).
+struct FrameTracers {
+    structures: BTreeMap<StructureKey, Built>,
+    /// One per plan instance.
+    tracers: Vec<Box<dyn Tracer>>,
+    /// The reference tracer that finds where secondary rays start, when any are needed.
+    secondary: Option<Box<dyn Tracer>>,
+}
+
+/// The progress bar over the plan's measurements, drawn only on a terminal so logs and CI output
+/// stay clean.
+pub fn progress_bar(measurements: usize) -> ProgressBar {
+    let target = if std::io::stderr().is_terminal() {
+        ProgressDrawTarget::stderr()
+    } else {
+        ProgressDrawTarget::hidden()
+    };
+    let bar = ProgressBar::with_draw_target(Some(measurements as u64), target);
+    bar.set_style(
+        ProgressStyle::with_template("{bar:30} {pos}/{len} [{elapsed_precise}, ETA {eta}] {msg}")
+            .expect("the template is a valid literal"),
+    );
+    bar.enable_steady_tick(Duration::from_millis(250));
+    bar
+}
+
+/// Runs every measurement of `plan`, loading each scene with `load` when its turn comes.
+pub fn run_plan(
+    exp: &Experiment,
+    plan: &Plan,
+    load: SceneLoader,
+    progress: &ProgressBar,
+) -> Result<Vec<Case>> {
+    let pools = exp
+        .threads
+        .iter()
+        .map(|&n| {
+            ThreadPoolBuilder::new()
+                .num_threads(n)
+                .build()
+                .map_err(|e| Error::runtime(format!("cannot start a pool of {n} threads: {e}")))
+        })
+        .collect::<Result<Vec<ThreadPool>>>()?;
+    // Counting and ray generation are not timed: give them the widest pool.
+    let widest = pools
+        .iter()
+        .max_by_key(|p| p.current_num_threads())
+        .expect("threads is never empty");
+
+    let mut cases = Vec::new();
+    for (scene_index, (spec, scene_plan)) in exp.scenes.iter().zip(&plan.scenes).enumerate() {
+        let scene = load(spec)?;
+        if scene.triangle_count() != scene_plan.triangles {
+            return Err(Error::runtime(format!(
+                "scene {} changed during the run: {} triangles when planned, {} now",
+                spec.name,
+                scene_plan.triangles,
+                scene.triangle_count()
+            )));
+        }
+        let mut current: Option<FrameTracers> = None;
+        for f in 0..exp.frames {
+            let frame = scene.frame(f, exp.frames);
+            let built_now = scene_plan.builds_at(f);
+            if built_now {
+                // Free the previous frame's structures before building the next ones.
+                current.take();
+                current = Some(build_frame(exp, scene_plan, &frame)?);
+            }
+            let frame_tracers = current.as_ref().expect("built above");
+            let batches = generate_batches(exp, scene_plan, &scene, &frame, frame_tracers, widest);
+            for (i, tracer) in frame_tracers.tracers.iter().enumerate() {
+                let instance = &exp.instances[i];
+                let build_seconds = match built_now {
+                    true => frame_tracers.structures[&instance.structure()].seconds,
+                    false => 0.0,
+                };
+                for batch in &batches {
+                    let kind = batch.kind();
+                    let counted = count_pass(widest, tracer.as_ref(), batch);
+                    let timings = pools
+                        .iter()
+                        .map(|pool| {
+                            progress.set_message(format!(
+                                "{} frame {}/{}: {instance} {} ×{}",
+                                spec.name,
+                                f + 1,
+                                exp.frames,
+                                kind.name(),
+                                pool.current_num_threads()
+                            ));
+                            let timing =
+                                time_passes(pool, tracer.as_ref(), batch, exp.warmup, exp.repeats);
+                            progress.inc(1);
+                            timing
+                        })
+                        .collect();
+                    cases.push(Case {
+                        scene: scene_index,
+                        triangles: frame.mesh.len(),
+                        frame: f,
+                        instance: i,
+                        kind,
+                        rays: batch.len(),
+                        counted,
+                        counts_internals: tracer.counts_internals(),
+                        build_seconds,
+                        built: built_now,
+                        timings,
+                    });
+                }
+            }
+        }
+    }
+    Ok(cases)
+}
+
+/// Builds the plan's structures over `frame`'s geometry, timing each, and the tracers over them.
+fn build_frame(exp: &Experiment, scene_plan: &ScenePlan, frame: &Frame) -> Result<FrameTracers> {
+    let mut structures = BTreeMap::new();
+    for s in &scene_plan.structures {
+        let start = Instant::now();
+        let accel = s.key.kind.build(&frame.mesh, &s.key.params)?;
+        let seconds = start.elapsed().as_secs_f64();
+        structures.insert(s.key.clone(), Built { accel, seconds });
+    }
+    let tracers = exp
+        .instances
+        .iter()
+        .map(|instance| {
+            build_tracer(
+                instance.info,
+                &instance.params,
+                &structures[&instance.structure()].accel,
+            )
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let secondary = match scene_plan.needs_secondary_rays() {
+        true => {
+            let info = TracerInfo::find(SECONDARY_RAY_TRACER)?;
+            Some(build_tracer(
+                info,
+                &Params::new(),
+                &structures[&secondary_ray_structure()].accel,
+            )?)
+        }
+        false => None,
+    };
+    Ok(FrameTracers {
+        structures,
+        tracers,
+        secondary,
+    })
+}
+
+/// The batches of the scene's ray kinds for one frame, in the plan's order. Secondary rays are
+/// seeded per frame and kind, so every run of the experiment traces the same rays.
+fn generate_batches(
+    exp: &Experiment,
+    scene_plan: &ScenePlan,
+    scene: &Scene,
+    frame: &Frame,
+    tracers: &FrameTracers,
+    pool: &ThreadPool,
+) -> Vec<RayBatch> {
+    let primary = primary_rays(&frame.camera, exp.width, exp.height);
+    let hits = tracers
+        .secondary
+        .as_ref()
+        .map(|t| pool.install(|| trace_hits(t.as_ref(), &primary)));
+    let seed = |kind: RayKind| mix64(exp.seed ^ mix64(frame.index as u64) ^ mix64(kind as u64 + 1));
+    let mut batches: Vec<RayBatch> = Vec::with_capacity(scene_plan.ray_kinds.len());
+    for &kind in &scene_plan.ray_kinds {
+        let hits = || {
+            hits.as_deref()
+                .expect("the plan builds the secondary-ray tracer for secondary kinds")
+        };
+        match kind {
+            // Placed below, once the secondary rays no longer need it.
+            RayKind::Primary => {}
+            RayKind::Shadow => batches.push(shadow_rays(
+                scene,
+                &frame.mesh,
+                &primary,
+                hits(),
+                seed(kind),
+            )),
+            RayKind::Diffuse => {
+                batches.push(diffuse_rays(&frame.mesh, &primary, hits(), seed(kind)))
+            }
+        }
+    }
+    if let Some(at) = scene_plan
+        .ray_kinds
+        .iter()
+        .position(|&k| k == RayKind::Primary)
+    {
+        batches.insert(at, primary);
+    }
+    batches
+}
