@@ -7,6 +7,7 @@ use std::sync::Arc;
 
 use crate::error::Result;
 use crate::scene::Mesh;
+use crate::tracers::embree::{Device, EmbreeConfig, EmbreeScene};
 use crate::tracers::Params;
 
 pub use bvh::{Bvh, BvhConfig, BvhNode};
@@ -16,12 +17,15 @@ pub use bvh::{Bvh, BvhConfig, BvhNode};
 pub enum AccelKind {
     /// Our binned-SAH binary BVH.
     Bvh,
+    /// Embree's own BVH over the mesh, built by the library (`quality`, `robust`).
+    Embree,
 }
 
 impl AccelKind {
     pub fn name(self) -> &'static str {
         match self {
             AccelKind::Bvh => "bvh",
+            AccelKind::Embree => "embree",
         }
     }
 
@@ -29,6 +33,7 @@ impl AccelKind {
     pub fn params(self) -> &'static [&'static str] {
         match self {
             AccelKind::Bvh => BvhConfig::PARAMS,
+            AccelKind::Embree => EmbreeConfig::PARAMS,
         }
     }
 
@@ -38,6 +43,11 @@ impl AccelKind {
                 &mesh.triangles,
                 BvhConfig::from_params(params)?,
             ))),
+            AccelKind::Embree => Accel::Embree(Arc::new(EmbreeScene::build(
+                Device::shared()?,
+                mesh,
+                EmbreeConfig::from_params(params)?,
+            )?)),
         })
     }
 }
@@ -46,12 +56,14 @@ impl AccelKind {
 #[derive(Clone, Debug)]
 pub enum Accel {
     Bvh(Arc<Bvh>),
+    Embree(Arc<EmbreeScene>),
 }
 
 impl Accel {
     pub fn build_seconds(&self) -> f64 {
         match self {
             Accel::Bvh(b) => b.build_seconds,
+            Accel::Embree(s) => s.build_seconds,
         }
     }
 }

@@ -3,6 +3,9 @@
 
 use crate::accel::{Accel, AccelKind};
 use crate::error::{Error, Result};
+use crate::tracers::embree::{
+    Coherence, EmbreeTracer, Packets16, Packets4, Packets8, Single, Stream,
+};
 use crate::tracers::{reference::ReferenceTracer, Params, Tracer};
 
 pub struct TracerInfo {
@@ -13,12 +16,45 @@ pub struct TracerInfo {
     pub about: &'static str,
 }
 
-pub const TRACERS: &[TracerInfo] = &[TracerInfo {
-    name: "reference",
-    accel: AccelKind::Bvh,
-    params: &[],
-    about: "single rays, binary SAH BVH, nearer child first; watertight triangles, robust slabs",
-}];
+pub const TRACERS: &[TracerInfo] = &[
+    TracerInfo {
+        name: "reference",
+        accel: AccelKind::Bvh,
+        params: &[],
+        about:
+            "single rays, binary SAH BVH, nearer child first; watertight triangles, robust slabs",
+    },
+    TracerInfo {
+        name: "embree1",
+        accel: AccelKind::Embree,
+        params: Coherence::PARAMS,
+        about: "Embree 3 baseline: rtcIntersect1 / rtcOccluded1 per ray",
+    },
+    TracerInfo {
+        name: "embree4",
+        accel: AccelKind::Embree,
+        params: Coherence::PARAMS,
+        about: "Embree 3 baseline: rtcIntersect4 / rtcOccluded4 on groups of 4 consecutive rays",
+    },
+    TracerInfo {
+        name: "embree8",
+        accel: AccelKind::Embree,
+        params: Coherence::PARAMS,
+        about: "Embree 3 baseline: rtcIntersect8 / rtcOccluded8 on groups of 8 consecutive rays",
+    },
+    TracerInfo {
+        name: "embree16",
+        accel: AccelKind::Embree,
+        params: Coherence::PARAMS,
+        about: "Embree 3 baseline: rtcIntersect16 / rtcOccluded16 on groups of 16 consecutive rays",
+    },
+    TracerInfo {
+        name: "embree-stream",
+        accel: AccelKind::Embree,
+        params: Coherence::PARAMS,
+        about: "Embree 3 baseline: AoS ray streams, rtcIntersect1M / rtcOccluded1M",
+    },
+];
 
 impl TracerInfo {
     pub fn find(name: &str) -> Result<&'static TracerInfo> {
@@ -46,6 +82,21 @@ pub fn build_tracer(info: &TracerInfo, params: &Params, accel: &Accel) -> Result
     params.check_known(info.name, &info.accepts())?;
     match (info.name, accel) {
         ("reference", Accel::Bvh(bvh)) => Ok(Box::new(ReferenceTracer::new(bvh.clone()))),
+        ("embree1", Accel::Embree(s)) => {
+            Ok(Box::new(EmbreeTracer::<Single>::from_params(s, params)?))
+        }
+        ("embree4", Accel::Embree(s)) => {
+            Ok(Box::new(EmbreeTracer::<Packets4>::from_params(s, params)?))
+        }
+        ("embree8", Accel::Embree(s)) => {
+            Ok(Box::new(EmbreeTracer::<Packets8>::from_params(s, params)?))
+        }
+        ("embree16", Accel::Embree(s)) => {
+            Ok(Box::new(EmbreeTracer::<Packets16>::from_params(s, params)?))
+        }
+        ("embree-stream", Accel::Embree(s)) => {
+            Ok(Box::new(EmbreeTracer::<Stream>::from_params(s, params)?))
+        }
         (name, _) => Err(Error::runtime(format!(
             "tracer {name} was given the wrong structure"
         ))),

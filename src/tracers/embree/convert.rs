@@ -1,0 +1,62 @@
+//! Our rays and hits to and from Embree's: tnear/tfar from tmin/tmax, every mask bit set (ray
+//! masks are compiled into the Debian library, so a zero mask would miss everything), time 0;
+//! back, tfar is the hit distance, primID our triangle index, and (u, v) already our convention
+//! (`Triangle::point(u, v)`).
+
+use super::ffi::{RTCHit, RTCRay, RTCRayHit, RTC_INVALID_GEOMETRY_ID};
+use crate::geometry::{Hit, Rays};
+
+/// Every ray sees every geometry.
+pub const ALL_MASK_BITS: u32 = u32::MAX;
+
+#[inline(always)]
+pub fn ray(rays: &Rays<'_>, i: usize) -> RTCRay {
+    RTCRay {
+        org_x: rays.ox[i],
+        org_y: rays.oy[i],
+        org_z: rays.oz[i],
+        tnear: rays.tmin[i],
+        dir_x: rays.dx[i],
+        dir_y: rays.dy[i],
+        dir_z: rays.dz[i],
+        time: 0.0,
+        tfar: rays.tmax[i],
+        mask: ALL_MASK_BITS,
+        id: 0,
+        flags: 0,
+    }
+}
+
+/// A ray with its hit cleared, as rtcIntersect* requires (geomID = RTC_INVALID_GEOMETRY_ID).
+#[inline(always)]
+pub fn ray_hit(rays: &Rays<'_>, i: usize) -> RTCRayHit {
+    RTCRayHit {
+        ray: ray(rays, i),
+        hit: RTCHit {
+            geomID: RTC_INVALID_GEOMETRY_ID,
+            instID: [RTC_INVALID_GEOMETRY_ID],
+            ..RTCHit::default()
+        },
+    }
+}
+
+/// The hit of a traced ray from its final tfar and hit record fields.
+#[inline(always)]
+pub fn hit(tfar: f32, geom_id: u32, prim_id: u32, u: f32, v: f32) -> Hit {
+    if geom_id == RTC_INVALID_GEOMETRY_ID {
+        Hit::MISS
+    } else {
+        Hit {
+            t: tfar,
+            prim: prim_id,
+            u,
+            v,
+        }
+    }
+}
+
+/// rtcOccluded* marks an occluded ray by setting its tfar to −∞.
+#[inline(always)]
+pub fn is_occluded(tfar: f32) -> bool {
+    tfar == f32::NEG_INFINITY
+}

@@ -1,0 +1,197 @@
+//! `embree4`, `embree8`, `embree16`: `rtcIntersectN` / `rtcOccludedN` on consecutive groups of N
+//! rays of the chunk; the last, partial group masks its missing lanes off. One implementation
+//! over the packet type; the three bindgen structs only supply their lanes and their calls.
+
+use std::marker::PhantomData;
+
+use super::ffi::{self, RTCIntersectContext, RTCRay, RTCScene, RTC_INVALID_GEOMETRY_ID};
+use super::{convert, EmbreeScene, Submission};
+use crate::geometry::{Hit, Rays};
+
+/// An Embree ray packet (`RTCRayN`): N lanes of rays, traced by `rtcOccludedN`.
+pub trait RayPacket: Sized {
+    const WIDTH: usize;
+    /// All lanes zero (a valid value: the struct is only floats and integers).
+    fn zeroed() -> Self;
+    fn set_ray(&mut self, lane: usize, ray: &RTCRay);
+    fn tfar(&self, lane: usize) -> f32;
+    /// # Safety
+    /// `valid` points to `WIDTH` ints, `scene` is committed, `self` is aligned as Embree requires.
+    unsafe fn occluded(
+        &mut self,
+        valid: *const i32,
+        scene: RTCScene,
+        context: &mut RTCIntersectContext,
+    );
+}
+
+/// An Embree ray-and-hit packet (`RTCRayHitN`), traced by `rtcIntersectN`.
+pub trait RayHitPacket: Sized {
+    type Rays: RayPacket;
+    fn zeroed() -> Self;
+    fn rays(&mut self) -> &mut Self::Rays;
+    /// Marks lane `lane` as not yet hit, as rtcIntersectN requires.
+    fn clear_hit(&mut self, lane: usize);
+    fn hit(&self, lane: usize) -> Hit;
+    /// # Safety
+    /// As `RayPacket::occluded`.
+    unsafe fn intersect(
+        &mut self,
+        valid: *const i32,
+        scene: RTCScene,
+        context: &mut RTCIntersectContext,
+    );
+}
+
+macro_rules! embree_packet {
+    ($width:literal, $ray:ident, $ray_hit:ident, $occluded:ident, $intersect:ident) => {
+        impl RayPacket for ffi::$ray {
+            const WIDTH: usize = $width;
+            fn zeroed() -> Self {
+                // SAFETY: a C struct of f32 and u32 arrays: all zero bits is a valid value.
+                unsafe { std::mem::zeroed() }
+            }
+            #[inline(always)]
+            fn set_ray(&mut self, lane: usize, r: &RTCRay) {
+                self.org_x[lane] = r.org_x;
+                self.org_y[lane] = r.org_y;
+                self.org_z[lane] = r.org_z;
+                self.tnear[lane] = r.tnear;
+                self.dir_x[lane] = r.dir_x;
+                self.dir_y[lane] = r.dir_y;
+                self.dir_z[lane] = r.dir_z;
+                self.time[lane] = r.time;
+                self.tfar[lane] = r.tfar;
+                self.mask[lane] = r.mask;
+                self.id[lane] = r.id;
+                self.flags[lane] = r.flags;
+            }
+            #[inline(always)]
+            fn tfar(&self, lane: usize) -> f32 {
+                self.tfar[lane]
+            }
+            #[inline(always)]
+            unsafe fn occluded(
+                &mut self,
+                valid: *const i32,
+                scene: RTCScene,
+                context: &mut RTCIntersectContext,
+            ) {
+                // SAFETY: the caller's contract.
+                unsafe { ffi::$occluded(valid, scene, context, self) }
+            }
+        }
+
+        impl RayHitPacket for ffi::$ray_hit {
+            type Rays = ffi::$ray;
+            fn zeroed() -> Self {
+                // SAFETY: as for the ray packet.
+                unsafe { std::mem::zeroed() }
+            }
+            #[inline(always)]
+            fn rays(&mut self) -> &mut ffi::$ray {
+                &mut self.ray
+            }
+            #[inline(always)]
+            fn clear_hit(&mut self, lane: usize) {
+                self.hit.geomID[lane] = RTC_INVALID_GEOMETRY_ID;
+                self.hit.instID[0][lane] = RTC_INVALID_GEOMETRY_ID;
+            }
+            #[inline(always)]
+            fn hit(&self, lane: usize) -> Hit {
+                let h = &self.hit;
+                convert::hit(
+                    self.ray.tfar[lane],
+                    h.geomID[lane],
+                    h.primID[lane],
+                    h.u[lane],
+                    h.v[lane],
+                )
+            }
+            #[inline(always)]
+            unsafe fn intersect(
+                &mut self,
+                valid: *const i32,
+                scene: RTCScene,
+                context: &mut RTCIntersectContext,
+            ) {
+                // SAFETY: the caller's contract.
+                unsafe { ffi::$intersect(valid, scene, context, self) }
+            }
+        }
+    };
+}
+
+embree_packet!(4, RTCRay4, RTCRayHit4, rtcOccluded4, rtcIntersect4);
+embree_packet!(8, RTCRay8, RTCRayHit8, rtcOccluded8, rtcIntersect8);
+embree_packet!(16, RTCRay16, RTCRayHit16, rtcOccluded16, rtcIntersect16);
+
+/// Embree's valid mask: −1 for an active lane, 0 for an inactive one; room and alignment for the
+/// widest packet.
+#[repr(C, align(64))]
+struct ValidMask([i32; 16]);
+
+impl ValidMask {
+    /// The first `active` lanes on.
+    #[inline(always)]
+    fn first(active: usize) -> Self {
+        ValidMask(std::array::from_fn(
+            |lane| if lane < active { -1 } else { 0 },
+        ))
+    }
+}
+
+/// Rays in packets of `P`'s width.
+pub struct Packets<P>(PhantomData<fn() -> P>);
+
+impl<P: RayHitPacket + 'static> Submission for Packets<P> {
+    fn intersect(
+        scene: &EmbreeScene,
+        context: &mut RTCIntersectContext,
+        rays: Rays<'_>,
+        hits: &mut [Hit],
+    ) {
+        let width = P::Rays::WIDTH;
+        let mut packet = P::zeroed();
+        for (g, hits) in hits.chunks_mut(width).enumerate() {
+            for lane in 0..hits.len() {
+                packet
+                    .rays()
+                    .set_ray(lane, &convert::ray(&rays, g * width + lane));
+                packet.clear_hit(lane);
+            }
+            let valid = ValidMask::first(hits.len());
+            // SAFETY: WIDTH valid ints, a committed scene, a packet aligned by its type.
+            unsafe { packet.intersect(valid.0.as_ptr(), scene.raw(), context) };
+            for (lane, hit) in hits.iter_mut().enumerate() {
+                *hit = packet.hit(lane);
+            }
+        }
+    }
+
+    fn occluded(
+        scene: &EmbreeScene,
+        context: &mut RTCIntersectContext,
+        rays: Rays<'_>,
+        occluded: &mut [bool],
+    ) {
+        let width = P::Rays::WIDTH;
+        let mut packet = P::Rays::zeroed();
+        for (g, occluded) in occluded.chunks_mut(width).enumerate() {
+            for lane in 0..occluded.len() {
+                packet.set_ray(lane, &convert::ray(&rays, g * width + lane));
+            }
+            let valid = ValidMask::first(occluded.len());
+            // SAFETY: as above.
+            unsafe { packet.occluded(valid.0.as_ptr(), scene.raw(), context) };
+            for (lane, o) in occluded.iter_mut().enumerate() {
+                *o = convert::is_occluded(packet.tfar(lane));
+            }
+        }
+    }
+}
+
+/// The packet types the registry names.
+pub type Packets4 = Packets<ffi::RTCRayHit4>;
+pub type Packets8 = Packets<ffi::RTCRayHit8>;
+pub type Packets16 = Packets<ffi::RTCRayHit16>;

@@ -1,0 +1,213 @@
+//! An Embree scene over our `Mesh`: one triangle geometry whose primitive `i` is our triangle `i`,
+//! committed once and then traversed concurrently by any number of tracers.
+
+use std::fmt;
+use std::sync::Arc;
+use std::time::Instant;
+
+use super::ffi::{self, RTCBufferType::*, RTCFormat::*};
+use super::{Device, EmbreeConfig};
+use crate::error::{Error, Result};
+use crate::scene::Mesh;
+
+pub struct EmbreeScene {
+    device: Arc<Device>,
+    raw: ffi::RTCScene,
+    /// The triangle geometry (geomID 0), kept to update its vertices; `None` for an empty mesh,
+    /// which Embree takes as a committed scene without geometry that every ray misses.
+    geometry: Option<ffi::RTCGeometry>,
+    triangle_count: usize,
+    pub config: EmbreeConfig,
+    /// Wall time of the last build or refit: buffer fill plus commit.
+    pub build_seconds: f64,
+}
+
+// SAFETY: Embree allows rtcIntersect*/rtcOccluded* on a committed scene from many threads at
+// once; everything that changes the scene (`refit`) takes `&mut self`.
+unsafe impl Send for EmbreeScene {}
+unsafe impl Sync for EmbreeScene {}
+
+impl EmbreeScene {
+    pub fn build(device: Arc<Device>, mesh: &Mesh, config: EmbreeConfig) -> Result<EmbreeScene> {
+        let start = Instant::now();
+        // Vertex indices are 32-bit: three per triangle.
+        if mesh.len() > (u32::MAX / 3) as usize {
+            return Err(Error::runtime(format!(
+                "Embree cannot index {} triangles with 32-bit vertex ids",
+                mesh.len()
+            )));
+        }
+        // SAFETY: a live device.
+        let raw = unsafe { ffi::rtcNewScene(device.raw()) };
+        // Owned from here on, so Drop releases it on every error path (a null one is skipped).
+        let mut scene = EmbreeScene {
+            device,
+            raw,
+            geometry: None,
+            triangle_count: mesh.len(),
+            config,
+            build_seconds: 0.0,
+        };
+        created(&scene.device, raw, "creating a scene")?;
+        // SAFETY: a live scene, not yet committed.
+        unsafe {
+            ffi::rtcSetSceneFlags(raw, config.scene_flags());
+            ffi::rtcSetSceneBuildQuality(raw, config.quality.scene());
+        }
+        if !mesh.is_empty() {
+            scene.attach_triangles(mesh)?;
+        }
+        scene.commit("building a scene")?;
+        scene.build_seconds = start.elapsed().as_secs_f64();
+        Ok(scene)
+    }
+
+    fn attach_triangles(&mut self, mesh: &Mesh) -> Result<()> {
+        let n = mesh.len();
+        let device = self.device.raw();
+        // SAFETY: a live device.
+        let geometry = unsafe {
+            ffi::rtcNewGeometry(device, ffi::RTCGeometryType::RTC_GEOMETRY_TYPE_TRIANGLE)
+        };
+        // Owned by `self` as soon as it exists, so Drop releases it on every error path below.
+        self.geometry = (!geometry.is_null()).then_some(geometry);
+        created(&self.device, geometry, "creating the triangle geometry")?;
+        // SAFETY: a live geometry. Embree allocates both buffers (padding the vertex buffer for
+        // its 16-byte loads) and owns them. Three vertices per triangle, none shared: triangle i
+        // reads vertices 3i, 3i+1, 3i+2 and keeps primitive id i.
+        let indices = unsafe {
+            ffi::rtcSetGeometryBuildQuality(geometry, self.config.quality.geometry());
+            ffi::rtcSetNewGeometryBuffer(
+                geometry,
+                RTC_BUFFER_TYPE_VERTEX,
+                0,
+                RTC_FORMAT_FLOAT3,
+                12,
+                3 * n,
+            );
+            ffi::rtcSetNewGeometryBuffer(
+                geometry,
+                RTC_BUFFER_TYPE_INDEX,
+                0,
+                RTC_FORMAT_UINT3,
+                12,
+                n,
+            )
+        };
+        created(
+            &self.device,
+            indices,
+            "allocating the vertex and index buffers",
+        )?;
+        // SAFETY: a buffer of n UINT3 items.
+        let indices = unsafe { std::slice::from_raw_parts_mut(indices as *mut [u32; 3], n) };
+        for (i, index) in indices.iter_mut().enumerate() {
+            let first = 3 * i as u32;
+            *index = [first, first + 1, first + 2];
+        }
+        self.write_vertices(mesh);
+        // SAFETY: live geometry and scene; the scene takes its own reference to the geometry.
+        let id = unsafe {
+            ffi::rtcCommitGeometry(geometry);
+            ffi::rtcAttachGeometry(self.raw, geometry)
+        };
+        self.device.check("attaching the triangle geometry")?;
+        debug_assert_eq!(id, 0, "the only geometry gets id 0");
+        Ok(())
+    }
+
+    /// Copies the mesh's vertices into the geometry's vertex buffer.
+    fn write_vertices(&mut self, mesh: &Mesh) {
+        let Some(geometry) = self.geometry else {
+            return;
+        };
+        // SAFETY: the vertex buffer set in `attach_triangles` holds 3 · triangle_count FLOAT3
+        // items, and `mesh` has triangle_count triangles (checked by callers).
+        let vertices = unsafe {
+            let data =
+                ffi::rtcGetGeometryBufferData(geometry, RTC_BUFFER_TYPE_VERTEX, 0) as *mut [f32; 3];
+            std::slice::from_raw_parts_mut(data, 3 * self.triangle_count)
+        };
+        for (corners, tri) in vertices.chunks_exact_mut(3).zip(&mesh.triangles) {
+            for (corner, v) in corners.iter_mut().zip(tri.v) {
+                *corner = v.to_array();
+            }
+        }
+    }
+
+    fn commit(&mut self, what: &str) -> Result<()> {
+        // SAFETY: a live scene; no traversal runs while we hold `&mut self`.
+        unsafe { ffi::rtcCommitScene(self.raw) };
+        self.device.check(what)
+    }
+
+    /// Moves the vertices to those of `mesh` (same triangle count and order) and recommits. With
+    /// quality `refit` Embree refits the existing tree's boxes; with the other qualities it
+    /// rebuilds the tree. `build_seconds` becomes the time of this update.
+    pub fn refit(&mut self, mesh: &Mesh) -> Result<()> {
+        if mesh.len() != self.triangle_count {
+            return Err(Error::runtime(format!(
+                "Embree refit needs the same {} triangles, got {}",
+                self.triangle_count,
+                mesh.len()
+            )));
+        }
+        let start = Instant::now();
+        self.write_vertices(mesh);
+        if let Some(geometry) = self.geometry {
+            // SAFETY: a live geometry whose vertex buffer was just rewritten.
+            unsafe {
+                ffi::rtcUpdateGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0);
+                ffi::rtcCommitGeometry(geometry);
+            }
+        }
+        self.commit("refitting a scene")?;
+        self.build_seconds = start.elapsed().as_secs_f64();
+        Ok(())
+    }
+
+    pub fn triangle_count(&self) -> usize {
+        self.triangle_count
+    }
+
+    /// The committed scene handle, for the tracers.
+    pub(super) fn raw(&self) -> ffi::RTCScene {
+        self.raw
+    }
+}
+
+/// `Ok` when Embree reported no error while `what` and returned a non-null `ptr`.
+fn created<T>(device: &Device, ptr: *mut T, what: &str) -> Result<()> {
+    device.check(what)?;
+    if ptr.is_null() {
+        return Err(Error::runtime(format!(
+            "Embree returned nothing while {what}"
+        )));
+    }
+    Ok(())
+}
+
+impl Drop for EmbreeScene {
+    fn drop(&mut self) {
+        // SAFETY: handles created by rtcNewGeometry / rtcNewScene, each released once; a null
+        // scene (failed creation) is skipped.
+        unsafe {
+            if let Some(geometry) = self.geometry {
+                ffi::rtcReleaseGeometry(geometry);
+            }
+            if !self.raw.is_null() {
+                ffi::rtcReleaseScene(self.raw);
+            }
+        }
+    }
+}
+
+impl fmt::Debug for EmbreeScene {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("EmbreeScene")
+            .field("triangles", &self.triangle_count)
+            .field("config", &self.config)
+            .field("build_seconds", &self.build_seconds)
+            .finish()
+    }
+}
