@@ -286,6 +286,14 @@ mod tests {
         );
         assert_eq!(meta["threads"], serde_json::json!([1, 2]));
         assert_eq!(meta["run_id"], dir.file_name().unwrap().to_str().unwrap());
+        assert!(
+            meta["versions"]["embree"]
+                .as_str()
+                .unwrap()
+                .starts_with("3."),
+            "{}",
+            meta["versions"]
+        );
 
         let mut pngs: Vec<String> = fs::read_dir(&dir)
             .unwrap()
@@ -294,6 +302,49 @@ mod tests {
             .collect();
         pngs.sort();
         assert_eq!(pngs.len(), 3 * 3, "{pngs:?}");
+        fs::remove_dir_all(&out).unwrap();
+    }
+
+    #[test]
+    fn embree_tracers_share_one_build_and_count_rays_only() {
+        let out = scratch("embree");
+        let text = "name = \"t\"\nscenes = [\"lit\"]\ntracers = [\"embree1\", \"embree16\"]\n\
+                    rays = [\"primary\", \"shadow\"]\nresolution = { width = 32, height = 32 }\nrepeats = 1\n";
+        let mut exp = Experiment::parse(Path::new("t.toml"), text).unwrap();
+        exp.output = out.clone();
+        let dir = run(
+            &exp,
+            text,
+            &RunOverrides::default(),
+            &plan::tests::load_quads,
+        )
+        .unwrap();
+        let (_, runs) = read_csv(&dir.join(output::RUNS_CSV));
+        assert_eq!(runs.len(), 2 * 2);
+        for r in &runs {
+            let expected = if r["ray_kind"] == "primary" {
+                ("1024", "900")
+            } else {
+                ("900", "0")
+            };
+            assert_eq!((r["rays"].as_str(), r["hits"].as_str()), expected);
+            assert_eq!(r["counted_rays"], r["rays"]);
+            for column in [
+                "nodes_visited",
+                "aabb_tests",
+                "triangle_tests",
+                "aabb_tests_per_ray",
+            ] {
+                assert_eq!(r[column], "", "{column} of {}", r["tracer"]);
+            }
+            // One Embree scene, built once, its time reported for both tracers.
+            assert_eq!(r["build_seconds"], runs[0]["build_seconds"]);
+            assert_eq!(r["structure"], "embree");
+        }
+        let (_, histograms) = read_csv(&dir.join(output::HISTOGRAMS_CSV));
+        assert!(histograms.is_empty());
+        assert!(dir.join("throughput_lit.png").is_file());
+        assert!(!dir.join("depths_lit_embree1.png").exists());
         fs::remove_dir_all(&out).unwrap();
     }
 

@@ -38,6 +38,8 @@ pub struct Plan {
     pub seed: u64,
     pub instances: Vec<InstancePlan>,
     pub scenes: Vec<ScenePlan>,
+    /// Run-wide remarks (oversubscribed threads).
+    pub notes: Vec<String>,
 }
 
 #[derive(Debug, Serialize)]
@@ -127,6 +129,12 @@ impl Plan {
             let scene = load(spec)?;
             scenes.push(plan_scene(exp, spec, &scene));
         }
+        let mut notes = Vec::new();
+        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+        let most = exp.threads.iter().copied().max().unwrap_or(1);
+        if most > cores {
+            notes.push(format!("{most} threads on {cores} logical cores: thread counts above {cores} are oversubscribed"));
+        }
         Ok(Plan {
             experiment: exp.name.clone(),
             description: exp.description.clone(),
@@ -139,6 +147,7 @@ impl Plan {
             seed: exp.seed,
             instances,
             scenes,
+            notes,
         })
     }
 
@@ -441,9 +450,23 @@ pub(crate) mod tests {
 
     #[test]
     fn tracers_sharing_a_structure_share_its_build() {
-        // Two instances on different BVHs, plus the secondary-ray BVH. Keys compare parameters as
-        // written, so {leaf_size=4} is not the default-parameter key {} even though 4 is the
-        // default: 3 structures.
+        // embree1 and embree16 read the same Embree scene (default quality); embree4 at high
+        // quality needs its own; secondary rays need our default BVH, built for that alone.
+        let exp = experiment(
+            "scenes = [\"lit\"]\ntracers = [\"embree1\", \"embree16\", { name = \"embree4\", params = { quality = \"high\" } }]\n\
+             rays = [\"primary\", \"shadow\"]\n",
+        );
+        let plan = Plan::derive(&exp, &load_quads).unwrap();
+        let structures = &plan.scenes[0].structures;
+        let keys: Vec<String> = structures.iter().map(|s| s.key.to_string()).collect();
+        assert_eq!(keys, ["embree", "embree[quality=high]", "bvh"]);
+        let users: Vec<&[usize]> = structures.iter().map(|s| s.used_by.as_slice()).collect();
+        assert_eq!(users, [&[0, 1][..], &[2][..], &[][..]]);
+        assert!(structures[2].generates_secondary_rays && !structures[0].generates_secondary_rays);
+        assert!(plan.instances.iter().all(|i| !i.counts_internals));
+
+        // Keys compare parameters as written: {leaf_size=4} is not the default key {} although 4
+        // is the default, so the secondary-ray BVH is a third structure here.
         let exp = experiment(
             "scenes = [\"lit\"]\ntracers = [{ name = \"reference\", params = { leaf_size = [2, 4] } }]\n\
              rays = [\"primary\", \"diffuse\"]\n",
@@ -455,8 +478,6 @@ pub(crate) mod tests {
             .map(|s| s.key.to_string())
             .collect();
         assert_eq!(keys, ["bvh[leaf_size=2]", "bvh[leaf_size=4]", "bvh"]);
-        assert!(plan.scenes[0].structures[2].generates_secondary_rays);
-        assert!(plan.scenes[0].structures[2].used_by.is_empty());
 
         // The bare reference tracer uses the default BVH: one structure, shared with secondary rays.
         let exp = experiment(
@@ -466,6 +487,7 @@ pub(crate) mod tests {
         assert_eq!(plan.scenes[0].structures.len(), 1);
         assert_eq!(plan.scenes[0].structures[0].used_by, vec![0]);
         assert!(plan.scenes[0].structures[0].generates_secondary_rays);
+        assert!(plan.instances[0].counts_internals);
 
         // Primary rays only: no secondary-ray structure at all.
         let exp = experiment(

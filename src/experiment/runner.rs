@@ -64,16 +64,18 @@ struct FrameTracers {
 /// The progress bar over the plan's measurements, drawn only on a terminal so logs and CI output
 /// stay clean.
 pub fn progress_bar(measurements: usize) -> ProgressBar {
-    let target = if std::io::stderr().is_terminal() {
-        ProgressDrawTarget::stderr()
-    } else {
-        ProgressDrawTarget::hidden()
-    };
-    let bar = ProgressBar::with_draw_target(Some(measurements as u64), target);
+    if !std::io::stderr().is_terminal() {
+        return ProgressBar::with_draw_target(
+            Some(measurements as u64),
+            ProgressDrawTarget::hidden(),
+        );
+    }
+    let bar = ProgressBar::new(measurements as u64);
     bar.set_style(
         ProgressStyle::with_template("{bar:30} {pos}/{len} [{elapsed_precise}, ETA {eta}] {msg}")
             .expect("the template is a valid literal"),
     );
+    // Redraw while one long measurement runs, so the elapsed time keeps moving.
     bar.enable_steady_tick(Duration::from_millis(250));
     bar
 }
