@@ -133,8 +133,7 @@ pub fn run_plan(
                 };
                 for batch in &batches {
                     let kind = batch.kind();
-                    let counted = count_pass(widest, tracer.as_ref(), batch);
-                    let timings = pools
+                    let timings: Vec<Timing> = pools
                         .iter()
                         .map(|pool| {
                             progress.set_message(format!(
@@ -151,6 +150,8 @@ pub fn run_plan(
                             timing
                         })
                         .collect();
+                    // After the timed passes, so it never acts as an extra warm-up for them.
+                    let counted = count_pass(widest, tracer.as_ref(), batch);
                     cases.push(Case {
                         scene: scene_index,
                         triangles: frame.mesh.len(),
