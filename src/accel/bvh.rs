@@ -10,6 +10,7 @@ use std::time::Instant;
 
 use glam::Vec3;
 
+use super::child_pairs::{child_pairs, ChildPair};
 use crate::error::{Error, Result};
 use crate::geometry::{Aabb, Triangle};
 use crate::tracers::Params;
@@ -82,6 +83,8 @@ pub struct Bvh {
     pub triangles: Vec<Triangle>,
     /// Scene primitive id of each entry of `triangles`.
     pub prim_ids: Vec<u32>,
+    /// Both children's boxes of every interior node, for SIMD single-ray traversal.
+    pub pairs: Vec<ChildPair>,
     pub config: BvhConfig,
     pub build_seconds: f64,
 }
@@ -171,6 +174,7 @@ impl Bvh {
         Bvh {
             triangles: order.iter().map(|&i| triangles[i as usize]).collect(),
             prim_ids: order,
+            pairs: child_pairs(&nodes),
             nodes,
             depth,
             config,

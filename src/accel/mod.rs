@@ -2,6 +2,7 @@
 //! and only for the tracers that need it (see `experiment::plan`).
 
 pub mod bvh;
+pub mod child_pairs;
 
 use std::sync::Arc;
 

@@ -1,9 +1,12 @@
 //! The reference tracer: one ray at a time through the binary BVH, nearer child first. Robust by
 //! construction — conservative slab test (Ize 2013) and watertight triangle test (Woop et al. 2013)
 //! — it is the yardstick the packet, grid and stream tracers are checked and measured against.
+//! Both children of a node are tested at once with SSE on the child-pair layout
+//! (`accel::child_pairs`).
 
 use std::sync::Arc;
 
+use crate::accel::child_pairs::PairRayTest;
 use crate::accel::{Bvh, BvhConfig};
 use crate::geometry::{Hit, Ray, RayBoxTest, Rays, WatertightRay};
 use crate::stats::Stats;
@@ -11,6 +14,16 @@ use crate::tracers::Kernel;
 
 pub struct ReferenceTracer {
     bvh: Arc<Bvh>,
+}
+
+/// A node waiting on the stack: its index, its triangle range (`count > 0`: leaf) and the
+/// distance at which the ray enters its box.
+#[derive(Clone, Copy, Default)]
+struct Pending {
+    index: u32,
+    first: u32,
+    count: u32,
+    enter: f32,
 }
 
 impl ReferenceTracer {
@@ -29,34 +42,42 @@ impl ReferenceTracer {
         if bvh.is_empty() {
             return best;
         }
-        let boxes = RayBoxTest::new(ray.origin, ray.dir);
-        let tris = WatertightRay::new(ray.origin, ray.dir);
         let (tmin, mut tmax) = (ray.tmin, ray.tmax);
-        let depth = |i: usize| if S::ENABLED { bvh.depth[i] as usize } else { 0 };
+        let depth = |i: u32| {
+            if S::ENABLED {
+                bvh.depth[i as usize] as usize
+            } else {
+                0
+            }
+        };
 
         if S::ENABLED {
             stats.aabb_test(0);
         }
-        if boxes
-            .hit(&bvh.nodes[Bvh::ROOT].bounds, tmin, tmax)
-            .is_none()
-        {
+        let root = &bvh.nodes[Bvh::ROOT];
+        let Some(enter) = RayBoxTest::new(ray.origin, ray.dir).hit(&root.bounds, tmin, tmax) else {
             return best;
-        }
+        };
+        let boxes = PairRayTest::new(ray.origin, ray.dir);
+        let tris = WatertightRay::new(ray.origin, ray.dir);
         // Far children wait here with their entry distance, so a pop can skip boxes that now lie
         // beyond the closest hit without testing them again.
-        let mut stack = [(0u32, 0.0f32); BvhConfig::DEPTH_LIMIT + 2];
+        let mut stack = [Pending::default(); BvhConfig::DEPTH_LIMIT + 2];
         let mut top = 0;
-        let mut index = Bvh::ROOT;
+        let mut node = Pending {
+            index: Bvh::ROOT as u32,
+            first: root.first,
+            count: root.count,
+            enter,
+        };
         loop {
-            let node = &bvh.nodes[index];
             if S::ENABLED {
-                stats.node(depth(index));
+                stats.node(depth(node.index));
             }
-            if node.is_leaf() {
+            if node.count > 0 {
                 for i in node.first as usize..(node.first + node.count) as usize {
                     if S::ENABLED {
-                        stats.triangle_test(depth(index));
+                        stats.triangle_test(depth(node.index));
                     }
                     if let Some((t, u, v)) = tris.intersect(&bvh.triangles[i], tmin, tmax) {
                         best = Hit {
@@ -72,30 +93,35 @@ impl ReferenceTracer {
                     }
                 }
             } else {
-                let (a, b) = (node.first as usize, node.first as usize + 1);
+                let pair = &bvh.pairs[node.index as usize];
                 if S::ENABLED {
-                    stats.aabb_test(depth(a));
-                    stats.aabb_test(depth(b));
+                    stats.aabb_test(depth(node.first));
+                    stats.aabb_test(depth(node.first + 1));
                 }
-                let ta = boxes.hit(&bvh.nodes[a].bounds, tmin, tmax);
-                let tb = boxes.hit(&bvh.nodes[b].bounds, tmin, tmax);
-                match (ta, tb) {
-                    (Some(ta), Some(tb)) => {
-                        let (near, far, t_far) = if ta <= tb { (a, b, tb) } else { (b, a, ta) };
-                        stack[top] = (far as u32, t_far);
+                let (enter, hit) = boxes.test(pair, tmin, tmax);
+                let child = |c: usize| Pending {
+                    index: node.first + c as u32,
+                    first: pair.first[c],
+                    count: pair.count[c],
+                    enter: enter[c],
+                };
+                match hit {
+                    0b11 => {
+                        let (near, far) = if enter[0] <= enter[1] { (0, 1) } else { (1, 0) };
+                        stack[top] = child(far);
                         top += 1;
-                        index = near;
+                        node = child(near);
                         continue;
                     }
-                    (Some(_), None) => {
-                        index = a;
+                    0b01 => {
+                        node = child(0);
                         continue;
                     }
-                    (None, Some(_)) => {
-                        index = b;
+                    0b10 => {
+                        node = child(1);
                         continue;
                     }
-                    (None, None) => {}
+                    _ => {}
                 }
             }
             // Pop, skipping nodes now beyond the closest hit.
@@ -104,9 +130,8 @@ impl ReferenceTracer {
                     return best;
                 }
                 top -= 1;
-                let (node, t_enter) = stack[top];
-                if t_enter <= tmax {
-                    index = node as usize;
+                if stack[top].enter <= tmax {
+                    node = stack[top];
                     break;
                 }
             }
