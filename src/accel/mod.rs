@@ -2,6 +2,7 @@
 //! and only for the tracers that need it (see `experiment::plan`).
 
 pub mod bvh;
+pub mod obvhs;
 
 use std::sync::Arc;
 
@@ -10,18 +11,22 @@ use crate::scene::Mesh;
 use crate::tracers::Params;
 
 pub use bvh::{Bvh, BvhConfig, BvhNode};
+pub use self::obvhs::{ObvhsBvh, ObvhsQuality};
 
 /// Which structure a tracer traverses.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum AccelKind {
     /// Our binned-SAH binary BVH.
     Bvh,
+    /// obvhs's compressed 8-wide BVH, built by obvhs's own builder.
+    Obvhs,
 }
 
 impl AccelKind {
     pub fn name(self) -> &'static str {
         match self {
             AccelKind::Bvh => "bvh",
+            AccelKind::Obvhs => "obvhs",
         }
     }
 
@@ -29,12 +34,16 @@ impl AccelKind {
     pub fn params(self) -> &'static [&'static str] {
         match self {
             AccelKind::Bvh => BvhConfig::PARAMS,
+            AccelKind::Obvhs => ObvhsQuality::PARAMS,
         }
     }
 
     pub fn build(self, mesh: &Mesh, params: &Params) -> Result<Accel> {
         Ok(match self {
             AccelKind::Bvh => Accel::Bvh(Arc::new(Bvh::build(&mesh.triangles, BvhConfig::from_params(params)?))),
+            AccelKind::Obvhs => {
+                Accel::Obvhs(Arc::new(ObvhsBvh::build(&mesh.triangles, ObvhsQuality::from_params(params)?)?))
+            }
         })
     }
 }
@@ -43,12 +52,14 @@ impl AccelKind {
 #[derive(Clone, Debug)]
 pub enum Accel {
     Bvh(Arc<Bvh>),
+    Obvhs(Arc<ObvhsBvh>),
 }
 
 impl Accel {
     pub fn build_seconds(&self) -> f64 {
         match self {
             Accel::Bvh(b) => b.build_seconds,
+            Accel::Obvhs(b) => b.build_seconds,
         }
     }
 }

@@ -3,7 +3,7 @@
 
 use crate::accel::{Accel, AccelKind};
 use crate::error::{Error, Result};
-use crate::tracers::{reference::ReferenceTracer, Params, Tracer};
+use crate::tracers::{obvhs::ObvhsTracer, reference::ReferenceTracer, Params, Tracer};
 
 pub struct TracerInfo {
     pub name: &'static str,
@@ -13,12 +13,20 @@ pub struct TracerInfo {
     pub about: &'static str,
 }
 
-pub const TRACERS: &[TracerInfo] = &[TracerInfo {
-    name: "reference",
-    accel: AccelKind::Bvh,
-    params: &[],
-    about: "single rays, binary SAH BVH, nearer child first; watertight triangles, robust slabs",
-}];
+pub const TRACERS: &[TracerInfo] = &[
+    TracerInfo {
+        name: "reference",
+        accel: AccelKind::Bvh,
+        params: &[],
+        about: "single rays, binary SAH BVH, nearer child first; watertight triangles, robust slabs",
+    },
+    TracerInfo {
+        name: "obvhs",
+        accel: AccelKind::Obvhs,
+        params: &[],
+        about: "single rays, obvhs 0.4 compressed 8-wide BVH and its own traversal; watertight triangles",
+    },
+];
 
 impl TracerInfo {
     pub fn find(name: &str) -> Result<&'static TracerInfo> {
@@ -39,6 +47,7 @@ pub fn build_tracer(info: &TracerInfo, params: &Params, accel: &Accel) -> Result
     params.check_known(info.name, &info.accepts())?;
     match (info.name, accel) {
         ("reference", Accel::Bvh(bvh)) => Ok(Box::new(ReferenceTracer::new(bvh.clone()))),
+        ("obvhs", Accel::Obvhs(bvh)) => Ok(Box::new(ObvhsTracer::new(bvh.clone()))),
         (name, _) => Err(Error::runtime(format!("tracer {name} was given the wrong structure"))),
     }
 }
