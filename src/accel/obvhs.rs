@@ -1,10 +1,10 @@
 //! The obvhs baseline structure: obvhs 0.4's compressed 8-wide BVH (CWBVH, Ylitie et al. 2017)
-//! built by obvhs's own triangle builder, `build_cwbvh_from_tris` (PLOC clustering, Meister &
-//! Bittner 2018, then parallel reinsertion, then collapse to 8-wide compressed nodes).
+//! built by obvhs's own triangle builder, `build_cwbvh_from_tris`: PLOC clustering (Meister &
+//! Bittner 2018), then reinsertion (Meister & Bittner 2022), then collapse to 8-wide nodes.
 //!
 //! Its build presets are the structure parameter `quality`. The default is `medium_build`: the
-//! preset obvhs itself uses in its crate documentation, README example and Cornell-box CWBVH
-//! example, and the one it describes as "around the same build time as embree but with faster
+//! preset obvhs itself uses in its crate-level example and its `basic_cwbvh` and
+//! `cornell_box_cwbvh` examples, and the one it describes as "around the same build time as embree but with faster
 //! traversal" — the fair point to set against our Embree baseline. obvhs is built without its
 //! `parallel` feature, so every preset builds on one thread.
 
