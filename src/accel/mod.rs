@@ -55,10 +55,6 @@ impl AccelKind {
                 mesh,
                 EmbreeConfig::from_params(params)?,
             )?)),
-            AccelKind::Bvh => Accel::Bvh(Arc::new(Bvh::build(
-                &mesh.triangles,
-                BvhConfig::from_params(params)?,
-            ))),
             AccelKind::Obvhs => Accel::Obvhs(Arc::new(ObvhsBvh::build(
                 &mesh.triangles,
                 ObvhsQuality::from_params(params)?,
