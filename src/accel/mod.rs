@@ -3,6 +3,7 @@
 
 pub mod bvh;
 pub mod child_pairs;
+pub mod obvhs;
 
 use std::sync::Arc;
 
@@ -11,6 +12,7 @@ use crate::scene::Mesh;
 use crate::tracers::embree::{Device, EmbreeConfig, EmbreeScene};
 use crate::tracers::Params;
 
+pub use self::obvhs::{ObvhsBvh, ObvhsQuality};
 pub use bvh::{Bvh, BvhConfig, BvhNode};
 
 /// Which structure a tracer traverses.
@@ -20,6 +22,8 @@ pub enum AccelKind {
     Bvh,
     /// Embree's own BVH over the mesh, built by the library (`quality`, `robust`).
     Embree,
+    /// obvhs's compressed 8-wide BVH, built by obvhs's own builder.
+    Obvhs,
 }
 
 impl AccelKind {
@@ -27,6 +31,7 @@ impl AccelKind {
         match self {
             AccelKind::Bvh => "bvh",
             AccelKind::Embree => "embree",
+            AccelKind::Obvhs => "obvhs",
         }
     }
 
@@ -35,6 +40,7 @@ impl AccelKind {
         match self {
             AccelKind::Bvh => BvhConfig::PARAMS,
             AccelKind::Embree => EmbreeConfig::PARAMS,
+            AccelKind::Obvhs => ObvhsQuality::PARAMS,
         }
     }
 
@@ -49,6 +55,10 @@ impl AccelKind {
                 mesh,
                 EmbreeConfig::from_params(params)?,
             )?)),
+            AccelKind::Obvhs => Accel::Obvhs(Arc::new(ObvhsBvh::build(
+                &mesh.triangles,
+                ObvhsQuality::from_params(params)?,
+            )?)),
         })
     }
 }
@@ -58,6 +68,7 @@ impl AccelKind {
 pub enum Accel {
     Bvh(Arc<Bvh>),
     Embree(Arc<EmbreeScene>),
+    Obvhs(Arc<ObvhsBvh>),
 }
 
 impl Accel {
@@ -65,6 +76,7 @@ impl Accel {
         match self {
             Accel::Bvh(b) => b.build_seconds,
             Accel::Embree(s) => s.build_seconds,
+            Accel::Obvhs(b) => b.build_seconds,
         }
     }
 }

@@ -2,6 +2,7 @@
 //! the benchmarks treat them alike. Adding a tracer is adding a file and one line in `registry.rs`.
 
 pub mod embree;
+pub mod obvhs;
 pub mod params;
 pub mod reference;
 pub mod registry;

@@ -6,7 +6,7 @@ use crate::error::{Error, Result};
 use crate::tracers::embree::{
     Coherence, EmbreeTracer, Packets16, Packets4, Packets8, Single, Stream,
 };
-use crate::tracers::{reference::ReferenceTracer, Params, Tracer};
+use crate::tracers::{obvhs::ObvhsTracer, reference::ReferenceTracer, Params, Tracer};
 
 pub struct TracerInfo {
     pub name: &'static str,
@@ -54,6 +54,12 @@ pub const TRACERS: &[TracerInfo] = &[
         params: Coherence::PARAMS,
         about: "Embree 3 baseline: AoS ray streams, rtcIntersect1M / rtcOccluded1M",
     },
+    TracerInfo {
+        name: "obvhs",
+        accel: AccelKind::Obvhs,
+        params: &[],
+        about: "single rays, obvhs 0.4 compressed 8-wide BVH and its own traversal; watertight triangles"
+    },
 ];
 
 impl TracerInfo {
@@ -97,6 +103,7 @@ pub fn build_tracer(info: &TracerInfo, params: &Params, accel: &Accel) -> Result
         ("embree-stream", Accel::Embree(s)) => {
             Ok(Box::new(EmbreeTracer::<Stream>::from_params(s, params)?))
         }
+        ("obvhs", Accel::Obvhs(bvh)) => Ok(Box::new(ObvhsTracer::new(bvh.clone()))),
         (name, _) => Err(Error::runtime(format!(
             "tracer {name} was given the wrong structure"
         ))),

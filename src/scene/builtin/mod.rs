@@ -1,0 +1,163 @@
+//! Built-in scene generators: embedded, no files needed. Each takes an integer `size` that sweeps
+//! the triangle count from about a thousand to a million or more, sets materials, point lights and
+//! a camera, and either a camera path (static scenes) or an `Animation` (marbles, deforming).
+//!
+//! | generator | size          | triangles               | ~1K      | default    | ≥ 1M           |
+//! |-----------|---------------|-------------------------|----------|------------|----------------|
+//! | room      | n subdivision | 96·n²                   | 3: 864   | 3: 864     | 103: 1,018,464 |
+//! | rings     | s levels      | 1920·s(s+1)(2s+1)/6 + 2 | 1: 1,922 | 4: 57,602  | 12: 1,248,002  |
+//! | balls     | L depth       | 18·(9^(L+1) − 1) + 2    | 1: 1,442 | 3: 118,082 | 4: 1,062,866   |
+//! | marbles   | N marbles     | 80·N + 10               | 12: 970  | 110: 8,810 | 12500: 1000010 |
+//! | deforming | n × n flag    | 2·n² + 26               | 22: 994  | 96: 18,458 | 708: 1,002,554 |
+//!
+//! Each generator's `triangle_count` gives the exact count without generating.
+
+pub mod balls;
+pub mod deforming;
+pub mod marble_physics;
+pub mod marbles;
+pub mod random;
+pub mod rings;
+pub mod room;
+pub mod tessellate;
+
+use crate::error::{Error, Result};
+use crate::scene::{Camera, CameraKey, CameraPath, Scene};
+
+/// What the integer `size` of a generator means and which values it accepts.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SizeKnob {
+    pub default: u32,
+    pub min: u32,
+    pub max: u32,
+    /// What the number counts, for help texts ("subdivisions per face edge", ...).
+    pub meaning: &'static str,
+}
+
+/// One generator: its name, a one-line description, its size knob, the exact triangle count for a
+/// size (without generating), and the generator itself.
+#[derive(Clone, Copy, Debug)]
+pub struct Generator {
+    pub name: &'static str,
+    pub about: &'static str,
+    pub size: SizeKnob,
+    pub triangle_count: fn(u32) -> usize,
+    pub build: fn(u32) -> Scene,
+}
+
+pub const GENERATORS: &[Generator] = &[
+    room::GENERATOR,
+    rings::GENERATOR,
+    balls::GENERATOR,
+    marbles::GENERATOR,
+    deforming::GENERATOR,
+];
+
+/// `(name, about)` of every generator, in the order of `GENERATORS`.
+pub const BUILTINS: &[(&str, &str)] = &names_and_about::<{ GENERATORS.len() }>();
+
+const fn names_and_about<const N: usize>() -> [(&'static str, &'static str); N] {
+    let mut out = [("", ""); N];
+    let mut i = 0;
+    while i < N {
+        out[i] = (GENERATORS[i].name, GENERATORS[i].about);
+        i += 1;
+    }
+    out
+}
+
+pub fn find(name: &str) -> Option<&'static Generator> {
+    GENERATORS.iter().find(|g| g.name == name)
+}
+
+/// The names of all generators, comma-separated, for error messages.
+pub fn known_names() -> String {
+    GENERATORS
+        .iter()
+        .map(|g| g.name)
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// Generates the built-in scene `name` at `size` (its default when `None`).
+pub fn generate(name: &str, size: Option<u32>) -> Result<Scene> {
+    let generator = find(name).ok_or_else(|| {
+        Error::usage(format!(
+            "unknown built-in scene '{name}' (built-ins: {})",
+            known_names()
+        ))
+    })?;
+    let size = generator.checked_size(size)?;
+    Ok((generator.build)(size))
+}
+
+impl Generator {
+    /// `size`, or the default when `None`; an error naming the valid range when out of it.
+    pub fn checked_size(&self, size: Option<u32>) -> Result<u32> {
+        let knob = &self.size;
+        let size = size.unwrap_or(knob.default);
+        if (knob.min..=knob.max).contains(&size) {
+            Ok(size)
+        } else {
+            Err(Error::usage(format!(
+                "built-in scene '{}': size {size} is out of range {}..={} (size = {})",
+                self.name, knob.min, knob.max, knob.meaning
+            )))
+        }
+    }
+}
+
+/// A camera path through `keys` (seconds, camera), for the static scenes' fly-throughs.
+fn camera_path(keys: &[(f32, Camera)]) -> CameraPath {
+    CameraPath {
+        keys: keys
+            .iter()
+            .map(|&(time, camera)| CameraKey { time, camera })
+            .collect(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn registry_lists_every_generator_and_rejects_unknown_names_and_sizes() {
+        let names: Vec<&str> = BUILTINS.iter().map(|b| b.0).collect();
+        assert_eq!(names, ["room", "rings", "balls", "marbles", "deforming"]);
+        let err = generate("nope", None).unwrap_err().to_string();
+        assert!(
+            err.contains("nope") && err.contains("room, rings, balls, marbles, deforming"),
+            "{err}"
+        );
+        let err = generate("balls", Some(99)).unwrap_err().to_string();
+        assert!(err.contains("out of range 1..=5"), "{err}");
+        assert!(generate("room", Some(0)).is_err());
+    }
+
+    #[test]
+    fn every_generator_matches_its_count_and_source_at_its_default_size() {
+        for g in GENERATORS {
+            let scene = generate(g.name, None).unwrap();
+            assert_eq!(
+                scene.triangle_count(),
+                (g.triangle_count)(g.size.default),
+                "{}",
+                g.name
+            );
+            assert_eq!(scene.source, format!("builtin:{}", g.name));
+            assert_eq!(scene.name, g.name);
+            assert!(!scene.lights.is_empty());
+            assert_eq!(scene.mesh.material_ids.len(), scene.mesh.triangles.len());
+            let materials = scene.materials.len() as u32;
+            assert!(scene.mesh.material_ids.iter().all(|&m| m < materials));
+            assert!(scene.mesh.triangles.iter().all(|t| t.is_finite()));
+            assert!(
+                scene.duration() >= 4.0,
+                "{} lasts {}",
+                g.name,
+                scene.duration()
+            );
+        }
+    }
+}
