@@ -17,6 +17,7 @@ use std::path::{Path, PathBuf};
 use serde::Serialize;
 
 use crate::error::{Error, Result};
+use crate::scene::library::load_scene;
 
 pub use config::{Experiment, SceneSpec, StructureKey, TracerInstance};
 pub use plan::{Plan, SceneLoader};
@@ -66,6 +67,17 @@ impl RunOverrides {
         }
         Ok(())
     }
+}
+
+/// Runs the experiment in `path` with the built-in and library scenes; returns the results
+/// directory.
+pub fn run_experiment(path: &Path, overrides: &RunOverrides) -> Result<PathBuf> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let mut exp = Experiment::parse(path, &text)?;
+    overrides.apply(&mut exp)?;
+    run(&exp, &text, overrides, &|spec: &SceneSpec| {
+        load_scene(&spec.name, spec.size)
+    })
 }
 
 /// Runs a parsed experiment (`file_text`: its file as written, for meta.json) with scenes from
@@ -346,6 +358,32 @@ mod tests {
         assert!(dir.join("throughput_lit.png").is_file());
         assert!(!dir.join("depths_lit_embree1.png").exists());
         fs::remove_dir_all(&out).unwrap();
+    }
+
+    #[test]
+    fn the_quick_experiment_plans_as_documented() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments/quick.toml");
+        let exp = Experiment::load(&path).unwrap();
+        let plan = Plan::derive(&exp, &|s: &SceneSpec| load_scene(&s.name, s.size)).unwrap();
+        let scenes: Vec<(&str, usize, bool)> = plan
+            .scenes
+            .iter()
+            .map(|s| (s.name.as_str(), s.triangles, s.rebuild_per_frame))
+            .collect();
+        assert_eq!(
+            scenes,
+            [
+                ("room", 864),
+                ("balls", 118_082),
+                ("rings", 174_722),
+                ("marbles", 8_810)
+            ]
+            .map(|(name, triangles)| (name, triangles, name == "marbles"))
+        );
+        let labels: Vec<&str> = plan.instances.iter().map(|i| i.label.as_str()).collect();
+        assert_eq!(labels, ["reference", "obvhs", "embree1", "embree16"]);
+        // Every scene has lights: 4 scenes × 2 frames × 4 tracers × 3 kinds × 2 thread counts.
+        assert_eq!(plan.measurements(), 192);
     }
 
     /// Nothing but the (empty) experiment directory may remain.

@@ -126,7 +126,11 @@ impl Plan {
         let instances = plan_instances(exp)?;
         let mut scenes = Vec::with_capacity(exp.scenes.len());
         for spec in &exp.scenes {
-            let scene = load(spec)?;
+            // A bad scene name is a mistake in the experiment file: say which file.
+            let scene = load(spec).map_err(|e| match e {
+                Error::Usage(m) => Error::usage(format!("{}: {m}", exp.path.display())),
+                other => other,
+            })?;
             scenes.push(plan_scene(exp, spec, &scene));
         }
         let mut notes = Vec::new();
