@@ -120,8 +120,9 @@ impl ScenePlan {
 }
 
 impl Plan {
-    /// Loads every scene once to learn what it needs, and builds every tracer instance once on a
-    /// one-triangle mesh so bad parameter values fail now, not an hour into the run.
+    /// Loads every scene to learn what it needs, and builds every tracer instance once on a
+    /// one-triangle mesh so bad parameter values fail now, not an hour into the run. Scenes are
+    /// dropped again (the run reloads each in turn), so only one is ever held in memory.
     pub fn derive(exp: &Experiment, load: SceneLoader) -> Result<Plan> {
         let instances = plan_instances(exp)?;
         let mut scenes = Vec::with_capacity(exp.scenes.len());
