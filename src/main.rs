@@ -1,5 +1,269 @@
-//! The `raylab` command line: run, render, verify, scenes.
+//! The `raylab` command line: run, render, verify, scenes. Parsing and printing only; the work is
+//! in the library. Any `Error` is printed once and exits with its code (2 for bad input).
 
-fn main() {
-    println!("raylab");
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+use raylab::error::{Error, Result};
+use raylab::experiment::{run_experiment, RunOverrides};
+use raylab::render::raycast::render_raycast;
+use raylab::scene::library::{list_scenes, load_scene};
+use raylab::tracers::Params;
+use raylab::verify::{self, format_table, Tolerance};
+
+#[derive(Parser)]
+#[command(
+    name = "raylab",
+    version,
+    about = "Coherent ray tracing testbed: packet, grid, stream and frustum tracers against Embree and obvhs"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Run an experiment TOML: scenes × tracers × parameters × frames → results/<experiment>/<run-id>/.
+    Run {
+        experiment: PathBuf,
+        /// Results root (default: the experiment's, else `results/`).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Override the experiment's thread counts.
+        #[arg(long, num_args = 1..)]
+        threads: Option<Vec<usize>>,
+        /// Override the resolution (square).
+        #[arg(long)]
+        resolution: Option<u32>,
+        /// Override the number of frames.
+        #[arg(long)]
+        frames: Option<usize>,
+        /// Override the untimed warm-up passes.
+        #[arg(long)]
+        warmup: Option<usize>,
+        /// Override the timed repeats.
+        #[arg(long)]
+        repeats: Option<usize>,
+    },
+    /// Render a frame with ray casting, point-light shadows and Lambert shading to a PNG.
+    Render {
+        #[arg(long)]
+        scene: String,
+        /// The scene's size knob (built-in generators).
+        #[arg(long)]
+        size: Option<u32>,
+        #[arg(long, default_value = "reference")]
+        tracer: String,
+        /// Tracer or structure parameter, `key=value` (repeatable).
+        #[arg(long = "param", value_parser = parse_param)]
+        params: Vec<(String, String)>,
+        #[arg(long, default_value_t = 1024)]
+        width: u32,
+        #[arg(long, default_value_t = 768)]
+        height: u32,
+        /// Frame index along the scene's animation / camera path, of `--frames`.
+        #[arg(long, default_value_t = 0)]
+        frame: usize,
+        #[arg(long, default_value_t = 1)]
+        frames: usize,
+        #[arg(long, short, default_value = "render.png")]
+        output: PathBuf,
+    },
+    /// Trace identical rays with a tracer and with Embree (robust) and compare them ray by ray.
+    Verify {
+        #[arg(long)]
+        scene: String,
+        #[arg(long)]
+        size: Option<u32>,
+        #[arg(long)]
+        tracer: String,
+        #[arg(long = "param", value_parser = parse_param)]
+        params: Vec<(String, String)>,
+        #[arg(long, default_value_t = 512)]
+        resolution: u32,
+        #[arg(long, default_value_t = 0)]
+        frame: usize,
+        #[arg(long, default_value_t = 1)]
+        frames: usize,
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Unexplained disagreements allowed per ray kind.
+        #[arg(long, default_value_t = 0)]
+        max_unexplained: u64,
+        /// Largest allowed 99th-percentile relative distance error.
+        #[arg(long, default_value_t = 1e-4)]
+        max_distance_error: f64,
+        /// Where summary.csv and disagreements.csv go (default results/verify/<scene>-<tracer>).
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
+    /// List built-in scenes and the scenes found on the search path, with triangle counts.
+    Scenes,
+}
+
+fn parse_param(s: &str) -> std::result::Result<(String, String), String> {
+    s.split_once('=')
+        .map(|(k, v)| (k.trim().to_string(), v.trim().to_string()))
+        .ok_or_else(|| format!("expected key=value, got {s:?}"))
+}
+
+fn params_of(pairs: Vec<(String, String)>) -> Params {
+    pairs
+        .into_iter()
+        .fold(Params::new(), |p, (k, v)| p.with(&k, v))
+}
+
+fn check_frame(frame: usize, frames: usize) -> Result<()> {
+    if frames == 0 || frame >= frames {
+        return Err(Error::usage(format!(
+            "--frame {frame} is not one of --frames {frames}"
+        )));
+    }
+    Ok(())
+}
+
+/// Writes into a temporary sibling of `dir` and renames it into place, so a failure never leaves
+/// a half-written directory behind.
+fn write_dir_atomically(dir: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
+    let io = |e: std::io::Error| Error::runtime(format!("{}: {e}", dir.display()));
+    let parent = dir.parent().unwrap_or(Path::new("."));
+    std::fs::create_dir_all(parent).map_err(io)?;
+    let name = dir
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let tmp = parent.join(format!(".{name}.partial"));
+    let _ = std::fs::remove_dir_all(&tmp);
+    std::fs::create_dir_all(&tmp).map_err(io)?;
+    if let Err(e) = write(&tmp) {
+        let _ = std::fs::remove_dir_all(&tmp);
+        return Err(e);
+    }
+    let _ = std::fs::remove_dir_all(dir);
+    std::fs::rename(&tmp, dir).map_err(io)
+}
+
+fn execute(command: Command) -> Result<bool> {
+    match command {
+        Command::Run {
+            experiment,
+            out,
+            threads,
+            resolution,
+            frames,
+            warmup,
+            repeats,
+        } => {
+            let overrides = RunOverrides {
+                output: out,
+                threads,
+                resolution: resolution.map(|r| (r, r)),
+                frames,
+                warmup,
+                repeats,
+            };
+            let dir = run_experiment(&experiment, &overrides)?;
+            println!("results: {}", dir.display());
+        }
+        Command::Render {
+            scene,
+            size,
+            tracer,
+            params,
+            width,
+            height,
+            frame,
+            frames,
+            output,
+        } => {
+            check_frame(frame, frames)?;
+            let scene = load_scene(&scene, size)?;
+            let frame = scene.frame(frame, frames);
+            let tracer = verify::tracer_for_frame(&tracer, &params_of(params), &frame)?;
+            let image = render_raycast(&scene, &frame, tracer.as_ref(), width, height);
+            image.save_png(&output)?;
+            println!(
+                "wrote {} ({}×{}, {} triangles)",
+                output.display(),
+                width,
+                height,
+                frame.mesh.len()
+            );
+        }
+        Command::Verify {
+            scene,
+            size,
+            tracer,
+            params,
+            resolution,
+            frame,
+            frames,
+            seed,
+            max_unexplained,
+            max_distance_error,
+            out,
+        } => {
+            check_frame(frame, frames)?;
+            let loaded = load_scene(&scene, size)?;
+            let frame = loaded.frame(frame, frames);
+            let reports = verify::verify_frame(
+                &loaded,
+                &frame,
+                &tracer,
+                &params_of(params),
+                resolution,
+                resolution,
+                seed,
+            )?;
+            let tol = Tolerance {
+                max_unexplained,
+                max_distance_error_p99: max_distance_error,
+            };
+            println!(
+                "{tracer} vs {} on {scene}, frame {}, {resolution}²:",
+                verify::ORACLE,
+                frame.index
+            );
+            print!("{}", format_table(&reports, &tol));
+            let dir = out.unwrap_or_else(|| {
+                PathBuf::from("results/verify").join(format!("{scene}-{tracer}"))
+            });
+            write_dir_atomically(&dir, |tmp| {
+                verify::write_csv(tmp, &scene, &tracer, &reports)
+            })?;
+            println!("CSV: {}", dir.display());
+            let pass = reports.iter().all(|r| r.passes(&tol));
+            println!(
+                "{} (tolerance: ≤ {max_unexplained} unexplained disagreements per ray kind, p99 distance error ≤ {max_distance_error:e})",
+                if pass { "PASS" } else { "FAIL" }
+            );
+            return Ok(pass);
+        }
+        Command::Scenes => {
+            println!("{:<22} {:>10}  source", "scene", "triangles");
+            for listing in list_scenes() {
+                let triangles = match load_scene(&listing.name, None) {
+                    Ok(s) => s.triangle_count().to_string(),
+                    Err(e) => format!("error: {e}"),
+                };
+                println!("{:<22} {:>10}  {}", listing.name, triangles, listing.source);
+            }
+        }
+    }
+    Ok(true)
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match execute(cli.command) {
+        Ok(true) => ExitCode::SUCCESS,
+        Ok(false) => ExitCode::from(1),
+        Err(e) => {
+            eprintln!("raylab: {e}");
+            ExitCode::from(e.exit_code() as u8)
+        }
+    }
 }

@@ -8,7 +8,7 @@ use rayon::prelude::*;
 
 use crate::geometry::{Hit, RayBatch, RayKind};
 use crate::render::image::Image;
-use crate::render::rays::{hit_point, shadow_ray, CameraProjection};
+use crate::render::rays::{shadow_ray, CameraProjection, SurfacePoint};
 use crate::scene::{Frame, Light, Scene};
 use crate::tracers::Tracer;
 
@@ -59,9 +59,10 @@ pub fn render_raycast(
             let mut shadows = RayBatch::new(RayKind::Shadow);
             let mut served = Vec::new();
             for (i, hit) in hits.iter().enumerate().filter(|(_, h)| h.is_hit()) {
-                let (p, n) = hit_point(&frame.mesh, &primary.ray(i), hit);
+                let surface = SurfacePoint::of_hit(&frame.mesh, &primary.ray(i), hit);
+                let (p, n) = (surface.p, surface.n);
                 for (l, (position, _)) in lights.iter().enumerate() {
-                    if let Some(ray) = shadow_ray(p, n, *position) {
+                    if let Some(ray) = shadow_ray(&surface, *position) {
                         shadows.push(ray, primary.pixel[i]);
                         served.push((
                             i,

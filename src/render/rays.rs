@@ -4,7 +4,7 @@
 use glam::Vec3;
 
 use crate::geometry::{Hit, Ray, RayBatch, RayKind};
-use crate::render::offset::offset_ray_origin;
+use crate::render::offset::{coordinate_scale, offset_ray_origin};
 use crate::render::sampling::{concentric_disk, cosine_hemisphere, uniform};
 use crate::scene::{Camera, Light, Mesh, Scene};
 
@@ -108,21 +108,39 @@ pub fn primary_rays(camera: &Camera, width: u32, height: u32) -> RayBatch {
     batch
 }
 
-/// The surface point of a hit, and the geometric normal turned to face the incoming ray.
-pub fn hit_point(mesh: &Mesh, ray: &Ray, hit: &Hit) -> (Vec3, Vec3) {
-    let tri = &mesh.triangles[hit.prim as usize];
-    let p = tri.point(hit.u, hit.v);
-    let n = tri.normal().normalize_or_zero();
-    (p, if n.dot(ray.dir) > 0.0 { -n } else { n })
+/// Where a ray hit a surface: the point, the geometric normal turned to face the incoming ray,
+/// and the coordinate scale that sets how far new rays must start from it.
+#[derive(Clone, Copy, Debug)]
+pub struct SurfacePoint {
+    pub p: Vec3,
+    pub n: Vec3,
+    pub scale: f32,
 }
 
-/// A shadow ray from `p` (facing normal `n`) towards `target`, or `None` when the target is behind
-/// the surface (the renderer would not cast it: the point is in its own shadow).
-pub fn shadow_ray(p: Vec3, n: Vec3, target: Vec3) -> Option<Ray> {
-    if (target - p).dot(n) <= 0.0 {
+impl SurfacePoint {
+    pub fn of_hit(mesh: &Mesh, ray: &Ray, hit: &Hit) -> Self {
+        let tri = &mesh.triangles[hit.prim as usize];
+        let n = tri.normal().normalize_or_zero();
+        SurfacePoint {
+            p: tri.point(hit.u, hit.v),
+            n: if n.dot(ray.dir) > 0.0 { -n } else { n },
+            scale: coordinate_scale(tri),
+        }
+    }
+
+    /// The origin of a ray leaving the surface on the side the normal faces.
+    pub fn ray_origin(&self) -> Vec3 {
+        offset_ray_origin(self.p, self.n, self.scale)
+    }
+}
+
+/// A shadow ray from `surface` towards `target`, or `None` when the target is behind the surface
+/// (the renderer would not cast it: the point is in its own shadow).
+pub fn shadow_ray(surface: &SurfacePoint, target: Vec3) -> Option<Ray> {
+    if (target - surface.p).dot(surface.n) <= 0.0 {
         return None;
     }
-    let origin = offset_ray_origin(p, n);
+    let origin = surface.ray_origin();
     let to_light = target - origin;
     let distance = to_light.length();
     // Stop just short of the light so a light sample lying on geometry does not shadow itself.
@@ -144,7 +162,7 @@ pub fn shadow_rays(
 ) -> RayBatch {
     let mut batch = RayBatch::new(RayKind::Shadow);
     for (i, hit) in hits.iter().enumerate().filter(|(_, h)| h.is_hit()) {
-        let (p, n) = hit_point(mesh, &primary.ray(i), hit);
+        let surface = SurfacePoint::of_hit(mesh, &primary.ray(i), hit);
         for (l, light) in scene.lights.iter().enumerate() {
             let sample = i as u64 * scene.lights.len() as u64 + l as u64;
             let target = match light {
@@ -153,7 +171,7 @@ pub fn shadow_rays(
                     light.sample_point(uniform(seed, sample, 0), uniform(seed, sample, 1))
                 }
             };
-            if let Some(ray) = shadow_ray(p, n, target) {
+            if let Some(ray) = shadow_ray(&surface, target) {
                 batch.push(ray, primary.pixel[i]);
             }
         }
@@ -165,10 +183,14 @@ pub fn shadow_rays(
 pub fn diffuse_rays(mesh: &Mesh, primary: &RayBatch, hits: &[Hit], seed: u64) -> RayBatch {
     let mut batch = RayBatch::new(RayKind::Diffuse);
     for (i, hit) in hits.iter().enumerate().filter(|(_, h)| h.is_hit()) {
-        let (p, n) = hit_point(mesh, &primary.ray(i), hit);
-        let dir = cosine_hemisphere(n, uniform(seed, i as u64, 0), uniform(seed, i as u64, 1));
+        let surface = SurfacePoint::of_hit(mesh, &primary.ray(i), hit);
+        let dir = cosine_hemisphere(
+            surface.n,
+            uniform(seed, i as u64, 0),
+            uniform(seed, i as u64, 1),
+        );
         batch.push(
-            Ray::new(offset_ray_origin(p, n), dir, 0.0, f32::INFINITY),
+            Ray::new(surface.ray_origin(), dir, 0.0, f32::INFINITY),
             primary.pixel[i],
         );
     }
@@ -246,10 +268,13 @@ mod tests {
 
     #[test]
     fn shadow_ray_is_skipped_behind_the_surface_and_stops_short_of_the_light() {
-        let p = Vec3::ZERO;
-        let n = Vec3::Y;
-        assert!(shadow_ray(p, n, Vec3::new(0.0, -1.0, 0.0)).is_none());
-        let r = shadow_ray(p, n, Vec3::new(0.0, 2.0, 0.0)).unwrap();
+        let surface = SurfacePoint {
+            p: Vec3::ZERO,
+            n: Vec3::Y,
+            scale: 1.0,
+        };
+        assert!(shadow_ray(&surface, Vec3::new(0.0, -1.0, 0.0)).is_none());
+        let r = shadow_ray(&surface, Vec3::new(0.0, 2.0, 0.0)).unwrap();
         assert!(r.origin.y > 0.0 && r.tmax < 2.0 && r.tmax > 1.99);
     }
 }

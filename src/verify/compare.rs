@@ -6,8 +6,10 @@ use crate::scene::Mesh;
 
 /// Relative distance under which two hits count as "the same distance".
 pub const SAME_DISTANCE: f32 = 1e-5;
-/// Barycentric distance to an edge under which a ray counts as grazing that edge.
-pub const EDGE_GRAZE: f32 = 1e-5;
+/// Distance to an edge, in ULPs of the largest coordinate magnitude of the triangle, under which
+/// a ray counts as grazing that edge: there rounding, not geometry, decides hit or miss. Measured
+/// as a distance, not in barycentrics, so that long thin slivers are judged fairly.
+pub const EDGE_GRAZE_ULPS: f32 = 16.0;
 
 /// What differed between the two answers.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -29,7 +31,7 @@ pub enum Tie {
     Coplanar,
     /// Both hit at the same distance on unrelated triangles (intersecting geometry).
     SameDistance,
-    /// The hit that one side lacks lies on an edge of its triangle, within `EDGE_GRAZE`.
+    /// The hit that one side lacks lies on an edge of its triangle, within `EDGE_GRAZE_ULPS`.
     EdgeGraze,
     /// The hit that one side lacks lies at the end of the ray's [tmin, tmax] interval.
     RangeBoundary,
@@ -66,8 +68,21 @@ fn same_distance(a: f32, b: f32) -> bool {
     (a - b).abs() <= SAME_DISTANCE * a.abs().max(b.abs())
 }
 
-fn grazes_edge(hit: &Hit) -> bool {
-    hit.u.min(hit.v).min(1.0 - hit.u - hit.v) <= EDGE_GRAZE
+fn grazes_edge(mesh: &Mesh, hit: &Hit) -> bool {
+    let tri = &mesh.triangles[hit.prim as usize];
+    let p = tri.point(hit.u, hit.v);
+    let scale = tri
+        .v
+        .iter()
+        .fold(p.abs().max_element(), |m, v| m.max(v.abs().max_element()));
+    let tolerance = EDGE_GRAZE_ULPS * scale * f32::EPSILON;
+    (0..3).any(|i| {
+        let (a, b) = (tri.v[i], tri.v[(i + 1) % 3]);
+        let edge = b - a;
+        let along =
+            ((p - a).dot(edge) / edge.length_squared().max(f32::MIN_POSITIVE)).clamp(0.0, 1.0);
+        (a + edge * along).distance(p) <= tolerance
+    })
 }
 
 fn at_range_end(ray: &Ray, hit: &Hit) -> bool {
@@ -100,8 +115,8 @@ fn tie_between(mesh: &Mesh, a: u32, b: u32) -> Tie {
 }
 
 /// A hit present on one side only: a tie when the ray grazes an edge or ends at the hit.
-fn one_sided(ray: &Ray, hit: &Hit, mismatch: Mismatch) -> Agreement {
-    if grazes_edge(hit) {
+fn one_sided(mesh: &Mesh, ray: &Ray, hit: &Hit, mismatch: Mismatch) -> Agreement {
+    if grazes_edge(mesh, hit) {
         Agreement::Tie(mismatch, Tie::EdgeGraze)
     } else if at_range_end(ray, hit) {
         Agreement::Tie(mismatch, Tie::RangeBoundary)
@@ -136,11 +151,16 @@ fn closest_as(
                 } else {
                     reference
                 };
-                one_sided(ray, nearer, mismatch)
+                one_sided(mesh, ray, nearer, mismatch)
             }
         }
-        (true, false) => one_sided(ray, tested, as_mismatch.unwrap_or(Mismatch::HitMiss)),
-        (false, true) => one_sided(ray, reference, as_mismatch.unwrap_or(Mismatch::HitMiss)),
+        (true, false) => one_sided(mesh, ray, tested, as_mismatch.unwrap_or(Mismatch::HitMiss)),
+        (false, true) => one_sided(
+            mesh,
+            ray,
+            reference,
+            as_mismatch.unwrap_or(Mismatch::HitMiss),
+        ),
     }
 }
 
