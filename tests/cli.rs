@@ -160,10 +160,10 @@ fn bad_experiments_fail_cleanly() {
     let unknown = experiment(
         &dir,
         "tracer.toml",
-        "name = \"x\"\nscenes = [\"room\"]\ntracers = [\"warp-drive\"]\nrays = [\"primary\"]\n",
+        "name = \"x\"\nscenes = [\"room\"]\ntracers = [\"warp-drive\"]\nrays = [\"primary\"]\nresolution = { width = 8, height = 8 }\n",
     );
     fails_with(&dir, &["run", &unknown], "warp-drive");
-    let scene = experiment(&dir, "scene.toml", "name = \"x\"\nscenes = [\"room\", \"no-such-scene\"]\ntracers = [\"reference\"]\nrays = [\"primary\"]\n");
+    let scene = experiment(&dir, "scene.toml", "name = \"x\"\nscenes = [\"room\", \"no-such-scene\"]\ntracers = [\"reference\"]\nrays = [\"primary\"]\nresolution = { width = 8, height = 8 }\n");
     fails_with(&dir, &["run", &scene], "no-such-scene");
     no_results(&dir);
 }
