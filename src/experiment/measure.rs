@@ -32,6 +32,10 @@ pub struct Counted {
     pub counters: Counters,
     /// Rays that hit something (closest hit) or were occluded (shadow rays).
     pub hits: usize,
+    /// Wall time of the counting pass and its thread count: against a timed pass at the same
+    /// thread count it gives the cost of counting.
+    pub seconds: f64,
+    pub threads: usize,
 }
 
 /// One pass of `trace` over `rays`, chunk by chunk, in the current pool.
@@ -131,25 +135,26 @@ fn median_of_sorted(sorted: &[f64]) -> f64 {
 /// One pass with the counting kernel, in `pool`.
 pub fn count_pass(pool: &ThreadPool, tracer: &dyn Tracer, batch: &RayBatch) -> Counted {
     let rays = batch.view();
-    pool.install(|| {
+    let start = Instant::now();
+    let (counters, hits) = pool.install(|| {
         if batch.kind().is_occlusion() {
             let mut out = vec![false; batch.len()];
             let counters =
                 counted_pass(rays, &mut out, &|r, o, c| tracer.occluded_counted(r, o, c));
-            Counted {
-                counters,
-                hits: out.iter().filter(|&&o| o).count(),
-            }
+            (counters, out.iter().filter(|&&o| o).count())
         } else {
             let mut out = vec![Hit::MISS; batch.len()];
             let counters =
                 counted_pass(rays, &mut out, &|r, h, c| tracer.intersect_counted(r, h, c));
-            Counted {
-                counters,
-                hits: out.iter().filter(|h| h.is_hit()).count(),
-            }
+            (counters, out.iter().filter(|h| h.is_hit()).count())
         }
-    })
+    });
+    Counted {
+        counters,
+        hits,
+        seconds: start.elapsed().as_secs_f64(),
+        threads: pool.current_num_threads(),
+    }
 }
 
 #[cfg(test)]

@@ -191,7 +191,13 @@ mod tests {
         assert_eq!(header, output::RUNS_COLUMNS);
         // frames 3 × instances 2 × threads 2 × kinds (lit 3 + dark 2 + moving 3).
         assert_eq!(runs.len(), 3 * 2 * 2 * (3 + 2 + 3));
-        assert!(runs.iter().all(|r| r.len() == 23));
+        assert!(runs.iter().all(|r| r.len() == 25));
+        // The counting pass runs once, on the widest pool: its cost is beside the 2-thread rows.
+        for r in &runs {
+            let overhead = r["counting_overhead"].parse::<f64>();
+            assert_eq!(overhead.is_ok(), r["threads"] == "2", "row {r:?}");
+            assert!(overhead.map_or(true, |o| o > 0.0));
+        }
         for r in &runs {
             let (scene, frame, kind) = (
                 r["scene"].as_str(),

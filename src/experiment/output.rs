@@ -36,6 +36,8 @@ pub const RUNS_COLUMNS: &[&str] = &[
     "nodes_per_ray",
     "aabb_tests_per_ray",
     "triangle_tests_per_ray",
+    "counting_seconds",
+    "counting_overhead",
 ];
 
 pub const HISTOGRAM_COLUMNS: &[&str] = &[
@@ -83,6 +85,8 @@ pub fn write_runs(path: &Path, plan: &Plan, cases: &[Case]) -> Result<()> {
             }
         };
         for timing in &case.timings {
+            // The counting pass ran once, on the widest pool: compare it with that row's median.
+            let same_threads = timing.threads == case.counted.threads;
             let row = [
                 plan.experiment.clone(),
                 plan.scenes[case.scene].name.clone(),
@@ -107,6 +111,8 @@ pub fn write_runs(path: &Path, plan: &Plan, cases: &[Case]) -> Result<()> {
                 cell(internal_per_ray(c.nodes_visited)),
                 cell(internal_per_ray(c.aabb_tests)),
                 cell(internal_per_ray(c.triangle_tests)),
+                cell(same_threads.then_some(case.counted.seconds)),
+                cell(same_threads.then(|| case.counted.seconds / timing.seconds_median)),
             ];
             w.write_record(&row).map_err(|e| csv_error(path, e))?;
         }
