@@ -11,8 +11,8 @@ use std::f32::consts::PI;
 
 use glam::{Quat, Vec3};
 
-use super::tessellate::Surface;
 use super::{point_lights, static_scene, Generator, SizeKnob};
+use crate::scene::tessellate::Surface;
 use crate::scene::{Camera, Material, Mesh, Scene};
 
 pub const GENERATOR: Generator = Generator {

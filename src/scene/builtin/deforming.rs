@@ -11,8 +11,8 @@ use std::f32::consts::TAU;
 
 use glam::{Vec2, Vec3};
 
-use super::tessellate::{onto_cylinder, Surface};
 use super::{animated_scene, point_lights, Generator, SizeKnob};
+use crate::scene::tessellate::{onto_cylinder, Surface};
 use crate::scene::{Animation, Camera, Material, Mesh, Scene};
 
 pub const GENERATOR: Generator = Generator {

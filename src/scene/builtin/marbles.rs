@@ -13,8 +13,8 @@ use glam::{Quat, Vec3};
 
 use super::marble_physics::{simulate, Trajectory, World};
 use super::random::SplitMix64;
-use super::tessellate::Surface;
 use super::{animated_scene, point_lights, Generator, SizeKnob};
+use crate::scene::tessellate::Surface;
 use crate::scene::{Animation, Camera, Material, Mesh, Scene};
 
 pub const GENERATOR: Generator = Generator {

@@ -19,7 +19,6 @@ pub mod marbles;
 pub mod random;
 pub mod rings;
 pub mod room;
-pub mod tessellate;
 
 use crate::error::{Error, Result};
 use std::sync::Arc;

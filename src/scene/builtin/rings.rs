@@ -17,8 +17,8 @@ use std::f32::consts::PI;
 
 use glam::{Mat3, Vec3};
 
-use super::tessellate::{onto_cylinder, Surface};
 use super::{point_lights, static_scene, Generator, SizeKnob};
+use crate::scene::tessellate::{onto_cylinder, Surface};
 use crate::scene::{Camera, Material, Mesh, Scene};
 
 pub const GENERATOR: Generator = Generator {

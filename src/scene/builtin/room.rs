@@ -10,8 +10,8 @@
 
 use glam::{Quat, Vec3};
 
-use super::tessellate::Surface;
 use super::{static_scene, Generator, SizeKnob};
+use crate::scene::tessellate::Surface;
 use crate::scene::{Camera, Light, Material, Mesh, Scene};
 
 pub const GENERATOR: Generator = Generator {

@@ -13,8 +13,8 @@ mod mtl;
 mod nff;
 mod obj;
 mod ply;
+mod quadrics;
 mod scene_graph;
-mod tessellate;
 mod tokens;
 mod triangulate;
 
