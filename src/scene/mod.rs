@@ -7,6 +7,7 @@ pub mod library;
 pub mod loaders;
 pub mod model;
 pub mod scene_file;
+pub mod tessellate;
 
 pub use camera::{Camera, CameraKey, CameraPath};
 pub use library::{list_scenes, load_scene, SceneListing, SearchPath};

@@ -11,9 +11,9 @@ use std::f32::consts::PI;
 
 use glam::{Quat, Vec3};
 
-use super::tessellate::Surface;
-use super::{camera_path, Generator, SizeKnob};
-use crate::scene::{Camera, Light, Material, Mesh, Scene};
+use super::{point_lights, static_scene, Generator, SizeKnob};
+use crate::scene::tessellate::Surface;
+use crate::scene::{Camera, Material, Mesh, Scene};
 
 pub const GENERATOR: Generator = Generator {
     name: "balls",
@@ -144,28 +144,23 @@ pub fn build(levels: u32) -> Scene {
             (k as f32 * 0.5, camera(turn * spd_eye))
         })
         .collect();
-    // SPD light positions, each scaled to a third of unit irradiance at the flake (1/d² falloff).
-    let lights = [
-        Vec3::new(4.0, 3.0, 2.0),
-        Vec3::new(1.0, -4.0, 4.0),
-        Vec3::new(-3.0, 1.0, 5.0),
-    ]
-    .map(|position| Light::Point {
-        position,
-        intensity: Vec3::splat(position.length_squared() / 3.0),
-    })
-    .to_vec();
-
-    Scene {
-        name: GENERATOR.name.into(),
-        source: format!("builtin:{}", GENERATOR.name),
+    // SPD light positions, together giving unit irradiance at the flake.
+    let lights = point_lights(
+        &[
+            Vec3::new(4.0, 3.0, 2.0),
+            Vec3::new(1.0, -4.0, 4.0),
+            Vec3::new(-3.0, 1.0, 5.0),
+        ],
+        Vec3::ZERO,
+    );
+    static_scene(
+        &GENERATOR,
         mesh,
-        materials: materials(),
+        materials(),
         lights,
-        camera: camera(spd_eye),
-        camera_path: Some(camera_path(&keys)),
-        animation: None,
-    }
+        camera(spd_eye),
+        &keys,
+    )
 }
 
 #[cfg(test)]

@@ -8,13 +8,12 @@
 //! 26: **2·n² + 26 triangles** (n = 22: 994; n = 96: 18,458; n = 708: 1,002,554).
 
 use std::f32::consts::TAU;
-use std::sync::Arc;
 
 use glam::{Vec2, Vec3};
 
-use super::tessellate::{onto_cylinder, Surface};
-use super::{Generator, SizeKnob};
-use crate::scene::{Animation, Camera, Light, Material, Mesh, Scene};
+use super::{animated_scene, point_lights, Generator, SizeKnob};
+use crate::scene::tessellate::{onto_cylinder, Surface};
+use crate::scene::{Animation, Camera, Material, Mesh, Scene};
 
 pub const GENERATOR: Generator = Generator {
     name: "deforming",
@@ -118,29 +117,16 @@ fn materials() -> Vec<Material> {
 }
 
 pub fn build(n: u32) -> Scene {
-    let flag = Flag::new(n);
-    let mesh = flag.mesh_at(0.0);
     let flag_centre = Vec3::new(FLAG_LENGTH * 0.5, FLAG_BOTTOM + FLAG_HEIGHT * 0.5, 0.0);
-    let light = Vec3::new(-3.0, 9.0, 6.0);
-    Scene {
-        name: GENERATOR.name.into(),
-        source: format!("builtin:{}", GENERATOR.name),
-        mesh,
-        materials: materials(),
-        lights: vec![Light::Point {
-            position: light,
-            intensity: Vec3::splat(light.distance_squared(flag_centre)),
-        }],
-        camera: Camera {
-            position: Vec3::new(2.0, 3.6, 9.0),
-            target: Vec3::new(2.0, 4.3, 0.0),
-            up: Vec3::Y,
-            fov_y_deg: 45.0,
-            ..Camera::default()
-        },
-        camera_path: None,
-        animation: Some(Arc::new(flag)),
-    }
+    let lights = point_lights(&[Vec3::new(-3.0, 9.0, 6.0)], flag_centre);
+    let camera = Camera {
+        position: Vec3::new(2.0, 3.6, 9.0),
+        target: Vec3::new(2.0, 4.3, 0.0),
+        up: Vec3::Y,
+        fov_y_deg: 45.0,
+        ..Camera::default()
+    };
+    animated_scene(&GENERATOR, Flag::new(n), materials(), lights, camera)
 }
 
 #[cfg(test)]

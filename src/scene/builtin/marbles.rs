@@ -9,15 +9,13 @@
 //! box: **80·N + 10 triangles** (N = 12: 970; N = 110, Wald's scene: 8,810; N = 12,500: 1,000,010).
 //! The box's footprint grows with ∛N so the pile's shape stays alike across sizes.
 
-use std::sync::Arc;
-
 use glam::{Quat, Vec3};
 
 use super::marble_physics::{simulate, Trajectory, World};
 use super::random::SplitMix64;
-use super::tessellate::Surface;
-use super::{Generator, SizeKnob};
-use crate::scene::{Animation, Camera, Light, Material, Mesh, Scene};
+use super::{animated_scene, point_lights, Generator, SizeKnob};
+use crate::scene::tessellate::Surface;
+use crate::scene::{Animation, Camera, Material, Mesh, Scene};
 
 pub const GENERATOR: Generator = Generator {
     name: "marbles",
@@ -194,9 +192,6 @@ pub fn animation(marbles: u32) -> MarblesAnimation {
 
 pub fn build(marbles: u32) -> Scene {
     let extent = box_extent(marbles);
-    let animation = animation(marbles);
-    let mesh = animation.mesh_at(0.0);
-
     // Look at the lower part of the box (where the pile ends up) from the front-right, far
     // enough for the whole box to fit a 45° view; the light is above the box.
     let target = Vec3::new(extent.x * 0.5, extent.y * 0.4, extent.z * 0.5);
@@ -210,19 +205,8 @@ pub fn build(marbles: u32) -> Scene {
     };
     let light = Vec3::new(extent.x * 0.7, extent.y + extent.x, extent.z * 0.4);
     let floor_centre = Vec3::new(extent.x * 0.5, 0.0, extent.z * 0.5);
-    Scene {
-        name: GENERATOR.name.into(),
-        source: format!("builtin:{}", GENERATOR.name),
-        mesh,
-        materials: materials(),
-        lights: vec![Light::Point {
-            position: light,
-            intensity: Vec3::splat(light.distance_squared(floor_centre)),
-        }],
-        camera,
-        camera_path: None,
-        animation: Some(Arc::new(animation)),
-    }
+    let lights = point_lights(&[light], floor_centre);
+    animated_scene(&GENERATOR, animation(marbles), materials(), lights, camera)
 }
 
 #[cfg(test)]

@@ -19,10 +19,13 @@ pub mod marbles;
 pub mod random;
 pub mod rings;
 pub mod room;
-pub mod tessellate;
 
 use crate::error::{Error, Result};
-use crate::scene::{Camera, CameraKey, CameraPath, Scene};
+use std::sync::Arc;
+
+use glam::Vec3;
+
+use crate::scene::{Animation, Camera, CameraKey, CameraPath, Light, Material, Mesh, Scene};
 
 /// What the integer `size` of a generator means and which values it accepts.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -107,14 +110,72 @@ impl Generator {
     }
 }
 
-/// A camera path through `keys` (seconds, camera), for the static scenes' fly-throughs.
-fn camera_path(keys: &[(f32, Camera)]) -> CameraPath {
-    CameraPath {
-        keys: keys
-            .iter()
-            .map(|&(time, camera)| CameraKey { time, camera })
-            .collect(),
+/// A static scene of generator `g`, flown through along `keys` (seconds, camera).
+fn static_scene(
+    g: &Generator,
+    mesh: Mesh,
+    materials: Vec<Material>,
+    lights: Vec<Light>,
+    camera: Camera,
+    keys: &[(f32, Camera)],
+) -> Scene {
+    let keys = keys
+        .iter()
+        .map(|&(time, camera)| CameraKey { time, camera })
+        .collect();
+    Scene {
+        camera_path: Some(CameraPath { keys }),
+        ..still_scene(g, mesh, materials, lights, camera)
     }
+}
+
+/// An animated scene of generator `g` seen from a fixed camera; its mesh is the animation's
+/// first frame.
+fn animated_scene(
+    g: &Generator,
+    animation: impl Animation + 'static,
+    materials: Vec<Material>,
+    lights: Vec<Light>,
+    camera: Camera,
+) -> Scene {
+    let mesh = animation.mesh_at(0.0);
+    Scene {
+        animation: Some(Arc::new(animation)),
+        ..still_scene(g, mesh, materials, lights, camera)
+    }
+}
+
+/// A scene of generator `g` without motion: named after it, from `builtin:<name>`.
+fn still_scene(
+    g: &Generator,
+    mesh: Mesh,
+    materials: Vec<Material>,
+    lights: Vec<Light>,
+    camera: Camera,
+) -> Scene {
+    Scene {
+        name: g.name.into(),
+        source: format!("builtin:{}", g.name),
+        mesh,
+        materials,
+        lights,
+        camera,
+        camera_path: None,
+        animation: None,
+    }
+}
+
+/// Point lights at `positions` whose equal shares add up to unit irradiance at `lit` (our
+/// lights fall off as 1/d²).
+fn point_lights(positions: &[Vec3], lit: Vec3) -> Vec<Light> {
+    let share = positions.len() as f32;
+    positions
+        .iter()
+        .map(|&position| Light::Point {
+            position,
+            intensity: Vec3::splat(position.distance_squared(lit) / share),
+        })
+        .collect()
 }
 
 #[cfg(test)]

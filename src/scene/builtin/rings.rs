@@ -17,9 +17,9 @@ use std::f32::consts::PI;
 
 use glam::{Mat3, Vec3};
 
-use super::tessellate::{onto_cylinder, Surface};
-use super::{camera_path, Generator, SizeKnob};
-use crate::scene::{Camera, Light, Material, Mesh, Scene};
+use super::{point_lights, static_scene, Generator, SizeKnob};
+use crate::scene::tessellate::{onto_cylinder, Surface};
+use crate::scene::{Camera, Material, Mesh, Scene};
 
 pub const GENERATOR: Generator = Generator {
     name: "rings",
@@ -160,30 +160,25 @@ pub fn build(levels: u32) -> Scene {
         |p| p,
     );
 
-    // SPD light positions; NFF lights do not fall off, ours do (1/d²), so each is scaled to give
-    // a third of unit irradiance at the middle of the pyramid.
+    // SPD light positions; NFF lights do not fall off, ours do (1/d²), so together they are
+    // scaled to give unit irradiance at the middle of the pyramid.
     let middle = Vec3::new(0.0, wall_y * 0.5, 0.0);
-    let lights = [
-        Vec3::new(3.0, -spread, 3.0),
-        Vec3::new(-4.0, -spread, 1.0),
-        Vec3::new(2.0, -spread, -4.0),
-    ]
-    .map(|position| Light::Point {
-        position,
-        intensity: Vec3::splat(position.distance_squared(middle) / 3.0),
-    })
-    .to_vec();
-
-    Scene {
-        name: GENERATOR.name.into(),
-        source: format!("builtin:{}", GENERATOR.name),
+    let lights = point_lights(
+        &[
+            Vec3::new(3.0, -spread, 3.0),
+            Vec3::new(-4.0, -spread, 1.0),
+            Vec3::new(2.0, -spread, -4.0),
+        ],
+        middle,
+    );
+    static_scene(
+        &GENERATOR,
         mesh,
-        materials: materials(),
+        materials(),
         lights,
-        camera: camera(spd_eye),
-        camera_path: Some(camera_path(&keys)),
-        animation: None,
-    }
+        camera(spd_eye),
+        &keys,
+    )
 }
 
 #[cfg(test)]

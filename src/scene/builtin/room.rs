@@ -10,8 +10,8 @@
 
 use glam::{Quat, Vec3};
 
-use super::tessellate::Surface;
-use super::{camera_path, Generator, SizeKnob};
+use super::{static_scene, Generator, SizeKnob};
+use crate::scene::tessellate::Surface;
 use crate::scene::{Camera, Light, Material, Mesh, Scene};
 
 pub const GENERATOR: Generator = Generator {
@@ -127,27 +127,19 @@ pub fn build(n: u32) -> Scene {
     };
     let start = camera([9.2, 3.4, 0.8], [4.5, 1.2, 6.0]);
     // A walk along the front wall to the left corner, keeping the table in view.
-    let path = camera_path(&[
+    let keys = [
         (0.0, start),
         (1.0, camera([7.0, 3.0, 0.6], [4.0, 1.5, 6.5])),
         (2.0, camera([4.5, 2.6, 0.6], [5.0, 1.4, 6.0])),
         (3.0, camera([1.5, 3.0, 1.0], [5.5, 1.2, 5.5])),
         (4.0, camera([0.8, 3.6, 3.5], [6.0, 1.0, 5.0])),
-    ]);
-    Scene {
-        name: GENERATOR.name.into(),
-        source: format!("builtin:{}", GENERATOR.name),
-        mesh,
-        materials: materials(),
-        // ~1 W/m²-equivalent on the floor below it: intensity / 5.6².
-        lights: vec![Light::Point {
-            position: Vec3::new(5.0, 5.6, 5.0),
-            intensity: Vec3::new(32.0, 30.0, 27.0),
-        }],
-        camera: start,
-        camera_path: Some(path),
-        animation: None,
-    }
+    ];
+    // ~1 W/m²-equivalent on the floor below it: intensity / 5.6².
+    let light = Light::Point {
+        position: Vec3::new(5.0, 5.6, 5.0),
+        intensity: Vec3::new(32.0, 30.0, 27.0),
+    };
+    static_scene(&GENERATOR, mesh, materials(), vec![light], start, &keys)
 }
 
 #[cfg(test)]

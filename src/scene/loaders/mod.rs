@@ -13,8 +13,8 @@ mod mtl;
 mod nff;
 mod obj;
 mod ply;
+mod quadrics;
 mod scene_graph;
-mod tessellate;
 mod tokens;
 mod triangulate;
 
@@ -22,7 +22,7 @@ use std::path::Path;
 
 use crate::error::{Error, Result};
 use crate::geometry::Aabb;
-use crate::scene::{Camera, Mesh, Scene};
+use crate::scene::{Camera, Material, Mesh, Scene};
 
 pub use triangulate::triangulate;
 
@@ -124,6 +124,22 @@ fn require_triangles(path: &Path, mesh: &Mesh) -> Result<()> {
     } else {
         Ok(())
     }
+}
+
+/// The scene of a file that holds geometry and materials only (OBJ, PLY): named after the file,
+/// no lights, the default view, nothing moves. Refuses a file without triangles.
+fn still_mesh_scene(path: &Path, mesh: Mesh, materials: Vec<Material>) -> Result<Scene> {
+    require_triangles(path, &mesh)?;
+    Ok(Scene {
+        name: scene_name(path),
+        source: path.display().to_string(),
+        camera: default_camera(&mesh.bounds()),
+        mesh,
+        materials,
+        lights: Vec::new(),
+        camera_path: None,
+        animation: None,
+    })
 }
 
 /// Unique path for a test file under the system temp directory.

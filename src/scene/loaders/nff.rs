@@ -9,7 +9,7 @@
 //!   `(ior, T)` when T > 0 (shine is a highlight exponent, not a reflection lobe; see
 //!   `dielectric` for indices ≤ 0);
 //! - `p` polygon and `pp` polygonal patch (its normals are dropped), ear-clipped;
-//! - `s` sphere and `c` cone or cylinder, tessellated (`tessellate.rs`).
+//! - `s` sphere and `c` cone or cylinder, tessellated (`quadrics.rs`).
 //!
 //! These commands are also the core of BART's AFF (`aff.rs`), which reads both formats.
 
@@ -17,7 +17,7 @@ use std::path::Path;
 
 use glam::Vec3;
 
-use super::{aff, tessellate, tokens::Tokens, LoadOptions};
+use super::{aff, quadrics, tokens::Tokens, LoadOptions};
 use crate::error::Result;
 use crate::geometry::Triangle;
 use crate::scene::{Camera, Light, Material, Scene};
@@ -150,7 +150,7 @@ pub fn sphere(t: &mut Tokens, options: &LoadOptions) -> Result<Vec<Triangle>> {
     if radius == 0.0 {
         return Err(t.error("sphere radius is zero"));
     }
-    Ok(tessellate::sphere(centre, radius, options.sphere_segments))
+    Ok(quadrics::sphere(centre, radius, options.sphere_segments))
 }
 
 /// After `c`: base point and radius, apex point and radius.
@@ -159,7 +159,7 @@ pub fn cone(t: &mut Tokens, options: &LoadOptions) -> Result<Vec<Triangle>> {
     let base_radius = t.number("cone base radius")?;
     let apex = t.vec3("cone apex")?;
     let apex_radius = t.number("cone apex radius")?;
-    tessellate::cone(base, base_radius, apex, apex_radius, options.cone_segments)
+    quadrics::cone(base, base_radius, apex, apex_radius, options.cone_segments)
         .ok_or_else(|| t.error("cone base and apex coincide"))
 }
 

@@ -11,7 +11,7 @@ use std::path::Path;
 
 use glam::Vec3;
 
-use super::{default_camera, mtl, require_triangles, scene_name, triangulate};
+use super::{mtl, still_mesh_scene, triangulate};
 use crate::error::{Error, Result};
 use crate::geometry::Triangle;
 use crate::scene::{Material, Mesh, Scene};
@@ -113,17 +113,7 @@ pub fn load(path: &Path) -> Result<Scene> {
             }
         }
     }
-    require_triangles(path, &mesh)?;
-    Ok(Scene {
-        name: scene_name(path),
-        source: path.display().to_string(),
-        camera: default_camera(&mesh.bounds()),
-        mesh,
-        materials,
-        lights: Vec::new(),
-        camera_path: None,
-        animation: None,
-    })
+    still_mesh_scene(path, mesh, materials)
 }
 
 /// The first line that breaks the OBJ rules `tobj` enforces (numbers that do not parse, indices
@@ -229,7 +219,7 @@ fn check_corner(corner: &str, counts: [usize; 3]) -> Option<String> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::loaders::temp_file;
+    use crate::scene::loaders::{default_camera, temp_file};
 
     #[test]
     fn triangles_quads_and_concave_polygons_with_materials() {

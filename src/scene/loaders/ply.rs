@@ -10,7 +10,7 @@ use std::path::Path;
 
 use glam::Vec3;
 
-use super::{default_camera, require_triangles, scene_name, triangulate};
+use super::{still_mesh_scene, triangulate};
 use crate::error::{Error, Result};
 use crate::geometry::Triangle;
 use crate::scene::{Material, Mesh, Scene};
@@ -30,17 +30,7 @@ pub fn load(path: &Path) -> Result<Scene> {
         raw
     };
     let mesh = parse(path, &data)?;
-    require_triangles(path, &mesh)?;
-    Ok(Scene {
-        name: scene_name(path),
-        source: path.display().to_string(),
-        camera: default_camera(&mesh.bounds()),
-        mesh,
-        materials: vec![Material::default()],
-        lights: Vec::new(),
-        camera_path: None,
-        animation: None,
-    })
+    still_mesh_scene(path, mesh, vec![Material::default()])
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -81,6 +81,22 @@ enum Items {
     Morphing(Range<usize>),
 }
 
+impl Items {
+    /// Extends this run by `next` when both are of one kind and `next` starts where this ends.
+    fn join(&mut self, next: &Items) -> bool {
+        match (self, next) {
+            (Items::Rigid(run), Items::Rigid(next))
+            | (Items::Morphing(run), Items::Morphing(next))
+                if run.end == next.start =>
+            {
+                run.end = next.end;
+                true
+            }
+            _ => false,
+        }
+    }
+}
+
 /// A run of consecutive triangles under the same block (`None`: in world space).
 #[derive(Clone, Debug)]
 struct Batch {
@@ -121,37 +137,30 @@ impl SceneGraph {
     }
 
     pub fn add_triangle(&mut self, tri: Triangle, material: u32) {
-        let node = self.open.last().copied();
-        let end = self.triangles.len();
-        match self.batches.last_mut() {
-            Some(Batch {
-                node: n,
-                items: Items::Rigid(range),
-            }) if *n == node && range.end == end => range.end += 1,
-            _ => self.batches.push(Batch {
-                node,
-                items: Items::Rigid(end..end + 1),
-            }),
-        }
+        let index = self.triangles.len();
+        self.file_under_open_block(Items::Rigid(index..index + 1));
         self.triangles.push(tri);
         self.material_ids.push(material);
     }
 
     pub fn add_morph(&mut self, morph: Morph, material: u32) {
-        let node = self.open.last().copied();
-        let end = self.morphs.len();
-        match self.batches.last_mut() {
-            Some(Batch {
-                node: n,
-                items: Items::Morphing(range),
-            }) if *n == node && range.end == end => range.end += 1,
-            _ => self.batches.push(Batch {
-                node,
-                items: Items::Morphing(end..end + 1),
-            }),
-        }
+        let index = self.morphs.len();
+        self.file_under_open_block(Items::Morphing(index..index + 1));
         self.morphs.push(morph);
         self.material_ids.push(material);
+    }
+
+    /// Puts `items` under the innermost open block: onto the last batch when it is the same
+    /// block's and `items` continue its run, else into a new batch.
+    fn file_under_open_block(&mut self, items: Items) {
+        let node = self.open.last().copied();
+        let joined = self
+            .batches
+            .last_mut()
+            .is_some_and(|last| last.node == node && last.items.join(&items));
+        if !joined {
+            self.batches.push(Batch { node, items });
+        }
     }
 
     /// The geometry at the clock's start and, when anything moves, the animation over the

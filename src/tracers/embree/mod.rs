@@ -8,6 +8,7 @@ mod denormals;
 mod device;
 pub mod ffi;
 mod packet;
+mod record;
 mod scene;
 mod single;
 mod stream;

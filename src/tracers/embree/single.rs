@@ -1,7 +1,8 @@
 //! `embree1`: one `rtcIntersect1` / `rtcOccluded1` call per ray.
 
-use super::ffi::{self, RTCIntersectContext};
-use super::{convert, EmbreeScene, Submission};
+use super::ffi::{RTCIntersectContext, RTCRay, RTCRayHit};
+use super::record::RayRecord;
+use super::{EmbreeScene, Submission};
 use crate::geometry::{Hit, Rays};
 
 pub struct Single;
@@ -13,18 +14,7 @@ impl Submission for Single {
         rays: Rays<'_>,
         hits: &mut [Hit],
     ) {
-        for (i, hit) in hits.iter_mut().enumerate() {
-            let mut rh = convert::ray_hit(&rays, i);
-            // SAFETY: a committed scene, a valid context and a 16-byte aligned RTCRayHit.
-            unsafe { ffi::rtcIntersect1(scene.raw(), context, &mut rh) };
-            *hit = convert::hit(
-                rh.ray.tfar,
-                rh.hit.geomID,
-                rh.hit.primID,
-                rh.hit.u,
-                rh.hit.v,
-            );
-        }
+        trace_one_by_one::<RTCRayHit>(scene, context, rays, hits);
     }
 
     fn occluded(
@@ -33,11 +23,20 @@ impl Submission for Single {
         rays: Rays<'_>,
         occluded: &mut [bool],
     ) {
-        for (i, o) in occluded.iter_mut().enumerate() {
-            let mut ray = convert::ray(&rays, i);
-            // SAFETY: as above, with an RTCRay.
-            unsafe { ffi::rtcOccluded1(scene.raw(), context, &mut ray) };
-            *o = convert::is_occluded(ray.tfar);
-        }
+        trace_one_by_one::<RTCRay>(scene, context, rays, occluded);
+    }
+}
+
+fn trace_one_by_one<R: RayRecord>(
+    scene: &EmbreeScene,
+    context: &mut RTCIntersectContext,
+    rays: Rays<'_>,
+    answers: &mut [R::Answer],
+) {
+    for (i, answer) in answers.iter_mut().enumerate() {
+        let mut record = R::from_rays(&rays, i);
+        // SAFETY: a committed scene and a valid context.
+        unsafe { record.trace1(scene.raw(), context) };
+        *answer = record.answer();
     }
 }

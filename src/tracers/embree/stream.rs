@@ -7,10 +7,11 @@
 //! the buffer stays in cache instead of growing with the chunk.
 
 use std::cell::RefCell;
-use std::mem::size_of;
+use std::thread::LocalKey;
 
-use super::ffi::{self, RTCIntersectContext, RTCRay, RTCRayHit};
-use super::{convert, EmbreeScene, Submission};
+use super::ffi::{RTCIntersectContext, RTCRay, RTCRayHit};
+use super::record::RayRecord;
+use super::{EmbreeScene, Submission};
 use crate::geometry::{Hit, Rays};
 
 /// Rays per stream call: 4096 × 80 bytes of RTCRayHit = 320 KiB, within L2.
@@ -19,6 +20,23 @@ pub const STREAM_LENGTH: usize = 4096;
 thread_local! {
     static RAY_HITS: RefCell<Vec<RTCRayHit>> = const { RefCell::new(Vec::new()) };
     static RAYS: RefCell<Vec<RTCRay>> = const { RefCell::new(Vec::new()) };
+}
+
+/// A record type with its per-thread stream buffer.
+trait Buffered: RayRecord + 'static {
+    fn buffer() -> &'static LocalKey<RefCell<Vec<Self>>>;
+}
+
+impl Buffered for RTCRayHit {
+    fn buffer() -> &'static LocalKey<RefCell<Vec<Self>>> {
+        &RAY_HITS
+    }
+}
+
+impl Buffered for RTCRay {
+    fn buffer() -> &'static LocalKey<RefCell<Vec<Self>>> {
+        &RAYS
+    }
 }
 
 pub struct Stream;
@@ -30,33 +48,7 @@ impl Submission for Stream {
         rays: Rays<'_>,
         hits: &mut [Hit],
     ) {
-        RAY_HITS.with_borrow_mut(|stream| {
-            for (c, hits) in hits.chunks_mut(STREAM_LENGTH).enumerate() {
-                let first = c * STREAM_LENGTH;
-                stream.clear();
-                stream.extend((first..first + hits.len()).map(|i| convert::ray_hit(&rays, i)));
-                // SAFETY: a committed scene, a valid context, and `stream.len()` (≤ STREAM_LENGTH,
-                // fits in u32) 16-byte aligned RTCRayHit records `size_of::<RTCRayHit>()` apart.
-                unsafe {
-                    ffi::rtcIntersect1M(
-                        scene.raw(),
-                        context,
-                        stream.as_mut_ptr(),
-                        stream.len() as u32,
-                        size_of::<RTCRayHit>(),
-                    )
-                };
-                for (hit, rh) in hits.iter_mut().zip(stream.iter()) {
-                    *hit = convert::hit(
-                        rh.ray.tfar,
-                        rh.hit.geomID,
-                        rh.hit.primID,
-                        rh.hit.u,
-                        rh.hit.v,
-                    );
-                }
-            }
-        });
+        trace_in_streams::<RTCRayHit>(scene, context, rays, hits);
     }
 
     fn occluded(
@@ -65,25 +57,26 @@ impl Submission for Stream {
         rays: Rays<'_>,
         occluded: &mut [bool],
     ) {
-        RAYS.with_borrow_mut(|stream| {
-            for (c, occluded) in occluded.chunks_mut(STREAM_LENGTH).enumerate() {
-                let first = c * STREAM_LENGTH;
-                stream.clear();
-                stream.extend((first..first + occluded.len()).map(|i| convert::ray(&rays, i)));
-                // SAFETY: as above, with RTCRay records.
-                unsafe {
-                    ffi::rtcOccluded1M(
-                        scene.raw(),
-                        context,
-                        stream.as_mut_ptr(),
-                        stream.len() as u32,
-                        size_of::<RTCRay>(),
-                    )
-                };
-                for (o, ray) in occluded.iter_mut().zip(stream.iter()) {
-                    *o = convert::is_occluded(ray.tfar);
-                }
-            }
-        });
+        trace_in_streams::<RTCRay>(scene, context, rays, occluded);
     }
+}
+
+fn trace_in_streams<R: Buffered>(
+    scene: &EmbreeScene,
+    context: &mut RTCIntersectContext,
+    rays: Rays<'_>,
+    answers: &mut [R::Answer],
+) {
+    R::buffer().with_borrow_mut(|stream| {
+        for (c, answers) in answers.chunks_mut(STREAM_LENGTH).enumerate() {
+            let first = c * STREAM_LENGTH;
+            stream.clear();
+            stream.extend((first..first + answers.len()).map(|i| R::from_rays(&rays, i)));
+            // SAFETY: a committed scene, a valid context, and at most STREAM_LENGTH records.
+            unsafe { R::trace1m(stream, scene.raw(), context) };
+            for (answer, record) in answers.iter_mut().zip(stream.iter()) {
+                *answer = record.answer();
+            }
+        }
+    });
 }

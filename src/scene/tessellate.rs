@@ -1,6 +1,7 @@
-//! Indexed surfaces the generators are built from: parametric grids, boxes, spheres and tubes.
-//! A `Surface` is tessellated once and then emitted into a `Mesh` through a point map, so
-//! animations re-emit the same faces in the same order with moved vertices.
+//! Indexed surfaces the built-in generators and the NFF loader's spheres and cones are made of:
+//! parametric grids, boxes, spheres and tubes. A `Surface` is tessellated once and then emitted
+//! into a `Mesh` through a point map, so animations re-emit the same faces in the same order with
+//! moved vertices.
 
 use glam::Vec3;
 
@@ -134,8 +135,17 @@ impl Surface {
 
     /// Pushes every face into `mesh` with material `material`, each vertex moved by `map`.
     pub fn emit(&self, mesh: &mut Mesh, material: u32, map: impl Fn(Vec3) -> Vec3) {
-        let moved: Vec<Vec3> = self.vertices.iter().map(|&p| map(p)).collect();
-        self.emit_vertices(mesh, material, &moved);
+        self.emit_vertices(mesh, material, &self.moved(map));
+    }
+
+    /// Every face as a triangle, each vertex moved by `map`.
+    pub fn triangles(&self, map: impl Fn(Vec3) -> Vec3) -> Vec<Triangle> {
+        let moved = self.moved(map);
+        self.faces.iter().map(|f| face(f, &moved)).collect()
+    }
+
+    fn moved(&self, map: impl Fn(Vec3) -> Vec3) -> Vec<Vec3> {
+        self.vertices.iter().map(|&p| map(p)).collect()
     }
 
     /// Pushes every face into `mesh`, reading vertex positions from `vertices` (same indexing as
@@ -145,14 +155,17 @@ impl Surface {
         mesh.triangles.reserve(self.faces.len());
         mesh.material_ids.reserve(self.faces.len());
         for f in &self.faces {
-            let tri = Triangle::new(
-                vertices[f[0] as usize],
-                vertices[f[1] as usize],
-                vertices[f[2] as usize],
-            );
-            mesh.push(tri, material);
+            mesh.push(face(f, vertices), material);
         }
     }
+}
+
+fn face(f: &[u32; 3], vertices: &[Vec3]) -> Triangle {
+    Triangle::new(
+        vertices[f[0] as usize],
+        vertices[f[1] as usize],
+        vertices[f[2] as usize],
+    )
 }
 
 /// The map taking the unit cube [0, 1]³ onto the axis-aligned box `[min, max]`.
@@ -160,17 +173,32 @@ pub fn onto_box(min: Vec3, max: Vec3) -> impl Fn(Vec3) -> Vec3 {
     move |p| min + p * (max - min)
 }
 
-/// The map taking the unit tube (radius 1, z ∈ [0, 1]) onto a cylinder of `radius` from `a` to `b`.
+/// The map taking the unit tube (radius 1, z ∈ {0, 1}) onto a cylinder of `radius` from `a` to `b`.
 pub fn onto_cylinder(a: Vec3, b: Vec3, radius: f32) -> impl Fn(Vec3) -> Vec3 {
-    let axis = b - a;
-    let (u, v) = axis.normalize().any_orthonormal_pair();
+    onto_cone(a, radius, b, radius)
+}
+
+/// The map taking the unit tube (radius 1, z ∈ {0, 1}) onto the side of a cone frustum: its z = 0
+/// ring onto the circle of `base_radius` about `base`, its z = 1 ring onto `apex_radius` about
+/// `apex`, both square to the axis.
+pub fn onto_cone(
+    base: Vec3,
+    base_radius: f32,
+    apex: Vec3,
+    apex_radius: f32,
+) -> impl Fn(Vec3) -> Vec3 {
     // (u, v, axis) right-handed keeps the outward winding.
-    let (u, v) = if u.cross(v).dot(axis) > 0.0 {
-        (u, v)
-    } else {
-        (v, u)
-    };
-    move |p| a + (u * p.x + v * p.y) * radius + axis * p.z
+    let w = (apex - base).normalize();
+    let u = w.any_orthonormal_vector();
+    let v = w.cross(u);
+    move |p| {
+        let (centre, radius) = if p.z == 0.0 {
+            (base, base_radius)
+        } else {
+            (apex, apex_radius)
+        };
+        centre + radius * (p.x * u + p.y * v)
+    }
 }
 
 #[cfg(test)]

@@ -1,47 +1,21 @@
-//! Triangle meshes for the NFF quadrics: spheres (`s`) and open cones or cylinders (`c`). The
-//! tracers take triangles only, so a sphere becomes a latitude–longitude mesh and a cone a ring
-//! of quads; all triangles face outwards (counter-clockwise seen from outside) unless the file
-//! asks for the inside with negative radii.
-
-use std::f32::consts::{PI, TAU};
+//! NFF's quadrics as triangles: spheres (`s`) and open cones or cylinders (`c`), cut by the shared
+//! tessellator (`scene::tessellate`) at the loader's segment counts. The tracers take triangles
+//! only, so a sphere becomes a latitude–longitude mesh and a cone a ring of quads; all triangles
+//! face outwards (counter-clockwise seen from outside) unless the file asks for the inside with
+//! negative radii.
 
 use glam::Vec3;
 
 use crate::geometry::Triangle;
+use crate::scene::tessellate::{onto_cone, Surface};
 
 /// Triangles of a sphere cut into `segments` longitudes and `segments / 2` latitude bands: the
 /// two polar bands are fans, the others quads. That makes `2 · segments · (segments/2 − 1)`
 /// triangles (120 for 12 segments). A negative radius shows the inside (NFF §"s").
 pub fn sphere(center: Vec3, radius: f32, segments: u32) -> Vec<Triangle> {
     let bands = (segments / 2).max(2);
-    let segments = segments.max(3);
     let r = radius.abs();
-    let point = |band: u32, seg: u32| {
-        let theta = PI * band as f32 / bands as f32;
-        let phi = TAU * (seg % segments) as f32 / segments as f32;
-        center
-            + r * Vec3::new(
-                theta.sin() * phi.cos(),
-                theta.sin() * phi.sin(),
-                theta.cos(),
-            )
-    };
-    let mut tris = Vec::with_capacity((2 * segments * (bands - 1)) as usize);
-    for seg in 0..segments {
-        // North cap: the pole, then two points of the first ring.
-        tris.push(Triangle::new(point(0, 0), point(1, seg), point(1, seg + 1)));
-        for band in 1..bands - 1 {
-            let (a, b) = (point(band, seg), point(band, seg + 1));
-            let (c, d) = (point(band + 1, seg), point(band + 1, seg + 1));
-            tris.push(Triangle::new(a, c, d));
-            tris.push(Triangle::new(a, d, b));
-        }
-        tris.push(Triangle::new(
-            point(bands, 0),
-            point(bands - 1, seg + 1),
-            point(bands - 1, seg),
-        ));
-    }
+    let mut tris = Surface::uv_sphere(segments.max(3), bands).triangles(|p| center + p * r);
     if radius < 0.0 {
         flip_all(&mut tris);
     }
@@ -59,36 +33,31 @@ pub fn cone(
     apex_radius: f32,
     segments: u32,
 ) -> Option<Vec<Triangle>> {
-    let axis = apex - base;
-    if axis.length_squared() == 0.0 {
+    if (apex - base).length_squared() == 0.0 {
         return None;
     }
-    let segments = segments.max(3);
     let inside = base_radius < 0.0;
     let (r0, r1) = if inside {
         (-base_radius, -apex_radius)
     } else {
         (base_radius, apex_radius)
     };
-    // (u, v, axis) right-handed, so that increasing angle runs counter-clockwise about the axis.
-    let w = axis.normalize();
-    let u = w.any_orthonormal_vector();
-    let v = w.cross(u);
-    let ring = |centre: Vec3, r: f32, seg: u32| {
-        let phi = TAU * (seg % segments) as f32 / segments as f32;
-        centre + r * (phi.cos() * u + phi.sin() * v)
+    let mut tube = Surface::tube(segments.max(3));
+    // Each face has an edge along one end ring (two vertices at that z); at a pointed end that
+    // edge is a point and the face has no area, so it is left out.
+    let edge_radius = |f: &[u32; 3]| {
+        let at_base = f
+            .iter()
+            .filter(|&&i| tube.vertices[i as usize].z == 0.0)
+            .count();
+        if at_base == 2 {
+            r0
+        } else {
+            r1
+        }
     };
-    let mut tris = Vec::with_capacity(2 * segments as usize);
-    for seg in 0..segments {
-        let (b0, b1) = (ring(base, r0, seg), ring(base, r0, seg + 1));
-        let (a0, a1) = (ring(apex, r1, seg), ring(apex, r1, seg + 1));
-        if r0 != 0.0 {
-            tris.push(Triangle::new(b0, b1, a1));
-        }
-        if r1 != 0.0 {
-            tris.push(Triangle::new(b0, a1, a0));
-        }
-    }
+    tube.faces.retain(|f| edge_radius(f) != 0.0);
+    let mut tris = tube.triangles(onto_cone(base, r0, apex, r1));
     if inside {
         flip_all(&mut tris);
     }
