@@ -11,11 +11,12 @@ use std::time::Instant;
 use glam::Vec3;
 
 use super::child_pairs::{child_pairs, ChildPair};
+use super::presplit::split_references;
 use crate::error::{Error, Result};
 use crate::geometry::{Aabb, Triangle};
 use crate::tracers::Params;
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BvhConfig {
     /// A node with at most this many triangles becomes a leaf when SAH says splitting does not pay;
     /// a node with more is always split (unless `max_depth` is reached).
@@ -24,6 +25,9 @@ pub struct BvhConfig {
     pub max_depth: usize,
     /// SAH bins per axis.
     pub bins: usize,
+    /// Early split clipping budget: at most this fraction of extra triangle references
+    /// (0 disables it; see `presplit`).
+    pub presplit: f32,
 }
 
 impl Default for BvhConfig {
@@ -32,6 +36,7 @@ impl Default for BvhConfig {
             max_leaf_size: 4,
             max_depth: 48,
             bins: 16,
+            presplit: 0.5,
         }
     }
 }
@@ -39,7 +44,7 @@ impl Default for BvhConfig {
 impl BvhConfig {
     /// Deepest tree a traversal stack must hold; `max_depth` is capped to it.
     pub const DEPTH_LIMIT: usize = 62;
-    pub const PARAMS: &'static [&'static str] = &["leaf_size", "max_depth", "bins"];
+    pub const PARAMS: &'static [&'static str] = &["leaf_size", "max_depth", "bins", "presplit"];
 
     pub fn from_params(p: &Params) -> Result<Self> {
         let d = BvhConfig::default();
@@ -47,10 +52,12 @@ impl BvhConfig {
             max_leaf_size: p.get_or("leaf_size", d.max_leaf_size)?,
             max_depth: p.get_or("max_depth", d.max_depth)?,
             bins: p.get_or("bins", d.bins)?,
+            presplit: p.get_or("presplit", d.presplit)?,
         };
-        if c.max_leaf_size == 0 || c.bins < 2 || c.max_depth > Self::DEPTH_LIMIT {
+        let presplit_ok = c.presplit.is_finite() && (0.0..=16.0).contains(&c.presplit);
+        if c.max_leaf_size == 0 || c.bins < 2 || c.max_depth > Self::DEPTH_LIMIT || !presplit_ok {
             return Err(Error::usage(format!(
-                "BVH parameters out of range: leaf_size ≥ 1, bins ≥ 2, max_depth ≤ {} (got {c:?})",
+                "BVH parameters out of range: leaf_size ≥ 1, bins ≥ 2, max_depth ≤ {}, presplit in [0, 16] (got {c:?})",
                 Self::DEPTH_LIMIT
             )));
         }
@@ -79,7 +86,7 @@ pub struct Bvh {
     pub nodes: Vec<BvhNode>,
     /// Depth of each node (root 0).
     pub depth: Vec<u8>,
-    /// Triangles in leaf order.
+    /// Triangles in leaf order (a presplit triangle appears once per leaf that references it).
     pub triangles: Vec<Triangle>,
     /// Scene primitive id of each entry of `triangles`.
     pub prim_ids: Vec<u32>,
@@ -112,8 +119,9 @@ impl Bvh {
 
     pub fn build(triangles: &[Triangle], config: BvhConfig) -> Bvh {
         let start = Instant::now();
-        let n = triangles.len();
-        let boxes: Vec<Aabb> = triangles.iter().map(Triangle::bounds).collect();
+        let refs = split_references(triangles, config.presplit);
+        let n = refs.len();
+        let boxes: Vec<Aabb> = refs.iter().map(|r| r.bounds).collect();
         let centroids: Vec<Vec3> = boxes.iter().map(Aabb::center).collect();
         let mut order: Vec<u32> = (0..n as u32).collect();
         let mut nodes = Vec::with_capacity((2 * n).max(1));
@@ -172,8 +180,11 @@ impl Bvh {
         }
 
         Bvh {
-            triangles: order.iter().map(|&i| triangles[i as usize]).collect(),
-            prim_ids: order,
+            triangles: order
+                .iter()
+                .map(|&i| triangles[refs[i as usize].prim as usize])
+                .collect(),
+            prim_ids: order.iter().map(|&i| refs[i as usize].prim).collect(),
             pairs: child_pairs(&nodes),
             nodes,
             depth,
@@ -289,6 +300,7 @@ mod tests {
         tris
     }
 
+    /// Without presplitting: every triangle in exactly one leaf whose box contains it.
     fn check_invariants(tris: &[Triangle], bvh: &Bvh) {
         // Every triangle in exactly one leaf.
         let mut seen = vec![0u32; tris.len()];
@@ -323,20 +335,24 @@ mod tests {
     #[test]
     fn every_triangle_in_one_leaf_and_boxes_nest() {
         let tris = grid_of_triangles(5000);
+        let unsplit = BvhConfig {
+            presplit: 0.0,
+            ..BvhConfig::default()
+        };
         for config in [
-            BvhConfig::default(),
+            unsplit,
             BvhConfig {
                 max_leaf_size: 1,
-                ..BvhConfig::default()
+                ..unsplit
             },
             BvhConfig {
                 max_leaf_size: 16,
                 bins: 4,
-                ..BvhConfig::default()
+                ..unsplit
             },
             BvhConfig {
                 max_depth: 6,
-                ..BvhConfig::default()
+                ..unsplit
             },
         ] {
             let bvh = Bvh::build(&tris, config);
@@ -358,9 +374,36 @@ mod tests {
     }
 
     #[test]
+    fn presplit_tree_references_every_triangle_within_budget() {
+        let tris = grid_of_triangles(3000);
+        let bvh = Bvh::build(&tris, BvhConfig::default());
+        let mut seen = vec![0u32; tris.len()];
+        for node in bvh.nodes.iter().filter(|n| n.is_leaf()) {
+            for i in node.first..node.first + node.count {
+                let id = bvh.prim_ids[i as usize];
+                seen[id as usize] += 1;
+                assert_eq!(bvh.triangles[i as usize], tris[id as usize]);
+            }
+        }
+        assert!(seen.iter().all(|&c| c >= 1), "a triangle is in no leaf");
+        let refs: u32 = seen.iter().sum();
+        assert!(refs as f32 <= 1.5 * tris.len() as f32, "{refs} references");
+        assert!(refs > tris.len() as u32, "large triangles were split");
+        for (i, node) in bvh.nodes.iter().enumerate().filter(|(_, n)| !n.is_leaf()) {
+            for c in [node.first as usize, node.first as usize + 1] {
+                assert!(
+                    node.bounds.contains(&bvh.nodes[c].bounds),
+                    "node {i} does not contain child {c}"
+                );
+            }
+        }
+    }
+
+    #[test]
     fn identical_triangles_are_split_by_count() {
         let t = Triangle::new(Vec3::ZERO, Vec3::X, Vec3::Y);
         let tris = vec![t; 100];
+        // Equal areas: presplitting all of them would exceed the budget, so none is split.
         let bvh = Bvh::build(&tris, BvhConfig::default());
         check_invariants(&tris, &bvh);
         assert!(bvh

@@ -4,6 +4,7 @@
 pub mod bvh;
 pub mod child_pairs;
 pub mod obvhs;
+pub mod presplit;
 
 use std::sync::Arc;
 
