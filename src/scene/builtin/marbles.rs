@@ -192,19 +192,19 @@ pub fn animation(marbles: u32) -> MarblesAnimation {
 
 pub fn build(marbles: u32) -> Scene {
     let extent = box_extent(marbles);
-    // Look at the lower part of the box (where the pile ends up) from the front-right, far
-    // enough for the whole box to fit a 45° view; the light is above the box.
-    let target = Vec3::new(extent.x * 0.5, extent.y * 0.4, extent.z * 0.5);
-    let distance = 2.0 * extent.max_element();
+    // Look down through the open top from just above the box, the field of view fitted to the
+    // floor: ray casting treats the glass walls as opaque, so any side view sees only walls; from
+    // here they are seen edge-on and the falling and piling marbles fill the frame.
+    let floor_centre = Vec3::new(extent.x * 0.5, 0.0, extent.z * 0.5);
+    let eye_height = extent.y * 1.1;
     let camera = Camera {
-        position: target + Vec3::new(0.55, 0.35, 0.75).normalize() * distance,
-        target,
-        up: Vec3::Y,
-        fov_y_deg: 45.0,
+        position: floor_centre + Vec3::new(0.0, eye_height, 0.1 * extent.z),
+        target: floor_centre,
+        up: -Vec3::Z,
+        fov_y_deg: 2.0 * (0.6 * extent.x / eye_height).atan().to_degrees(),
         ..Camera::default()
     };
     let light = Vec3::new(extent.x * 0.7, extent.y + extent.x, extent.z * 0.4);
-    let floor_centre = Vec3::new(extent.x * 0.5, 0.0, extent.z * 0.5);
     let lights = point_lights(&[light], floor_centre);
     animated_scene(&GENERATOR, animation(marbles), materials(), lights, camera)
 }
