@@ -41,6 +41,10 @@ const MAILBOX: usize = 8;
 /// crosses into the next cell.
 struct Walk<'a> {
     grid: &'a Grid,
+    /// `grid.bounds.min` and `grid.cell_size` as arrays: per-axis access by a runtime index
+    /// without glam's component match (`crossing` still computes `Grid::boundary` bit for bit).
+    grid_min: [f32; 3],
+    cell_size: [f32; 3],
     origin: [f32; 3],
     dir: [f32; 3],
     inv_dir: [f32; 3],
@@ -52,7 +56,8 @@ impl Walk<'_> {
     /// Distance at which the ray crosses the plane between cells `i − 1` and `i` on `axis`.
     #[inline(always)]
     fn crossing(&self, axis: usize, i: u32) -> f32 {
-        (self.grid.boundary(axis, i) - self.origin[axis]) * self.inv_dir[axis]
+        let boundary = self.grid_min[axis] + i as f32 * self.cell_size[axis];
+        (boundary - self.origin[axis]) * self.inv_dir[axis]
     }
 
     /// Distance at which the ray leaves the current cell on `axis` (∞ if it never moves on it).
@@ -215,6 +220,8 @@ impl GridDdaTracer {
         }
         let mut walk = Walk {
             grid: g,
+            grid_min: g.bounds.min.to_array(),
+            cell_size: g.cell_size.to_array(),
             origin,
             dir,
             inv_dir,
