@@ -3,6 +3,7 @@
 
 pub mod bvh;
 pub mod child_pairs;
+pub mod grid;
 pub mod obvhs;
 pub mod presplit;
 
@@ -15,6 +16,7 @@ use crate::tracers::Params;
 
 pub use self::obvhs::{ObvhsBvh, ObvhsQuality};
 pub use bvh::{Bvh, BvhConfig, BvhNode};
+pub use grid::{Grid, GridConfig};
 
 /// Which structure a tracer traverses.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -25,6 +27,8 @@ pub enum AccelKind {
     Embree,
     /// obvhs's compressed 8-wide BVH, built by obvhs's own builder.
     Obvhs,
+    /// Uniform grid with macrocells, rebuilt from scratch every frame (Wald et al. 2006, §3).
+    Grid,
 }
 
 impl AccelKind {
@@ -33,6 +37,7 @@ impl AccelKind {
             AccelKind::Bvh => "bvh",
             AccelKind::Embree => "embree",
             AccelKind::Obvhs => "obvhs",
+            AccelKind::Grid => "grid",
         }
     }
 
@@ -42,6 +47,7 @@ impl AccelKind {
             AccelKind::Bvh => BvhConfig::PARAMS,
             AccelKind::Embree => EmbreeConfig::PARAMS,
             AccelKind::Obvhs => ObvhsQuality::PARAMS,
+            AccelKind::Grid => GridConfig::PARAMS,
         }
     }
 
@@ -60,6 +66,10 @@ impl AccelKind {
                 &mesh.triangles,
                 ObvhsQuality::from_params(params)?,
             )?)),
+            AccelKind::Grid => Accel::Grid(Arc::new(Grid::build(
+                &mesh.triangles,
+                GridConfig::from_params(params)?,
+            ))),
         })
     }
 }
@@ -70,6 +80,7 @@ pub enum Accel {
     Bvh(Arc<Bvh>),
     Embree(Arc<EmbreeScene>),
     Obvhs(Arc<ObvhsBvh>),
+    Grid(Arc<Grid>),
 }
 
 impl Accel {
@@ -78,6 +89,7 @@ impl Accel {
             Accel::Bvh(b) => b.build_seconds,
             Accel::Embree(s) => s.build_seconds,
             Accel::Obvhs(b) => b.build_seconds,
+            Accel::Grid(g) => g.build_seconds,
         }
     }
 }

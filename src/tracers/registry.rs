@@ -6,7 +6,9 @@ use crate::error::{Error, Result};
 use crate::tracers::embree::{
     Coherence, EmbreeTracer, Packets16, Packets4, Packets8, Single, Stream,
 };
-use crate::tracers::{obvhs::ObvhsTracer, reference::ReferenceTracer, Params, Tracer};
+use crate::tracers::{
+    dda::GridDdaTracer, obvhs::ObvhsTracer, reference::ReferenceTracer, Params, Tracer,
+};
 
 pub struct TracerInfo {
     pub name: &'static str,
@@ -60,6 +62,12 @@ pub const TRACERS: &[TracerInfo] = &[
         params: &[],
         about: "single rays, obvhs 0.4 compressed 8-wide BVH and its own traversal; watertight triangles"
     },
+    TracerInfo {
+        name: "grid-dda",
+        accel: AccelKind::Grid,
+        params: &[],
+        about: "single rays, uniform grid by 3D-DDA (Amanatides & Woo 1987), empty macrocells skipped; watertight triangles",
+    },
 ];
 
 impl TracerInfo {
@@ -104,6 +112,7 @@ pub fn build_tracer(info: &TracerInfo, params: &Params, accel: &Accel) -> Result
             Ok(Box::new(EmbreeTracer::<Stream>::from_params(s, params)?))
         }
         ("obvhs", Accel::Obvhs(bvh)) => Ok(Box::new(ObvhsTracer::new(bvh.clone()))),
+        ("grid-dda", Accel::Grid(grid)) => Ok(Box::new(GridDdaTracer::new(grid.clone()))),
         (name, _) => Err(Error::runtime(format!(
             "tracer {name} was given the wrong structure"
         ))),
