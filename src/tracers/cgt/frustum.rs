@@ -339,15 +339,19 @@ impl Frustum {
     #[inline]
     pub fn culls(&self, p: &[[f32; 3]; 3]) -> bool {
         let tol = self.eps;
-        let all = |f: &dyn Fn(&[f32; 3]) -> bool| p.iter().all(f);
-        let line = |s: f32, u0: f32, slope: f32| u0 + (s - self.s_ref) * slope;
-        if all(&|q| q[0] < self.s_range[0] - tol)
-            || all(&|q| q[0] > self.s_range[1] + tol)
-            || all(&|q| q[1] < line(q[0], self.u0[0], self.du[0]) - tol)
-            || all(&|q| q[1] > line(q[0], self.u0[1], self.du[1]) + tol)
-            || all(&|q| q[2] < line(q[0], self.v0[0], self.dv[0]) - tol)
-            || all(&|q| q[2] > line(q[0], self.v0[1], self.dv[1]) + tol)
-        {
+        // One bit per plane a vertex lies beyond; a plane all three lie beyond culls.
+        let mut beyond_all = 0b11_1111u8;
+        for q in p {
+            let ds = q[0] - self.s_ref;
+            let beyond = (q[0] < self.s_range[0] - tol) as u8
+                | ((q[0] > self.s_range[1] + tol) as u8) << 1
+                | ((q[1] < self.u0[0] + ds * self.du[0] - tol) as u8) << 2
+                | ((q[1] > self.u0[1] + ds * self.du[1] + tol) as u8) << 3
+                | ((q[2] < self.v0[0] + ds * self.dv[0] - tol) as u8) << 4
+                | ((q[2] > self.v0[1] + ds * self.dv[1] + tol) as u8) << 5;
+            beyond_all &= beyond;
+        }
+        if beyond_all != 0 {
             return true;
         }
         let Some(apex) = &self.apex else {
