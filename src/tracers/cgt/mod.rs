@@ -24,7 +24,9 @@
 //!   skipped. Sound because the packet tests a triangle against every ray still active, and a ray
 //!   only ever leaves the active set.
 //! - **Culling (§2.3).** Per packet and triangle (`cull`): the frustum's side planes, and for
-//!   common-origin packets the four corner rays' shaft test (`Frustum::culls`).
+//!   common-origin packets the four corner rays' shaft test (`Frustum::culls`). A cull costs
+//!   about as much as testing four rays (§2.3), so packets with at most `CULL_MIN_RAYS` active
+//!   rays (split shadow and diffuse packets, ends of walks) test directly.
 //! - **Macrocells (§2.4).** `macrocells` uses the grid's M³ macrocells (`macro_size`).
 //! - **Shadow rays (§4.7).** Occlusion uses the same walk; a ray is done at its first hit. The
 //!   batch's shadow rays leave the surface points towards the light, so they share an end point,
@@ -112,6 +114,9 @@ const MAX_SLOPE_SPREAD: f32 = 1.0;
 /// Packets whose rays start more than this many cells apart (u + v) are split in halves (§4.7:
 /// shadow rays from hit points on both sides of a silhouette).
 const MAX_ORIGIN_SPREAD: f32 = 4.0;
+
+/// Packets with at most this many active rays test triangles without culling them first.
+const CULL_MIN_RAYS: usize = 4;
 
 /// Something told about every cell a packet visits (`()` for tracing, a list for tests).
 pub trait CellObserver {
@@ -400,7 +405,11 @@ impl<S: Stats, O: CellObserver, const ANY: bool> SliceVisitor for Packet<'_, S, 
             if self.config.mailbox && !self.ws.mailbox.insert(id) {
                 continue;
             }
-            if self.config.cull && self.frustum.culls(&self.march_vertices(id)) {
+            // Culling costs about a 4-ray triangle test (§2.3): it pays only for more rays.
+            if self.config.cull
+                && self.ws.active.len() > CULL_MIN_RAYS
+                && self.frustum.culls(&self.march_vertices(id))
+            {
                 continue;
             }
             let tri = &grid.triangles[id as usize];
