@@ -147,9 +147,8 @@ struct Workspace {
     /// Chunk indices of the packet being split or traversed.
     group: Vec<u32>,
     /// The traversed packet's rays in march coordinates, and per ray: its speed along s, its
-    /// triangle-test form,
-    /// its interval (`tmax` shrinks to the closest hit), and the `s` where it stops needing
-    /// cells (its segment's end, then its closest hit).
+    /// triangle-test form, its interval (`tmax` shrinks to the closest hit), and the `s` where
+    /// it stops needing cells (its segment's end, then its closest hit).
     march: MarchRays,
     d_s: Vec<f32>,
     tests: Vec<WatertightRay>,
