@@ -1,4 +1,4 @@
-//! The foundation's correctness bar: the reference and obvhs tracers agree with Embree (robust
+//! The foundation's correctness bar: the reference, obvhs and cgt tracers agree with Embree (robust
 //! mode) on well over a million rays — primary, shadow and diffuse bounces — over three built-in
 //! scenes and two real ones (conference, bunny), with zero unexplained disagreements. Ties are
 //! classified and printed, not hidden.
@@ -73,4 +73,9 @@ fn reference_agrees_with_embree() {
 #[test]
 fn obvhs_agrees_with_embree() {
     agrees_with_embree("obvhs");
+}
+
+#[test]
+fn cgt_agrees_with_embree() {
+    agrees_with_embree("cgt");
 }

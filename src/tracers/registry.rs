@@ -3,6 +3,7 @@
 
 use crate::accel::{Accel, AccelKind};
 use crate::error::{Error, Result};
+use crate::tracers::cgt::{CgtConfig, CgtTracer};
 use crate::tracers::embree::{
     Coherence, EmbreeTracer, Packets16, Packets4, Packets8, Single, Stream,
 };
@@ -68,6 +69,12 @@ pub const TRACERS: &[TracerInfo] = &[
         params: &[],
         about: "single rays, uniform grid by 3D-DDA (Amanatides & Woo 1987), empty macrocells skipped; watertight triangles",
     },
+    TracerInfo {
+        name: "cgt",
+        accel: AccelKind::Grid,
+        params: CgtConfig::PARAMS,
+        about: "coherent grid traversal (Wald et al. 2006): n×n packets walk the uniform grid slice by slice in their frustum; per-packet mailboxing, SIMD frustum culling, macrocells",
+    },
 ];
 
 impl TracerInfo {
@@ -113,6 +120,7 @@ pub fn build_tracer(info: &TracerInfo, params: &Params, accel: &Accel) -> Result
         }
         ("obvhs", Accel::Obvhs(bvh)) => Ok(Box::new(ObvhsTracer::new(bvh.clone()))),
         ("grid-dda", Accel::Grid(grid)) => Ok(Box::new(GridDdaTracer::new(grid.clone()))),
+        ("cgt", Accel::Grid(grid)) => Ok(Box::new(CgtTracer::from_params(grid.clone(), params)?)),
         (name, _) => Err(Error::runtime(format!(
             "tracer {name} was given the wrong structure"
         ))),

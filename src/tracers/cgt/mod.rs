@@ -1,0 +1,457 @@
+//! Coherent grid traversal (Wald, Ize, Kensler, Knoll and Parker 2006, "Ray Tracing Animated
+//! Scenes using Coherent Grid Traversal"): packets of n×n rays walk a uniform grid slice by slice
+//! inside their bounding frustum (§2.2), test the triangles of every overlapped cell with mailboxing
+//! and SIMD frustum culling (§2.3), and skip empty space with macrocells (§2.4).
+//!
+//! - **Packets.** Consecutive groups of n² rays of the chunk (parameter `packet` = n). The runner
+//!   orders camera rays in 32×32 tiles with Morton order inside, so each group of camera rays is
+//!   an n×n screen block; shadow and diffuse batches are grouped the same way (consecutive rays
+//!   descend from neighbouring pixels). The last group of a chunk may be partial.
+//! - **Major axis and direction signs (§2.2).** The march axis K is the dominant grid-space axis
+//!   of the packet's first ray, and every ray must travel the same way along it. When they do
+//!   not, the packet is **split**: rays going +K, rays going −K and rays with a zero K component
+//!   become sub-packets, each choosing its own axis from its first ray, recursively (a split
+//!   always shrinks the packet, and a single ray always agrees with itself). Coherent packets
+//!   never split.
+//! - **Frustum (§2.2).** Bounds every ray of the packet (see `frustum`): for camera and other
+//!   common-origin packets it is the paper's corner-ray pyramid; for general packets the
+//!   interval of origins and directions.
+//! - **Exact closest hits.** A hit found in a cell is final only once the walk has left the slice
+//!   holding it: a ray stays active, taking part in every later cell's tests with its interval
+//!   clipped to its closest hit so far, until the slice about to be entered starts beyond its hit
+//!   (or its segment's end); the packet stops when no ray is active (§2.3 early termination).
+//! - **Mailboxing (§2.3).** Per packet (`mailbox`): a triangle met again in another cell is
+//!   skipped. Sound because the packet tests a triangle against every ray still active, and a ray
+//!   only ever leaves the active set.
+//! - **Culling (§2.3).** Per packet and triangle (`cull`): the frustum's side planes, and for
+//!   common-origin packets the four corner rays' shaft test (`Frustum::culls`). A cull costs
+//!   about as much as testing four rays (§2.3), so packets with at most `CULL_MIN_RAYS` active
+//!   rays (split shadow and diffuse packets, ends of walks) test directly.
+//! - **Macrocells (§2.4).** `macrocells` uses the grid's M³ macrocells (`macro_size`).
+//! - **Shadow rays (§4.7).** Occlusion uses the same walk; a ray is done at its first hit. The
+//!   batch's shadow rays leave the surface points towards the light, so they share an end point,
+//!   not an origin: we trace them as given, with the general frustum (interval of origins), rather
+//!   than reversed from the light. Reversed rays would be other rays — the watertight test is not
+//!   symmetric in the ray's direction, so at edges they could disagree with the rays every other
+//!   tracer answers.
+//! - **Incoherent packets are halved (§4.7).** The paper splits shadow packets whose hit points
+//!   lie too far apart. We measure that on the frustum: a packet whose rays start more than
+//!   `MAX_ORIGIN_SPREAD` cells apart, or whose frustum widens by more than `MAX_SLOPE_SPREAD`
+//!   cells per slice (diffuse bounces), is split into its first and second half, recursively
+//!   down to single rays. Camera packets stay below both limits unless they are very wide: a
+//!   32×32 packet of a 60° image spreads by 0.6 at 128² pixels and by 0.07 at 1024².
+//!
+//! Counters: `ray` per ray; `node(0)` per grid cell visited (per packet); `triangle_test(0)` per
+//! ray–triangle test (one per active ray of a packet for each triangle neither mailboxed nor
+//! culled). Rays whose direction is zero or not finite, or whose origin is not finite, hit nothing.
+
+mod frustum;
+mod mailbox;
+mod traversal;
+
+use std::sync::Arc;
+
+use glam::Vec3;
+
+use crate::accel::Grid;
+use crate::error::{Error, Result};
+use crate::geometry::{Hit, RayBoxTest, Rays, WatertightRay};
+use crate::stats::{NoStats, Stats};
+use crate::tracers::{Kernel, Params};
+
+use frustum::{Frustum, MarchFrame, MarchRays};
+use mailbox::Mailbox;
+use traversal::{walk, SliceVisitor};
+
+/// The tracer's own parameters (the grid's are `GridConfig`'s).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct CgtConfig {
+    /// Packet side n: packets of n×n rays.
+    pub packet: u32,
+    pub mailbox: bool,
+    pub cull: bool,
+    pub macrocells: bool,
+}
+
+impl Default for CgtConfig {
+    fn default() -> Self {
+        CgtConfig {
+            packet: 4,
+            mailbox: true,
+            cull: true,
+            macrocells: true,
+        }
+    }
+}
+
+impl CgtConfig {
+    pub const PARAMS: &'static [&'static str] = &["packet", "mailbox", "cull", "macrocells"];
+    /// The packet sides the paper studies (§4.1).
+    pub const PACKET_SIDES: [u32; 5] = [2, 4, 8, 16, 32];
+
+    pub fn from_params(p: &Params) -> Result<Self> {
+        let d = CgtConfig::default();
+        let c = CgtConfig {
+            packet: p.get_or("packet", d.packet)?,
+            mailbox: p.get_or("mailbox", d.mailbox)?,
+            cull: p.get_or("cull", d.cull)?,
+            macrocells: p.get_or("macrocells", d.macrocells)?,
+        };
+        if !Self::PACKET_SIDES.contains(&c.packet) {
+            return Err(Error::usage(format!(
+                "parameter packet = {} must be one of {:?} (packets of n×n rays)",
+                c.packet,
+                Self::PACKET_SIDES
+            )));
+        }
+        Ok(c)
+    }
+}
+
+/// Packets whose overlap box grows by more than this many cells per slice (u + v) are split in
+/// halves (module doc).
+const MAX_SLOPE_SPREAD: f32 = 1.0;
+/// Packets whose rays start more than this many cells apart (u + v) are split in halves (§4.7:
+/// shadow rays from hit points on both sides of a silhouette).
+const MAX_ORIGIN_SPREAD: f32 = 4.0;
+
+/// Packets with at most this many active rays test triangles without culling them first.
+const CULL_MIN_RAYS: usize = 4;
+
+/// Something told about every cell a packet visits (`()` for tracing, a list for tests).
+pub trait CellObserver {
+    fn visit(&mut self, cell: [u32; 3]);
+}
+
+impl CellObserver for () {
+    #[inline(always)]
+    fn visit(&mut self, _: [u32; 3]) {}
+}
+
+impl CellObserver for Vec<[u32; 3]> {
+    fn visit(&mut self, cell: [u32; 3]) {
+        self.push(cell);
+    }
+}
+
+pub struct CgtTracer {
+    grid: Arc<Grid>,
+    config: CgtConfig,
+    /// Rounding scale of the world → grid transform (see `frustum`).
+    scale: f32,
+}
+
+/// Per-call scratch space, reused by every packet of a chunk.
+#[derive(Default)]
+struct Workspace {
+    /// Chunk indices of the packet being split or traversed.
+    group: Vec<u32>,
+    /// The traversed packet's rays in march coordinates, and per ray: its speed along s, its
+    /// triangle-test form, its interval (`tmax` shrinks to the closest hit), and the `s` where
+    /// it stops needing cells (its segment's end, then its closest hit).
+    march: MarchRays,
+    d_s: Vec<f32>,
+    tests: Vec<WatertightRay>,
+    tmin: Vec<f32>,
+    tmax: Vec<f32>,
+    s_limit: Vec<f32>,
+    /// Positions (into the packet) of the rays still active.
+    active: Vec<u32>,
+    mailbox: Mailbox,
+}
+
+impl CgtTracer {
+    pub fn new(grid: Arc<Grid>, config: CgtConfig) -> Self {
+        let b = &grid.bounds;
+        let world = b.min.abs().max(b.max.abs()).max_element();
+        let res = grid.res.iter().copied().max().unwrap_or(1) as f32;
+        let scale = res.max(world * grid.inv_cell_size.max_element());
+        CgtTracer {
+            grid,
+            config,
+            scale,
+        }
+    }
+
+    pub fn from_params(grid: Arc<Grid>, params: &Params) -> Result<Self> {
+        Ok(CgtTracer::new(grid, CgtConfig::from_params(params)?))
+    }
+
+    /// The cells the packets of `rays` visit, packet by packet in visiting order (the closest-hit
+    /// query's walk, hits written to `hits`).
+    pub fn visited_cells(&self, rays: Rays<'_>, hits: &mut [Hit]) -> Vec<[u32; 3]> {
+        let mut cells = vec![];
+        self.trace::<NoStats, _, false>(rays, hits, &mut NoStats, &mut cells);
+        cells
+    }
+
+    /// Closest hits (`ANY = false`) or any hit (`ANY = true`) of every ray of the chunk.
+    fn trace<S: Stats, O: CellObserver, const ANY: bool>(
+        &self,
+        rays: Rays<'_>,
+        hits: &mut [Hit],
+        stats: &mut S,
+        observer: &mut O,
+    ) {
+        hits.fill(Hit::MISS);
+        let mut ws = Workspace::default();
+        let size = (self.config.packet * self.config.packet) as usize;
+        for start in (0..rays.len()).step_by(size) {
+            let end = (start + size).min(rays.len());
+            ws.group.clear();
+            for i in start..end {
+                if S::ENABLED {
+                    stats.ray();
+                }
+                let ray = rays.ray(i);
+                let usable = ray.origin.is_finite()
+                    && ray.dir.is_finite()
+                    && ray.dir != Vec3::ZERO
+                    && RayBoxTest::new(ray.origin, ray.dir)
+                        .hit(&self.grid.bounds, ray.tmin, ray.tmax)
+                        .is_some();
+                if usable {
+                    ws.group.push(i as u32);
+                }
+            }
+            if !ws.group.is_empty() {
+                let mut group = std::mem::take(&mut ws.group);
+                self.split::<S, O, ANY>(rays, &mut group, &mut ws, hits, stats, observer);
+                ws.group = group;
+            }
+        }
+    }
+
+    /// Traverses the packet `group` along the dominant axis of its first ray if all its rays
+    /// agree in direction along it; otherwise splits it by that direction (module doc).
+    fn split<S: Stats, O: CellObserver, const ANY: bool>(
+        &self,
+        rays: Rays<'_>,
+        group: &mut [u32],
+        ws: &mut Workspace,
+        hits: &mut [Hit],
+        stats: &mut S,
+        observer: &mut O,
+    ) {
+        let grid_dir = |i: u32| rays.ray(i as usize).dir * self.grid.inv_cell_size;
+        let k = dominant_axis(grid_dir(group[0]));
+        // 0: +K, 1: −K, 2: zero along K.
+        let class = |i: &u32| {
+            let d = grid_dir(*i)[k];
+            if d > 0.0 {
+                0u8
+            } else if d < 0.0 {
+                1
+            } else {
+                2
+            }
+        };
+        let first = class(&group[0]);
+        if group.iter().all(|i| class(i) == first) {
+            let frame = MarchFrame::new(k, first == 1, self.grid.res);
+            let frustum = self.setup(rays, group, &frame, ws);
+            let (slopes, origins) = frustum.spread();
+            if group.len() > 1 && (slopes > MAX_SLOPE_SPREAD || origins > MAX_ORIGIN_SPREAD) {
+                // §4.7: an incoherent packet would drag a wide frustum through the grid.
+                let (front, back) = group.split_at_mut(group.len() / 2);
+                self.split::<S, O, ANY>(rays, front, ws, hits, stats, observer);
+                self.split::<S, O, ANY>(rays, back, ws, hits, stats, observer);
+                return;
+            }
+            let mut packet = Packet::<S, O, ANY> {
+                grid: &self.grid,
+                frame: &frame,
+                frustum: &frustum,
+                config: &self.config,
+                group,
+                ws,
+                hits,
+                stats,
+                observer,
+            };
+            walk(
+                &self.grid,
+                &frame,
+                &frustum,
+                self.config.macrocells,
+                &mut packet,
+            );
+            return;
+        }
+        group.sort_unstable_by_key(class);
+        let mut rest: &mut [u32] = group;
+        while !rest.is_empty() {
+            let c = class(&rest[0]);
+            let n = rest.iter().take_while(|i| class(i) == c).count();
+            let (part, tail) = std::mem::take(&mut rest).split_at_mut(n);
+            self.split::<S, O, ANY>(rays, part, ws, hits, stats, observer);
+            rest = tail;
+        }
+    }
+
+    /// Fills the workspace for the packet `group`, whose rays all travel towards +s in `frame`,
+    /// and returns its frustum.
+    fn setup(
+        &self,
+        rays: Rays<'_>,
+        group: &[u32],
+        frame: &MarchFrame,
+        ws: &mut Workspace,
+    ) -> Frustum {
+        let grid = &*self.grid;
+        let to_grid = |p: Vec3| (p - grid.bounds.min) * grid.inv_cell_size;
+        let n_box = Vec3::new(grid.res[0] as f32, grid.res[1] as f32, grid.res[2] as f32);
+        ws.march.clear();
+        ws.d_s.clear();
+        ws.tests.clear();
+        ws.tmin.clear();
+        ws.tmax.clear();
+        let first_origin = rays.ray(group[0] as usize).origin;
+        let mut common_origin = true;
+        for &i in group {
+            let ray = rays.ray(i as usize);
+            common_origin &= ray.origin == first_origin && ray.tmin >= 0.0;
+            let (og, dg) = (to_grid(ray.origin), ray.dir * grid.inv_cell_size);
+            let (o, d) = (frame.point(og), frame.dir(dg));
+            // The ray's stretch inside the grid box [0, N] (slabs; NaN from 0·∞ is ignored by
+            // min/max, and the frustum's margin absorbs rounding).
+            let inv = Vec3::ONE / dg;
+            let (ta, tb) = ((Vec3::ZERO - og) * inv, (n_box - og) * inv);
+            let (enter, exit) = (ta.min(tb), ta.max(tb));
+            let t0 = ray.tmin.max(enter.x).max(enter.y).max(enter.z);
+            let t1 = ray.tmax.min(exit.x).min(exit.y).min(exit.z);
+            let m = &mut ws.march;
+            m.o_s.push(o[0]);
+            m.o_u.push(o[1]);
+            m.o_v.push(o[2]);
+            m.a.push(d[1] / d[0]);
+            m.b.push(d[2] / d[0]);
+            m.s_start.push(o[0] + t0.max(ray.tmin) * d[0]);
+            m.s_end.push(o[0] + t1.max(t0) * d[0]);
+            ws.d_s.push(d[0]);
+            ws.tests.push(WatertightRay::new(ray.origin, ray.dir));
+            ws.tmin.push(ray.tmin);
+            ws.tmax.push(ray.tmax);
+        }
+        let apex = common_origin.then(|| frame.point(to_grid(first_origin)));
+        ws.s_limit.clear();
+        ws.s_limit.extend_from_slice(&ws.march.s_end);
+        ws.active.clear();
+        ws.active.extend(0..group.len() as u32);
+        ws.mailbox.clear();
+        Frustum::new(&ws.march, apex, self.scale)
+    }
+}
+
+/// The axis of the largest |component| (the first on ties).
+fn dominant_axis(d: Vec3) -> usize {
+    let a = d.abs();
+    if a.x >= a.y && a.x >= a.z {
+        0
+    } else if a.y >= a.z {
+        1
+    } else {
+        2
+    }
+}
+
+/// A packet on its walk: decides when its rays are done and tests the triangles of each cell.
+struct Packet<'a, S, O, const ANY: bool> {
+    grid: &'a Grid,
+    frame: &'a MarchFrame,
+    frustum: &'a Frustum,
+    config: &'a CgtConfig,
+    group: &'a [u32],
+    ws: &'a mut Workspace,
+    hits: &'a mut [Hit],
+    stats: &'a mut S,
+    observer: &'a mut O,
+}
+
+impl<S: Stats, O: CellObserver, const ANY: bool> Packet<'_, S, O, ANY> {
+    /// The triangle's vertices in march coordinates (for culling).
+    #[inline]
+    fn march_vertices(&self, id: u32) -> [[f32; 3]; 3] {
+        let g = self.grid;
+        g.triangles[id as usize]
+            .v
+            .map(|p| self.frame.point((p - g.bounds.min) * g.inv_cell_size))
+    }
+}
+
+impl<S: Stats, O: CellObserver, const ANY: bool> SliceVisitor for Packet<'_, S, O, ANY> {
+    fn begin_slice(&mut self, slice: u32) -> bool {
+        // A ray is done when the slab about to be entered starts past its hit or its end
+        // (§2.3 early termination, per ray); the margin covers rounding of s.
+        let start = slice as f32 - self.frustum.eps();
+        let s_limit = &self.ws.s_limit;
+        self.ws.active.retain(|&l| s_limit[l as usize] >= start);
+        !self.ws.active.is_empty()
+    }
+
+    fn cell(&mut self, index: usize, cell: [u32; 3]) {
+        if self.ws.active.is_empty() {
+            return; // every ray found its occluder earlier in this slice
+        }
+        if S::ENABLED {
+            self.stats.node(0);
+        }
+        self.observer.visit(cell);
+        let grid = self.grid;
+        let ids =
+            &grid.cell_tris[grid.cell_start[index] as usize..grid.cell_start[index + 1] as usize];
+        for &id in ids {
+            if self.config.mailbox && !self.ws.mailbox.insert(id) {
+                continue;
+            }
+            // Culling costs about a 4-ray triangle test (§2.3): it pays only for more rays.
+            if self.config.cull
+                && self.ws.active.len() > CULL_MIN_RAYS
+                && self.frustum.culls(&self.march_vertices(id))
+            {
+                continue;
+            }
+            let tri = &grid.triangles[id as usize];
+            let ws = &mut *self.ws;
+            let mut any_done = false;
+            for &l in &ws.active {
+                let l = l as usize;
+                if S::ENABLED {
+                    self.stats.triangle_test(0);
+                }
+                if let Some((t, u, v)) = ws.tests[l].intersect(tri, ws.tmin[l], ws.tmax[l]) {
+                    self.hits[self.group[l] as usize] = Hit { t, prim: id, u, v };
+                    ws.tmax[l] = t;
+                    if ANY {
+                        ws.s_limit[l] = f32::NEG_INFINITY;
+                        any_done = true;
+                    } else {
+                        ws.s_limit[l] = ws.s_limit[l].min(ws.march.o_s[l] + t * ws.d_s[l]);
+                    }
+                }
+            }
+            if any_done {
+                let s_limit = &ws.s_limit;
+                ws.active
+                    .retain(|&l| s_limit[l as usize] != f32::NEG_INFINITY);
+                if ws.active.is_empty() {
+                    return;
+                }
+            }
+        }
+    }
+}
+
+impl Kernel for CgtTracer {
+    fn intersect_with<S: Stats>(&self, rays: Rays<'_>, hits: &mut [Hit], stats: &mut S) {
+        self.trace::<S, (), false>(rays, hits, stats, &mut ());
+    }
+
+    fn occluded_with<S: Stats>(&self, rays: Rays<'_>, occluded: &mut [bool], stats: &mut S) {
+        let mut hits = vec![Hit::MISS; rays.len()];
+        self.trace::<S, (), true>(rays, &mut hits, stats, &mut ());
+        for (o, h) in occluded.iter_mut().zip(&hits) {
+            *o = h.is_hit();
+        }
+    }
+}
