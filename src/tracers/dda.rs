@@ -22,9 +22,9 @@
 use std::sync::Arc;
 
 use crate::accel::Grid;
-use crate::geometry::{Hit, Ray, Rays, WatertightRay};
+use crate::geometry::{Hit, Ray, WatertightRay};
 use crate::stats::Stats;
-use crate::tracers::Kernel;
+use crate::tracers::SingleRayKernel;
 
 pub struct GridDdaTracer {
     grid: Arc<Grid>,
@@ -185,8 +185,9 @@ impl GridDdaTracer {
     pub fn new(grid: Arc<Grid>) -> Self {
         GridDdaTracer { grid }
     }
+}
 
-    /// Closest hit (`ANY = false`) or first hit found (`ANY = true`, for occlusion).
+impl SingleRayKernel for GridDdaTracer {
     #[inline(always)]
     fn trace<S: Stats, const ANY: bool>(&self, ray: &Ray, stats: &mut S) -> Hit {
         let g = &*self.grid;
@@ -284,20 +285,6 @@ impl GridDdaTracer {
     }
 }
 
-impl Kernel for GridDdaTracer {
-    fn intersect_with<S: Stats>(&self, rays: Rays<'_>, hits: &mut [Hit], stats: &mut S) {
-        for (i, hit) in hits.iter_mut().enumerate() {
-            *hit = self.trace::<S, false>(&rays.ray(i), stats);
-        }
-    }
-
-    fn occluded_with<S: Stats>(&self, rays: Rays<'_>, occluded: &mut [bool], stats: &mut S) {
-        for (i, o) in occluded.iter_mut().enumerate() {
-            *o = self.trace::<S, true>(&rays.ray(i), stats).is_hit();
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use glam::Vec3;
@@ -308,6 +295,7 @@ mod tests {
     use crate::scene::builtin::random::SplitMix64;
     use crate::stats::{Counters, NoStats};
     use crate::tracers::reference::ReferenceTracer;
+    use crate::tracers::Kernel;
 
     fn vec(rng: &mut SplitMix64, lo: f32, hi: f32) -> Vec3 {
         Vec3::new(rng.range(lo, hi), rng.range(lo, hi), rng.range(lo, hi))

@@ -9,7 +9,7 @@ pub mod params;
 pub mod reference;
 pub mod registry;
 
-use crate::geometry::{Hit, Rays};
+use crate::geometry::{Hit, Ray, Rays};
 use crate::stats::{Counters, NoStats, Stats};
 
 pub use params::Params;
@@ -26,6 +26,27 @@ pub trait Kernel: Send + Sync {
 
     /// `occluded[i]` becomes whether anything lies on ray `i` within `[tmin, tmax]`.
     fn occluded_with<S: Stats>(&self, rays: Rays<'_>, occluded: &mut [bool], stats: &mut S);
+}
+
+/// A tracer that answers one ray at a time (reference, obvhs, grid-dda): its `Kernel` is the loop
+/// over the chunk.
+pub trait SingleRayKernel: Send + Sync {
+    /// Closest hit (`ANY = false`) or first hit found (`ANY = true`, for occlusion) of one ray.
+    fn trace<S: Stats, const ANY: bool>(&self, ray: &Ray, stats: &mut S) -> Hit;
+}
+
+impl<T: SingleRayKernel> Kernel for T {
+    fn intersect_with<S: Stats>(&self, rays: Rays<'_>, hits: &mut [Hit], stats: &mut S) {
+        for (i, hit) in hits.iter_mut().enumerate() {
+            *hit = self.trace::<S, false>(&rays.ray(i), stats);
+        }
+    }
+
+    fn occluded_with<S: Stats>(&self, rays: Rays<'_>, occluded: &mut [bool], stats: &mut S) {
+        for (i, o) in occluded.iter_mut().enumerate() {
+            *o = self.trace::<S, true>(&rays.ray(i), stats).is_hit();
+        }
+    }
 }
 
 /// The object-safe face of a `Kernel`: the runner holds `Box<dyn Tracer>`.

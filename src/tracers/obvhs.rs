@@ -44,9 +44,9 @@ use ::obvhs::cwbvh::node::{extract_byte64, CwBvhNode};
 use glam::{UVec2, Vec3, Vec3A};
 
 use crate::accel::ObvhsBvh;
-use crate::geometry::{Aabb, Hit, Ray, RayBoxTest, Rays, WatertightRay};
+use crate::geometry::{Aabb, Hit, Ray, RayBoxTest, WatertightRay};
 use crate::stats::Stats;
-use crate::tracers::Kernel;
+use crate::tracers::SingleRayKernel;
 
 /// 2⁶⁴: the exact stretch of obvhs's t axis that moves its fixed box-entry clamp out of the way.
 const T_SCALE: f32 = 18_446_744_073_709_551_616.0;
@@ -116,8 +116,9 @@ impl ObvhsTracer {
         let index = (node as *const CwBvhNode as usize - base) / std::mem::size_of::<CwBvhNode>();
         self.bvh.node_depth[index] as usize
     }
+}
 
-    /// Closest hit (`ANY = false`) or first hit found (`ANY = true`, for occlusion).
+impl SingleRayKernel for ObvhsTracer {
     #[inline(always)]
     fn trace<S: Stats, const ANY: bool>(&self, ray: &Ray, stats: &mut S) -> Hit {
         if S::ENABLED {
@@ -183,23 +184,6 @@ impl ObvhsTracer {
     }
 }
 
-impl Kernel for ObvhsTracer {
-    /// Every counter is real: see the module doc for what each one counts here.
-    const COUNTS_INTERNALS: bool = true;
-
-    fn intersect_with<S: Stats>(&self, rays: Rays<'_>, hits: &mut [Hit], stats: &mut S) {
-        for (i, hit) in hits.iter_mut().enumerate() {
-            *hit = self.trace::<S, false>(&rays.ray(i), stats);
-        }
-    }
-
-    fn occluded_with<S: Stats>(&self, rays: Rays<'_>, occluded: &mut [bool], stats: &mut S) {
-        for (i, o) in occluded.iter_mut().enumerate() {
-            *o = self.trace::<S, true>(&rays.ray(i), stats).is_hit();
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -208,6 +192,7 @@ mod tests {
     use crate::scene::Mesh;
     use crate::stats::{Counters, NoStats};
     use crate::tracers::reference::ReferenceTracer;
+    use crate::tracers::Kernel;
     use crate::tracers::{build_tracer, Params, TracerInfo};
 
     /// SplitMix64 (Steele et al. 2014): a seeded, dependency-free source of test geometry.

@@ -8,9 +8,9 @@ use std::sync::Arc;
 
 use crate::accel::child_pairs::PairRayTest;
 use crate::accel::{Bvh, BvhConfig};
-use crate::geometry::{Hit, Ray, RayBoxTest, Rays, WatertightRay};
+use crate::geometry::{Hit, Ray, RayBoxTest, WatertightRay};
 use crate::stats::Stats;
-use crate::tracers::Kernel;
+use crate::tracers::SingleRayKernel;
 
 pub struct ReferenceTracer {
     bvh: Arc<Bvh>,
@@ -30,8 +30,9 @@ impl ReferenceTracer {
     pub fn new(bvh: Arc<Bvh>) -> Self {
         ReferenceTracer { bvh }
     }
+}
 
-    /// Closest hit (`ANY = false`) or first hit found (`ANY = true`, for occlusion).
+impl SingleRayKernel for ReferenceTracer {
     #[inline(always)]
     fn trace<S: Stats, const ANY: bool>(&self, ray: &Ray, stats: &mut S) -> Hit {
         let bvh = &*self.bvh;
@@ -135,20 +136,6 @@ impl ReferenceTracer {
                     break;
                 }
             }
-        }
-    }
-}
-
-impl Kernel for ReferenceTracer {
-    fn intersect_with<S: Stats>(&self, rays: Rays<'_>, hits: &mut [Hit], stats: &mut S) {
-        for (i, hit) in hits.iter_mut().enumerate() {
-            *hit = self.trace::<S, false>(&rays.ray(i), stats);
-        }
-    }
-
-    fn occluded_with<S: Stats>(&self, rays: Rays<'_>, occluded: &mut [bool], stats: &mut S) {
-        for (i, o) in occluded.iter_mut().enumerate() {
-            *o = self.trace::<S, true>(&rays.ray(i), stats).is_hit();
         }
     }
 }
