@@ -1,12 +1,13 @@
 //! The `raylab` command line: run, render, verify, scenes. Parsing and printing only; the work is
 //! in the library. Any `Error` is printed once and exits with its code (2 for bad input).
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
 use raylab::error::{Error, Result};
+use raylab::experiment::results_dir::PendingResults;
 use raylab::experiment::{run_experiment, RunOverrides};
 use raylab::render::raycast::render_raycast;
 use raylab::scene::library::{list_scenes, load_scene};
@@ -96,9 +97,10 @@ enum Command {
         /// Largest allowed 99th-percentile relative distance error.
         #[arg(long, default_value_t = 1e-4)]
         max_distance_error: f64,
-        /// Where summary.csv and disagreements.csv go (default results/verify/<scene>-<tracer>).
-        #[arg(long)]
-        out: Option<PathBuf>,
+        /// Results root: summary.csv and disagreements.csv go to <out>/verify/<scene>-<tracer>
+        /// (a -2, -3… suffix when that exists), written whole or not at all.
+        #[arg(long, default_value = "results")]
+        out: PathBuf,
     },
     /// List built-in scenes and the scenes found on the search path, with triangle counts.
     Scenes,
@@ -123,27 +125,6 @@ fn check_frame(frame: usize, frames: usize) -> Result<()> {
         )));
     }
     Ok(())
-}
-
-/// Writes into a temporary sibling of `dir` and renames it into place, so a failure never leaves
-/// a half-written directory behind.
-fn write_dir_atomically(dir: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
-    let io = |e: std::io::Error| Error::runtime(format!("{}: {e}", dir.display()));
-    let parent = dir.parent().unwrap_or(Path::new("."));
-    std::fs::create_dir_all(parent).map_err(io)?;
-    let name = dir
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let tmp = parent.join(format!(".{name}.partial"));
-    let _ = std::fs::remove_dir_all(&tmp);
-    std::fs::create_dir_all(&tmp).map_err(io)?;
-    if let Err(e) = write(&tmp) {
-        let _ = std::fs::remove_dir_all(&tmp);
-        return Err(e);
-    }
-    let _ = std::fs::remove_dir_all(dir);
-    std::fs::rename(&tmp, dir).map_err(io)
 }
 
 fn execute(command: Command) -> Result<bool> {
@@ -228,13 +209,11 @@ fn execute(command: Command) -> Result<bool> {
                 frame.index
             );
             print!("{}", format_table(&reports, &tol));
-            let dir = out.unwrap_or_else(|| {
-                PathBuf::from("results/verify").join(format!("{scene}-{tracer}"))
-            });
-            write_dir_atomically(&dir, |tmp| {
-                verify::write_csv(tmp, &scene, &tracer, &reports)
-            })?;
-            println!("CSV: {}", dir.display());
+            // A scene given as a path must not turn into subdirectories.
+            let name = format!("{scene}-{tracer}").replace(['/', '\\'], "_");
+            let pending = PendingResults::create(&out, "verify", &name)?;
+            verify::write_csv(pending.dir(), &scene, &tracer, &reports)?;
+            println!("CSV: {}", pending.commit()?.display());
             let pass = reports.iter().all(|r| r.passes(&tol));
             println!(
                 "{} (tolerance: ≤ {max_unexplained} unexplained disagreements per ray kind, p99 distance error ≤ {max_distance_error:e})",

@@ -9,6 +9,7 @@ use std::arch::x86_64::*;
 use glam::Vec3;
 
 use super::bvh::BvhNode;
+use crate::geometry::aabb::FAR_SCALE;
 
 #[derive(Clone, Copy, Debug, Default)]
 #[repr(C, align(64))]
@@ -41,10 +42,6 @@ pub fn child_pairs(nodes: &[BvhNode]) -> Vec<ChildPair> {
         })
         .collect()
 }
-
-/// `1 + 2γ(3)`: the far-distance scale of Ize 2013 that makes the slab test conservative.
-const FAR_SCALE: f32 =
-    1.0 + 2.0 * (3.0 * (f32::EPSILON * 0.5) / (1.0 - 3.0 * (f32::EPSILON * 0.5)));
 
 /// A ray prepared for child-pair tests. Per axis, a negative direction (sign bit, so −0.0 counts)
 /// swaps the min/max halves so lanes come out as `[near_l, near_r, far_l, far_r]`; far lanes are

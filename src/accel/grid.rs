@@ -347,11 +347,7 @@ pub fn triangle_overlaps_box(tri: &Triangle, lo: Vec3, hi: Vec3) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::builtin::random::SplitMix64;
-
-    fn vec(rng: &mut SplitMix64, lo: f32, hi: f32) -> Vec3 {
-        Vec3::new(rng.range(lo, hi), rng.range(lo, hi), rng.range(lo, hi))
-    }
+    use crate::random::SplitMix64;
 
     /// `n` triangles with centres in [-1, 1]³: mostly small, some long and skinny across the box,
     /// and every tenth degenerate (collinear or a point).
@@ -359,21 +355,21 @@ mod tests {
         let mut rng = SplitMix64::new(seed);
         (0..n)
             .map(|i| {
-                let c = vec(&mut rng, -1.0, 1.0);
+                let c = rng.vec3(-1.0, 1.0);
                 match i % 10 {
                     0 => {
-                        let d = vec(&mut rng, -0.3, 0.3);
+                        let d = rng.vec3(-0.3, 0.3);
                         Triangle::new(c, c + d, c + 2.0 * d)
                     }
                     1 => Triangle::new(c, c, c),
                     2 | 3 => {
-                        let d = vec(&mut rng, -1.0, 1.0);
-                        Triangle::new(c - d, c + d, c + d + vec(&mut rng, -0.02, 0.02))
+                        let d = rng.vec3(-1.0, 1.0);
+                        Triangle::new(c - d, c + d, c + d + rng.vec3(-0.02, 0.02))
                     }
                     _ => Triangle::new(
-                        c + vec(&mut rng, -0.1, 0.1),
-                        c + vec(&mut rng, -0.1, 0.1),
-                        c + vec(&mut rng, -0.1, 0.1),
+                        c + rng.vec3(-0.1, 0.1),
+                        c + rng.vec3(-0.1, 0.1),
+                        c + rng.vec3(-0.1, 0.1),
                     ),
                 }
             })
@@ -572,7 +568,7 @@ mod tests {
         // 200 triangles in the plane z = 3.
         let flat: Vec<Triangle> = (0..200)
             .map(|_| {
-                let mut p = [0.0; 3].map(|_| vec(&mut rng, -1.0, 1.0));
+                let mut p = [0.0; 3].map(|_| rng.vec3(-1.0, 1.0));
                 for q in &mut p {
                     q.z = 3.0;
                 }

@@ -5,19 +5,12 @@
 use std::hint::black_box;
 use std::time::Instant;
 
-use rayon::prelude::*;
 use rayon::ThreadPool;
 
-use crate::geometry::{Hit, RayBatch, Rays};
+use crate::geometry::{Hit, RayBatch};
 use crate::stats::Counters;
+use crate::tracers::batch::{counted_pass, pass};
 use crate::tracers::Tracer;
-
-/// Rays per work chunk. 4096 = four whole 32×32 camera tiles: a multiple of 16 (and of every
-/// aligned n×n block, n ≤ 32), so no packet or Morton block of primary rays straddles two chunks
-/// and packet and stream tracers see the same coherent groups whatever the thread count; large
-/// enough that rayon's per-chunk cost (~1 µs) is noise next to tracing 4096 rays, small enough
-/// that a 1024² batch gives 256 chunks for load balancing.
-pub const CHUNK_RAYS: usize = 4096;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Timing {
@@ -36,36 +29,6 @@ pub struct Counted {
     /// thread count it gives the cost of counting.
     pub seconds: f64,
     pub threads: usize,
-}
-
-/// One pass of `trace` over `rays`, chunk by chunk, in the current pool.
-fn pass<T: Send>(rays: Rays<'_>, out: &mut [T], trace: &(dyn Fn(Rays<'_>, &mut [T]) + Sync)) {
-    out.par_chunks_mut(CHUNK_RAYS)
-        .enumerate()
-        .for_each(|(c, chunk)| {
-            let start = c * CHUNK_RAYS;
-            trace(rays.slice(start..start + chunk.len()), chunk);
-        });
-}
-
-/// One counting pass: each chunk counts into its own `Counters`, merged at the end.
-fn counted_pass<T: Send>(
-    rays: Rays<'_>,
-    out: &mut [T],
-    trace: &(dyn Fn(Rays<'_>, &mut [T], &mut Counters) + Sync),
-) -> Counters {
-    out.par_chunks_mut(CHUNK_RAYS)
-        .enumerate()
-        .map(|(c, chunk)| {
-            let start = c * CHUNK_RAYS;
-            let mut counters = Counters::default();
-            trace(rays.slice(start..start + chunk.len()), chunk, &mut counters);
-            counters
-        })
-        .reduce(Counters::default, |mut a, b| {
-            a.merge(&b);
-            a
-        })
 }
 
 /// `warmup` untimed passes, then `repeats` timed ones, all in `pool`. The answers land in a

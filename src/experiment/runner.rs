@@ -13,11 +13,11 @@ use rayon::{ThreadPool, ThreadPoolBuilder};
 use crate::accel::Accel;
 use crate::error::{Error, Result};
 use crate::geometry::{RayBatch, RayKind};
+use crate::random::mix64;
 use crate::render::rays::{diffuse_rays, primary_rays, shadow_rays};
-use crate::render::sampling::mix64;
 use crate::scene::{Frame, Scene};
+use crate::tracers::batch::trace_hits;
 use crate::tracers::{build_tracer, Params, Tracer, TracerInfo};
-use crate::verify::trace_hits;
 
 use super::config::{Experiment, StructureKey};
 use super::measure::{count_pass, time_passes, Counted, Timing};

@@ -86,7 +86,7 @@ impl Aabb {
 
 /// `1 + 2γ(3)`, γ(n) = nε/(1 − nε) with ε = 2⁻²⁴: scaling the far slab distance by it makes the
 /// slab test conservative under f32 rounding (Ize 2013, §3; pbrt-v4 `Bounds3::IntersectP`).
-const FAR_SCALE: f32 =
+pub const FAR_SCALE: f32 =
     1.0 + 2.0 * (3.0 * (f32::EPSILON * 0.5) / (1.0 - 3.0 * (f32::EPSILON * 0.5)));
 
 /// A ray prepared for many box tests: reciprocal direction and which box corner is near per axis.

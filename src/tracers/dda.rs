@@ -292,26 +292,22 @@ mod tests {
     use super::*;
     use crate::accel::{Bvh, BvhConfig, GridConfig};
     use crate::geometry::{RayBatch, RayKind, Triangle};
-    use crate::scene::builtin::random::SplitMix64;
+    use crate::random::SplitMix64;
     use crate::stats::{Counters, NoStats};
     use crate::tracers::reference::ReferenceTracer;
     use crate::tracers::Kernel;
-
-    fn vec(rng: &mut SplitMix64, lo: f32, hi: f32) -> Vec3 {
-        Vec3::new(rng.range(lo, hi), rng.range(lo, hi), rng.range(lo, hi))
-    }
 
     /// `n` triangles with centres in [-1, 1]³ and edges up to `size` long, every 20th degenerate.
     fn soup(n: usize, size: f32, seed: u64) -> Vec<Triangle> {
         let mut rng = SplitMix64::new(seed);
         (0..n)
             .map(|i| {
-                let c = vec(&mut rng, -1.0, 1.0);
-                let d = vec(&mut rng, -size, size);
+                let c = rng.vec3(-1.0, 1.0);
+                let d = rng.vec3(-size, size);
                 if i % 20 == 0 {
                     Triangle::new(c, c + d, c + 2.0 * d)
                 } else {
-                    Triangle::new(c, c + d, c + vec(&mut rng, -size, size))
+                    Triangle::new(c, c + d, c + rng.vec3(-size, size))
                 }
             })
             .collect()
@@ -326,12 +322,12 @@ mod tests {
         for i in 0..n {
             let (origin, dir) = match i % 5 {
                 0 => {
-                    let o = vec(&mut rng, -1.0, 1.0).normalize_or(Vec3::X) * 3.0;
-                    (o, vec(&mut rng, -0.8, 0.8) - o)
+                    let o = rng.vec3(-1.0, 1.0).normalize_or(Vec3::X) * 3.0;
+                    (o, rng.vec3(-0.8, 0.8) - o)
                 }
-                1 => (vec(&mut rng, -1.0, 1.0), vec(&mut rng, -1.0, 1.0)),
+                1 => (rng.vec3(-1.0, 1.0), rng.vec3(-1.0, 1.0)),
                 family => {
-                    let mut d = vec(&mut rng, -1.0, 1.0).to_array();
+                    let mut d = rng.vec3(-1.0, 1.0).to_array();
                     let axis = (rng.next_u64() % 3) as usize;
                     if family == 4 {
                         d[axis] = rng.range(-1.0, 1.0) * f32::EPSILON;
@@ -342,7 +338,7 @@ mod tests {
                             d[(axis + 1) % 3] = zero;
                         }
                     }
-                    (vec(&mut rng, -1.2, 1.2), Vec3::from_array(d))
+                    (rng.vec3(-1.2, 1.2), Vec3::from_array(d))
                 }
             };
             batch.push(Ray::new(origin, dir, 0.0, f32::INFINITY), i as u32);

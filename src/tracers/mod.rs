@@ -1,6 +1,7 @@
 //! Every tracer — from-scratch or baseline — behind one trait, so the runner, the verifier and
 //! the benchmarks treat them alike. Adding a tracer is adding a file and one line in `registry.rs`.
 
+pub mod batch;
 pub mod cgt;
 pub mod dda;
 pub mod embree;

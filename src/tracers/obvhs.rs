@@ -189,42 +189,23 @@ mod tests {
     use super::*;
     use crate::accel::{Accel, AccelKind, Bvh, BvhConfig, ObvhsQuality};
     use crate::geometry::{RayBatch, RayKind, Triangle};
+    use crate::random::SplitMix64;
     use crate::scene::Mesh;
     use crate::stats::{Counters, NoStats};
     use crate::tracers::reference::ReferenceTracer;
     use crate::tracers::Kernel;
     use crate::tracers::{build_tracer, Params, TracerInfo};
 
-    /// SplitMix64 (Steele et al. 2014): a seeded, dependency-free source of test geometry.
-    struct Rng(u64);
-
-    impl Rng {
-        fn next_u64(&mut self) -> u64 {
-            self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-            let mut z = self.0;
-            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-            z ^ (z >> 31)
-        }
-        /// Uniform in [lo, hi).
-        fn range(&mut self, lo: f32, hi: f32) -> f32 {
-            lo + (hi - lo) * (self.next_u64() >> 40) as f32 / (1u64 << 24) as f32
-        }
-        fn vec(&mut self, lo: f32, hi: f32) -> Vec3 {
-            Vec3::new(self.range(lo, hi), self.range(lo, hi), self.range(lo, hi))
-        }
-    }
-
     /// `n` triangles with centres in [-1, 1]³ and edges up to `size` long.
     fn soup(n: usize, size: f32, seed: u64) -> Vec<Triangle> {
-        let mut rng = Rng(seed);
+        let mut rng = SplitMix64::new(seed);
         (0..n)
             .map(|_| {
-                let c = rng.vec(-1.0, 1.0);
+                let c = rng.vec3(-1.0, 1.0);
                 Triangle::new(
-                    c + rng.vec(-size, size),
-                    c + rng.vec(-size, size),
-                    c + rng.vec(-size, size),
+                    c + rng.vec3(-size, size),
+                    c + rng.vec3(-size, size),
+                    c + rng.vec3(-size, size),
                 )
             })
             .collect()
@@ -255,37 +236,37 @@ mod tests {
     ];
 
     fn mixed_rays(n: usize, seed: u64) -> (RayBatch, Vec<Family>) {
-        let mut rng = Rng(seed);
+        let mut rng = SplitMix64::new(seed);
         let mut batch = RayBatch::with_capacity(RayKind::Primary, n);
         let mut families = Vec::with_capacity(n);
         for i in 0..n {
             let family = FAMILIES[i % FAMILIES.len()];
             let (origin, dir) = match family {
                 Family::Outside => {
-                    let o = rng.vec(-1.0, 1.0).normalize_or(Vec3::X) * 3.0;
-                    (o, rng.vec(-0.8, 0.8) - o)
+                    let o = rng.vec3(-1.0, 1.0).normalize_or(Vec3::X) * 3.0;
+                    (o, rng.vec3(-0.8, 0.8) - o)
                 }
-                Family::Inside => (rng.vec(-1.0, 1.0), rng.vec(-1.0, 1.0)),
+                Family::Inside => (rng.vec3(-1.0, 1.0), rng.vec3(-1.0, 1.0)),
                 Family::AxisParallel | Family::NegativeZero => {
                     let zero = if family == Family::NegativeZero {
                         -0.0
                     } else {
                         0.0
                     };
-                    let mut d = rng.vec(-1.0, 1.0).to_array();
+                    let mut d = rng.vec3(-1.0, 1.0).to_array();
                     // Zero one or two axes (never all three).
                     let first = (rng.next_u64() % 3) as usize;
                     d[first] = zero;
                     if rng.next_u64().is_multiple_of(2) {
                         d[(first + 1) % 3] = zero;
                     }
-                    (rng.vec(-1.0, 1.0), Vec3::from_array(d))
+                    (rng.vec3(-1.0, 1.0), Vec3::from_array(d))
                 }
                 Family::NearAxis => {
-                    let mut d = rng.vec(-1.0, 1.0).to_array();
+                    let mut d = rng.vec3(-1.0, 1.0).to_array();
                     let axis = (rng.next_u64() % 3) as usize;
                     d[axis] = rng.range(-1.0, 1.0) * f32::EPSILON;
-                    (rng.vec(-1.0, 1.0), Vec3::from_array(d))
+                    (rng.vec3(-1.0, 1.0), Vec3::from_array(d))
                 }
             };
             batch.push(Ray::new(origin, dir, 0.0, f32::INFINITY), i as u32);

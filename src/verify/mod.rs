@@ -10,9 +10,10 @@ pub mod report;
 use rayon::prelude::*;
 
 use crate::error::Result;
-use crate::geometry::{Hit, RayBatch, RayKind};
+use crate::geometry::{RayBatch, RayKind};
 use crate::render::rays::{diffuse_rays, primary_rays, shadow_rays};
 use crate::scene::{Frame, Scene};
+use crate::tracers::batch::{trace_hits, trace_occlusion};
 use crate::tracers::{build_tracer, Params, Tracer, TracerInfo};
 
 pub use compare::{Agreement, Mismatch, Tie};
@@ -33,33 +34,6 @@ pub fn tracer_for_frame(name: &str, params: &Params, frame: &Frame) -> Result<Bo
         .build(&frame.mesh, &params.subset(info.accel.params()))?;
     build_tracer(info, params, &accel)
 }
-
-/// Closest hits of a whole batch, chunks spread over the current rayon pool.
-pub fn trace_hits(tracer: &dyn Tracer, batch: &RayBatch) -> Vec<Hit> {
-    let mut hits = vec![Hit::MISS; batch.len()];
-    let rays = batch.view();
-    hits.par_chunks_mut(CHUNK).enumerate().for_each(|(c, out)| {
-        let start = c * CHUNK;
-        tracer.intersect(rays.slice(start..start + out.len()), out);
-    });
-    hits
-}
-
-/// Occlusion flags of a whole batch.
-pub fn trace_occlusion(tracer: &dyn Tracer, batch: &RayBatch) -> Vec<bool> {
-    let mut flags = vec![false; batch.len()];
-    let rays = batch.view();
-    flags
-        .par_chunks_mut(CHUNK)
-        .enumerate()
-        .for_each(|(c, out)| {
-            let start = c * CHUNK;
-            tracer.occluded(rays.slice(start..start + out.len()), out);
-        });
-    flags
-}
-
-const CHUNK: usize = 4096;
 
 /// The verification batches of one frame: camera rays, and the shadow and diffuse rays leaving the
 /// oracle's primary hits (so the rays do not depend on the tracer under test). No shadow rays

@@ -12,8 +12,8 @@
 use glam::{Quat, Vec3};
 
 use super::marble_physics::{simulate, Trajectory, World};
-use super::random::SplitMix64;
 use super::{animated_scene, point_lights, Generator, SizeKnob};
+use crate::random::SplitMix64;
 use crate::scene::tessellate::Surface;
 use crate::scene::{Animation, Camera, Material, Mesh, Scene};
 

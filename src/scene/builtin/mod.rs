@@ -16,7 +16,6 @@ pub mod balls;
 pub mod deforming;
 pub mod marble_physics;
 pub mod marbles;
-pub mod random;
 pub mod rings;
 pub mod room;
 

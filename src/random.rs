@@ -1,7 +1,19 @@
-//! A small seeded generator (SplitMix64, Steele, Lea & Flood, OOPSLA 2014) so the generated scenes
-//! are identical on every run and every machine without pulling in a random-number crate.
+//! Seeded randomness without a random-number crate: SplitMix64 (Steele, Lea & Flood, OOPSLA 2014)
+//! as a sequence for the built-in generators and tests, and its finaliser as a hash for the
+//! order-independent samples of `render::sampling`. Identical on every run and every machine.
 
 use glam::Vec3;
+
+const GOLDEN_GAMMA: u64 = 0x9E37_79B9_7F4A_7C15;
+
+/// The SplitMix64 step as a hash: a cheap, well-mixed 64-bit function of `z`.
+#[inline]
+pub fn mix64(z: u64) -> u64 {
+    let mut z = z.wrapping_add(GOLDEN_GAMMA);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
 
 #[derive(Clone, Debug)]
 pub struct SplitMix64 {
@@ -14,11 +26,9 @@ impl SplitMix64 {
     }
 
     pub fn next_u64(&mut self) -> u64 {
-        self.state = self.state.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.state;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
+        let out = mix64(self.state);
+        self.state = self.state.wrapping_add(GOLDEN_GAMMA);
+        out
     }
 
     /// Uniform in [0, 1): the top 24 bits, exactly representable in f32.
@@ -29,6 +39,11 @@ impl SplitMix64 {
     /// Uniform in [lo, hi).
     pub fn range(&mut self, lo: f32, hi: f32) -> f32 {
         lo + (hi - lo) * self.unit()
+    }
+
+    /// A point uniform in the cube [lo, hi)³.
+    pub fn vec3(&mut self, lo: f32, hi: f32) -> Vec3 {
+        Vec3::new(self.range(lo, hi), self.range(lo, hi), self.range(lo, hi))
     }
 
     /// Uniform direction on the unit sphere (z uniform in [−1, 1], azimuth uniform).
