@@ -1,6 +1,7 @@
 //! Counters as a type parameter. Kernels are generic over `S: Stats` and guard every count with
 //! `if S::ENABLED`, so `NoStats` compiles every count away and timing runs pay nothing, while
-//! `Counters` records exact AABB tests, triangle tests and nodes visited, per BVH depth.
+//! `Counters` records exact AABB tests, triangle tests and nodes visited, per BVH depth, plus the
+//! algorithm-specific events of `Event` (mailbox hits, culled boxes, rays alive at leaves, ...).
 
 pub trait Stats: Default + Send {
     const ENABLED: bool;
@@ -8,6 +9,58 @@ pub trait Stats: Default + Send {
     fn node(&mut self, depth: usize);
     fn aabb_test(&mut self, depth: usize);
     fn triangle_test(&mut self, depth: usize);
+    /// `n` occurrences of an algorithm-specific event.
+    fn event(&mut self, event: Event, n: u64);
+}
+
+/// Events that only some algorithms have. Each is one column of runs.csv (empty for tracers that
+/// cannot count internals); a tracer that never raises an event reports 0 for it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Event {
+    /// Packets (or sub-packets after a split) started; rays / packets = mean packet occupancy.
+    Packets,
+    /// Ray–triangle tests skipped because the packet had already tested the triangle (mailbox).
+    MailboxHits,
+    /// Triangles rejected by a frustum (or interval) test for a whole packet, before any ray test.
+    TrianglesCulled,
+    /// BVH boxes rejected for a whole packet by a frustum or interval-arithmetic test.
+    BoxesCulled,
+    /// Leaves (BVH) or cells with triangles (grid) reached by a packet.
+    LeavesVisited,
+    /// Active rays summed over `LeavesVisited`: the mean number of rays alive at a leaf.
+    LeafActiveRays,
+    /// Grid slices a packet stepped through.
+    SlicesStepped,
+    /// Empty macrocells skipped.
+    MacrocellsSkipped,
+}
+
+impl Event {
+    pub const ALL: [Event; 8] = [
+        Event::Packets,
+        Event::MailboxHits,
+        Event::TrianglesCulled,
+        Event::BoxesCulled,
+        Event::LeavesVisited,
+        Event::LeafActiveRays,
+        Event::SlicesStepped,
+        Event::MacrocellsSkipped,
+    ];
+    pub const COUNT: usize = Event::ALL.len();
+
+    /// The runs.csv column.
+    pub fn name(self) -> &'static str {
+        match self {
+            Event::Packets => "packets",
+            Event::MailboxHits => "mailbox_hits",
+            Event::TrianglesCulled => "triangles_culled",
+            Event::BoxesCulled => "boxes_culled",
+            Event::LeavesVisited => "leaves_visited",
+            Event::LeafActiveRays => "leaf_active_rays",
+            Event::SlicesStepped => "slices_stepped",
+            Event::MacrocellsSkipped => "macrocells_skipped",
+        }
+    }
 }
 
 /// Counts nothing; every method is empty and inlined away.
@@ -24,6 +77,8 @@ impl Stats for NoStats {
     fn aabb_test(&mut self, _: usize) {}
     #[inline(always)]
     fn triangle_test(&mut self, _: usize) {}
+    #[inline(always)]
+    fn event(&mut self, _: Event, _: u64) {}
 }
 
 /// Exact counts for one tracer on one ray kind. Depth-indexed vectors grow on demand; depth is the
@@ -37,6 +92,8 @@ pub struct Counters {
     pub triangle_tests: u64,
     pub aabb_by_depth: Vec<u64>,
     pub triangle_by_depth: Vec<u64>,
+    /// Indexed by `Event as usize`.
+    pub events: [u64; Event::COUNT],
 }
 
 fn bump(by_depth: &mut Vec<u64>, depth: usize) {
@@ -66,14 +123,25 @@ impl Stats for Counters {
         self.triangle_tests += 1;
         bump(&mut self.triangle_by_depth, depth);
     }
+    #[inline]
+    fn event(&mut self, event: Event, n: u64) {
+        self.events[event as usize] += n;
+    }
 }
 
 impl Counters {
+    pub fn get(&self, event: Event) -> u64 {
+        self.events[event as usize]
+    }
+
     pub fn merge(&mut self, other: &Counters) {
         self.rays += other.rays;
         self.nodes_visited += other.nodes_visited;
         self.aabb_tests += other.aabb_tests;
         self.triangle_tests += other.triangle_tests;
+        for (mine, theirs) in self.events.iter_mut().zip(&other.events) {
+            *mine += theirs;
+        }
         for (mine, theirs) in [
             (&mut self.aabb_by_depth, &other.aabb_by_depth),
             (&mut self.triangle_by_depth, &other.triangle_by_depth),
@@ -102,7 +170,11 @@ mod tests {
         b.ray();
         b.aabb_test(3);
         b.node(1);
+        b.event(Event::MailboxHits, 3);
+        a.event(Event::MailboxHits, 2);
         a.merge(&b);
+        assert_eq!(a.get(Event::MailboxHits), 5);
+        assert_eq!(a.get(Event::Packets), 0);
         assert_eq!(
             (a.rays, a.aabb_tests, a.triangle_tests, a.nodes_visited),
             (2, 2, 1, 1)

@@ -188,10 +188,10 @@ mod tests {
         assert_eq!(dir.parent().unwrap(), out.join("t"));
 
         let (header, runs) = read_csv(&dir.join(output::RUNS_CSV));
-        assert_eq!(header, output::RUNS_COLUMNS);
+        assert_eq!(header, output::runs_columns());
         // frames 3 × instances 2 × threads 2 × kinds (lit 3 + dark 2 + moving 3).
         assert_eq!(runs.len(), 3 * 2 * 2 * (3 + 2 + 3));
-        assert!(runs.iter().all(|r| r.len() == 25));
+        assert!(runs.iter().all(|r| r.len() == output::runs_columns().len()));
         // The counting pass runs once, on the widest pool: its cost is beside the 2-thread rows.
         for r in &runs {
             let overhead = r["counting_overhead"].parse::<f64>();

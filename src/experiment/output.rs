@@ -5,6 +5,7 @@
 use std::path::Path;
 
 use crate::error::{Error, Result};
+use crate::stats::Event;
 
 use super::plan::Plan;
 use super::runner::Case;
@@ -40,6 +41,15 @@ pub const RUNS_COLUMNS: &[&str] = &[
     "counting_overhead",
 ];
 
+/// runs.csv's columns: the fixed ones, then one per `Event`.
+pub fn runs_columns() -> Vec<&'static str> {
+    RUNS_COLUMNS
+        .iter()
+        .copied()
+        .chain(Event::ALL.iter().map(|e| e.name()))
+        .collect()
+}
+
 pub const HISTOGRAM_COLUMNS: &[&str] = &[
     "experiment",
     "scene",
@@ -71,7 +81,7 @@ fn csv_error(path: &Path, e: csv::Error) -> Error {
 
 pub fn write_runs(path: &Path, plan: &Plan, cases: &[Case]) -> Result<()> {
     let mut w = csv::Writer::from_path(path).map_err(|e| csv_error(path, e))?;
-    w.write_record(RUNS_COLUMNS)
+    w.write_record(runs_columns())
         .map_err(|e| csv_error(path, e))?;
     for case in cases {
         let instance = &plan.instances[case.instance];
@@ -87,7 +97,7 @@ pub fn write_runs(path: &Path, plan: &Plan, cases: &[Case]) -> Result<()> {
         for timing in &case.timings {
             // The counting pass ran once, on the widest pool: compare it with that row's median.
             let same_threads = timing.threads == case.counted.threads;
-            let row = [
+            let fixed = [
                 plan.experiment.clone(),
                 plan.scenes[case.scene].name.clone(),
                 case.triangles.to_string(),
@@ -114,6 +124,8 @@ pub fn write_runs(path: &Path, plan: &Plan, cases: &[Case]) -> Result<()> {
                 cell(same_threads.then_some(case.counted.seconds)),
                 cell(same_threads.then(|| case.counted.seconds / timing.seconds_median)),
             ];
+            let events = Event::ALL.iter().map(|&e| cell(internal(c.get(e))));
+            let row: Vec<String> = fixed.into_iter().chain(events).collect();
             w.write_record(&row).map_err(|e| csv_error(path, e))?;
         }
     }

@@ -656,6 +656,7 @@ mod tests {
                 triangle_tests: 1,
                 aabb_by_depth: vec![0, 3],
                 triangle_by_depth: vec![0, 1],
+                ..Counters::default()
             }
         );
         const { assert!(ObvhsTracer::COUNTS_INTERNALS) };
