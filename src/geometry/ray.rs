@@ -93,6 +93,10 @@ pub struct RayBatch {
     pub tmin: Vec<f32>,
     pub tmax: Vec<f32>,
     pub pixel: Vec<u32>,
+    /// Explicit packets (packet assembly, Boulos et al. 2007 §3.2): `packet_start[i]` says ray `i`
+    /// begins a packet. Empty when the batch has none: packet tracers then group consecutive rays
+    /// (camera rays come in Morton-ordered tiles, so consecutive means a screen block).
+    pub packet_start: Vec<bool>,
 }
 
 impl RayBatch {
@@ -116,6 +120,7 @@ impl RayBatch {
             tmin: v(),
             tmax: v(),
             pixel: Vec::with_capacity(n),
+            packet_start: Vec::new(),
         }
     }
 
@@ -124,6 +129,13 @@ impl RayBatch {
     }
 
     pub fn push(&mut self, ray: Ray, pixel: u32) {
+        if !self.packet_start.is_empty() {
+            self.packet_start.push(false);
+        }
+        self.push_lanes(ray, pixel);
+    }
+
+    fn push_lanes(&mut self, ray: Ray, pixel: u32) {
         self.ox.push(ray.origin.x);
         self.oy.push(ray.origin.y);
         self.oz.push(ray.origin.z);
@@ -133,6 +145,23 @@ impl RayBatch {
         self.tmin.push(ray.tmin);
         self.tmax.push(ray.tmax);
         self.pixel.push(pixel);
+    }
+
+    /// Pushes `ray` as the first ray of a new explicit packet; from then on the batch has explicit
+    /// packets, and the rays pushed so far form one packet.
+    pub fn push_packet_start(&mut self, ray: Ray, pixel: u32) {
+        if self.packet_start.is_empty() {
+            // Switch to explicit packets: the rays so far (if any) form the first one.
+            self.packet_start.resize(self.len(), false);
+            if let Some(first) = self.packet_start.first_mut() {
+                *first = true;
+            }
+            self.packet_start.push(true);
+            self.push_lanes(ray, pixel);
+            return;
+        }
+        self.push(ray, pixel);
+        *self.packet_start.last_mut().expect("just pushed") = true;
     }
 
     pub fn len(&self) -> usize {
@@ -157,6 +186,7 @@ impl RayBatch {
             dz: &self.dz,
             tmin: &self.tmin,
             tmax: &self.tmax,
+            packet_start: &self.packet_start,
         }
     }
 }
@@ -173,6 +203,8 @@ pub struct Rays<'a> {
     pub dz: &'a [f32],
     pub tmin: &'a [f32],
     pub tmax: &'a [f32],
+    /// As `RayBatch::packet_start`: empty, or one flag per ray.
+    pub packet_start: &'a [bool],
 }
 
 impl<'a> Rays<'a> {
@@ -204,7 +236,73 @@ impl<'a> Rays<'a> {
             dy: &self.dy[range.clone()],
             dz: &self.dz[range.clone()],
             tmin: &self.tmin[range.clone()],
-            tmax: &self.tmax[range],
+            tmax: &self.tmax[range.clone()],
+            packet_start: if self.packet_start.is_empty() {
+                &[]
+            } else {
+                &self.packet_start[range]
+            },
         }
+    }
+
+    /// Whether the rays come in explicit packets (`RayBatch::packet_start`).
+    pub fn has_explicit_packets(&self) -> bool {
+        !self.packet_start.is_empty()
+    }
+
+    /// The packets of this view, of at most `max` rays each: consecutive runs of `max` rays, or,
+    /// with explicit packets, each explicit packet cut into runs of at most `max`.
+    pub fn packets(&self, max: usize) -> impl Iterator<Item = std::ops::Range<usize>> + 'a {
+        assert!(max > 0, "packets of at least one ray");
+        let (len, starts) = (self.len(), self.packet_start);
+        let mut begin = 0;
+        std::iter::from_fn(move || {
+            if begin >= len {
+                return None;
+            }
+            let limit = (begin + max).min(len);
+            let end = if starts.is_empty() {
+                limit
+            } else {
+                (begin + 1..limit).find(|&i| starts[i]).unwrap_or(limit)
+            };
+            let packet = begin..end;
+            begin = end;
+            Some(packet)
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ray(x: f32) -> Ray {
+        Ray::new(Vec3::new(x, 0.0, 0.0), Vec3::Z, 0.0, 1.0)
+    }
+
+    #[test]
+    fn uniform_batches_are_cut_into_runs_of_max() {
+        let mut b = RayBatch::new(RayKind::Primary);
+        (0..10).for_each(|i| b.push(ray(i as f32), i));
+        let packets: Vec<_> = b.view().packets(4).collect();
+        assert_eq!(packets, vec![0..4, 4..8, 8..10]);
+        assert!(!b.view().has_explicit_packets());
+    }
+
+    #[test]
+    fn explicit_packets_are_kept_and_cut_at_max() {
+        let mut b = RayBatch::new(RayKind::Shadow);
+        b.push(ray(0.0), 0);
+        b.push(ray(1.0), 1);
+        b.push_packet_start(ray(2.0), 2);
+        (3..9).for_each(|i| b.push(ray(i as f32), i));
+        b.push_packet_start(ray(9.0), 9);
+        assert_eq!(b.packet_start.len(), 10);
+        let packets: Vec<_> = b.view().packets(4).collect();
+        assert_eq!(packets, vec![0..2, 2..6, 6..9, 9..10]);
+        // A sub-view keeps its part of the flags.
+        let tail: Vec<_> = b.view().slice(5..10).packets(8).collect();
+        assert_eq!(tail, vec![0..4, 4..5]);
     }
 }

@@ -2,27 +2,59 @@
 //! runner's timed and counted passes, verification and secondary-ray generation all go through
 //! here, so every caller splits a batch the same way.
 
+use std::ops::Range;
+
 use rayon::prelude::*;
 
 use crate::geometry::{Hit, RayBatch, Rays};
 use crate::stats::Counters;
 use crate::tracers::Tracer;
 
-/// Rays per work chunk. 4096 = four whole 32×32 camera tiles: a multiple of 16 (and of every
+/// Rays per work chunk (at least; see `chunk_ranges`). 4096 = four whole 32×32 camera tiles: a multiple of 16 (and of every
 /// aligned n×n block, n ≤ 32), so no packet or Morton block of primary rays straddles two chunks
 /// and packet and stream tracers see the same coherent groups whatever the thread count; large
 /// enough that rayon's per-chunk cost (~1 µs) is noise next to tracing 4096 rays, small enough
 /// that a 1024² batch gives 256 chunks for load balancing.
 pub const CHUNK_RAYS: usize = 4096;
 
+/// The chunks of `rays`: runs of `CHUNK_RAYS`, or, when the batch has explicit packets, runs of
+/// whole packets each ending at the first packet start at or past `CHUNK_RAYS` rays, so that no
+/// packet is split between two chunks.
+fn chunk_ranges(rays: Rays<'_>) -> Vec<Range<usize>> {
+    let mut chunks = Vec::with_capacity(rays.len() / CHUNK_RAYS + 1);
+    let mut begin = 0;
+    while begin < rays.len() {
+        let at_least = (begin + CHUNK_RAYS).min(rays.len());
+        let end = if rays.has_explicit_packets() {
+            (at_least..rays.len())
+                .find(|&i| rays.packet_start[i])
+                .unwrap_or(rays.len())
+        } else {
+            at_least
+        };
+        chunks.push(begin..end);
+        begin = end;
+    }
+    chunks
+}
+
+/// `out` cut along `chunk_ranges(rays)`, each part with its rays.
+fn chunks<'a, 'r, T>(rays: Rays<'r>, mut out: &'a mut [T]) -> Vec<(Rays<'r>, &'a mut [T])> {
+    chunk_ranges(rays)
+        .into_iter()
+        .map(|range| {
+            let (chunk, rest) = std::mem::take(&mut out).split_at_mut(range.len());
+            out = rest;
+            (rays.slice(range), chunk)
+        })
+        .collect()
+}
+
 /// One pass of `trace` over `rays`, chunk by chunk, in the current pool.
 pub fn pass<T: Send>(rays: Rays<'_>, out: &mut [T], trace: &(dyn Fn(Rays<'_>, &mut [T]) + Sync)) {
-    out.par_chunks_mut(CHUNK_RAYS)
-        .enumerate()
-        .for_each(|(c, chunk)| {
-            let start = c * CHUNK_RAYS;
-            trace(rays.slice(start..start + chunk.len()), chunk);
-        });
+    chunks(rays, out)
+        .into_par_iter()
+        .for_each(|(rays, chunk)| trace(rays, chunk));
 }
 
 /// One counting pass: each chunk counts into its own `Counters`, merged at the end.
@@ -31,12 +63,11 @@ pub fn counted_pass<T: Send>(
     out: &mut [T],
     trace: &(dyn Fn(Rays<'_>, &mut [T], &mut Counters) + Sync),
 ) -> Counters {
-    out.par_chunks_mut(CHUNK_RAYS)
-        .enumerate()
-        .map(|(c, chunk)| {
-            let start = c * CHUNK_RAYS;
+    chunks(rays, out)
+        .into_par_iter()
+        .map(|(rays, chunk)| {
             let mut counters = Counters::default();
-            trace(rays.slice(start..start + chunk.len()), chunk, &mut counters);
+            trace(rays, chunk, &mut counters);
             counters
         })
         .reduce(Counters::default, |mut a, b| {
@@ -57,4 +88,46 @@ pub fn trace_occlusion(tracer: &dyn Tracer, batch: &RayBatch) -> Vec<bool> {
     let mut flags = vec![false; batch.len()];
     pass(batch.view(), &mut flags, &|r, o| tracer.occluded(r, o));
     flags
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::{Ray, RayKind};
+    use glam::Vec3;
+
+    fn batch(n: usize, packet_every: Option<usize>) -> RayBatch {
+        let mut b = RayBatch::new(RayKind::Shadow);
+        for i in 0..n {
+            let ray = Ray::new(Vec3::ZERO, Vec3::X, 0.0, i as f32);
+            match packet_every {
+                Some(k) if i % k == 0 => b.push_packet_start(ray, i as u32),
+                _ => b.push(ray, i as u32),
+            }
+        }
+        b
+    }
+
+    #[test]
+    fn uniform_chunks_are_chunk_rays_long() {
+        let b = batch(2 * CHUNK_RAYS + 5, None);
+        let lens: Vec<usize> = chunk_ranges(b.view()).iter().map(|r| r.len()).collect();
+        assert_eq!(lens, vec![CHUNK_RAYS, CHUNK_RAYS, 5]);
+    }
+
+    #[test]
+    fn chunks_never_split_an_explicit_packet() {
+        // Packets of 1000 rays: a chunk ends at the first packet start at or past 4096 rays.
+        let b = batch(10_000, Some(1000));
+        let ranges = chunk_ranges(b.view());
+        assert_eq!(ranges, vec![0..5000, 5000..10_000]);
+        // Every ray is traced exactly once, in its own slot.
+        let mut out = vec![0.0f32; b.len()];
+        pass(b.view(), &mut out, &|r, o| {
+            for (i, x) in o.iter_mut().enumerate() {
+                *x = r.tmax[i];
+            }
+        });
+        assert!(out.iter().enumerate().all(|(i, &t)| t == i as f32));
+    }
 }

@@ -3,7 +3,7 @@
 //! inside their bounding frustum (§2.2), test the triangles of every overlapped cell with mailboxing
 //! and SIMD frustum culling (§2.3), and skip empty space with macrocells (§2.4).
 //!
-//! - **Packets.** Consecutive groups of n² rays of the chunk (parameter `packet` = n). The runner
+//! - **Packets.** Consecutive groups of n² rays of the chunk (`Rays::packets`: an explicit packet of the batch is never merged with the next) (parameter `packet` = n). The runner
 //!   orders camera rays in 32×32 tiles with Morton order inside, so each group of camera rays is
 //!   an n×n screen block; shadow and diffuse batches are grouped the same way (consecutive rays
 //!   descend from neighbouring pixels). The last group of a chunk may be partial.
@@ -196,10 +196,9 @@ impl CgtTracer {
         hits.fill(Hit::MISS);
         let mut ws = Workspace::default();
         let size = (self.config.packet * self.config.packet) as usize;
-        for start in (0..rays.len()).step_by(size) {
-            let end = (start + size).min(rays.len());
+        for packet in rays.packets(size) {
             ws.group.clear();
-            for i in start..end {
+            for i in packet {
                 if S::ENABLED {
                     stats.ray();
                 }

@@ -1,5 +1,6 @@
 //! `embree4`, `embree8`, `embree16`: `rtcIntersectN` / `rtcOccludedN` on consecutive groups of N
-//! rays of the chunk; the last, partial group masks its missing lanes off. One implementation
+//! rays of the chunk (never across an explicit packet boundary, `Rays::packets`); a partial
+//! group masks its missing lanes off. One implementation
 //! over the packet type; the three bindgen structs only supply their lanes and their calls.
 
 use std::marker::PhantomData;
@@ -153,11 +154,13 @@ impl<P: RayHitPacket + 'static> Submission for Packets<P> {
     ) {
         let width = P::Rays::WIDTH;
         let mut packet = P::zeroed();
-        for (g, hits) in hits.chunks_mut(width).enumerate() {
+        for group in rays.packets(width) {
+            let start = group.start;
+            let hits = &mut hits[group];
             for lane in 0..hits.len() {
                 packet
                     .rays()
-                    .set_ray(lane, &convert::ray(&rays, g * width + lane));
+                    .set_ray(lane, &convert::ray(&rays, start + lane));
                 packet.clear_hit(lane);
             }
             let valid = ValidMask::first(hits.len());
@@ -177,9 +180,11 @@ impl<P: RayHitPacket + 'static> Submission for Packets<P> {
     ) {
         let width = P::Rays::WIDTH;
         let mut packet = P::Rays::zeroed();
-        for (g, occluded) in occluded.chunks_mut(width).enumerate() {
+        for group in rays.packets(width) {
+            let start = group.start;
+            let occluded = &mut occluded[group];
             for lane in 0..occluded.len() {
-                packet.set_ray(lane, &convert::ray(&rays, g * width + lane));
+                packet.set_ray(lane, &convert::ray(&rays, start + lane));
             }
             let valid = ValidMask::first(occluded.len());
             // SAFETY: as above.
