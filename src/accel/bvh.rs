@@ -11,7 +11,7 @@ use std::time::Instant;
 use glam::Vec3;
 
 use super::child_pairs::{child_pairs, ChildPair};
-use super::presplit::split_references;
+use super::presplit::{split_references, Reference};
 use crate::error::{Error, Result};
 use crate::geometry::{Aabb, Triangle};
 use crate::tracers::Params;
@@ -90,6 +90,10 @@ pub struct Bvh {
     pub triangles: Vec<Triangle>,
     /// Scene primitive id of each entry of `triangles`.
     pub prim_ids: Vec<u32>,
+    /// For a moving mesh (motion blur, `build_moving`): each entry of `triangles` at shutter
+    /// close, `triangles` being it at shutter open; a ray at time τ meets the triangle linearly
+    /// in between. `None` for static geometry.
+    pub motion_end: Option<Vec<Triangle>>,
     /// Both children's boxes of every interior node, for SIMD single-ray traversal.
     pub pairs: Vec<ChildPair>,
     pub config: BvhConfig,
@@ -120,6 +124,35 @@ impl Bvh {
     pub fn build(triangles: &[Triangle], config: BvhConfig) -> Bvh {
         let start = Instant::now();
         let refs = split_references(triangles, config.presplit);
+        Self::build_over(&refs, triangles, None, config, start)
+    }
+
+    /// The tree over a mesh moving linearly from `open` to `close` (same count and order) during
+    /// the shutter interval: each triangle's box is the union of its boxes at both ends, which
+    /// holds it at every time in between (a box of linearly moving points is bounded by their
+    /// end boxes). No early split clipping: a piece clipped at one end is not that piece later.
+    pub fn build_moving(open: &[Triangle], close: &[Triangle], config: BvhConfig) -> Bvh {
+        assert_eq!(open.len(), close.len(), "both ends of a moving mesh");
+        let start = Instant::now();
+        let refs: Vec<Reference> = open
+            .iter()
+            .zip(close)
+            .enumerate()
+            .map(|(i, (a, b))| Reference {
+                bounds: a.bounds().union(b.bounds()),
+                prim: i as u32,
+            })
+            .collect();
+        Self::build_over(&refs, open, Some(close), config, start)
+    }
+
+    fn build_over(
+        refs: &[Reference],
+        triangles: &[Triangle],
+        close: Option<&[Triangle]>,
+        config: BvhConfig,
+        start: Instant,
+    ) -> Bvh {
         let n = refs.len();
         let boxes: Vec<Aabb> = refs.iter().map(|r| r.bounds).collect();
         let centroids: Vec<Vec3> = boxes.iter().map(Aabb::center).collect();
@@ -185,6 +218,12 @@ impl Bvh {
                 .map(|&i| triangles[refs[i as usize].prim as usize])
                 .collect(),
             prim_ids: order.iter().map(|&i| refs[i as usize].prim).collect(),
+            motion_end: close.map(|close| {
+                order
+                    .iter()
+                    .map(|&i| close[refs[i as usize].prim as usize])
+                    .collect()
+            }),
             pairs: child_pairs(&nodes),
             nodes,
             depth,

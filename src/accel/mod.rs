@@ -9,7 +9,7 @@ pub mod presplit;
 
 use std::sync::Arc;
 
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::scene::Mesh;
 use crate::tracers::embree::{Device, EmbreeConfig, EmbreeScene};
 use crate::tracers::Params;
@@ -71,6 +71,38 @@ impl AccelKind {
                 GridConfig::from_params(params)?,
             ))),
         })
+    }
+}
+
+impl AccelKind {
+    /// The structure over a mesh moving linearly from `open` to `close` during the shutter
+    /// interval (motion blur): our BVH (`Bvh::build_moving`) and Embree's two-time-step scene.
+    /// The other structures are built for one instant and refuse.
+    pub fn build_moving(self, open: &Mesh, close: &Mesh, params: &Params) -> Result<Accel> {
+        if open.len() != close.len() {
+            return Err(Error::runtime(format!(
+                "a moving mesh needs the same triangles at both ends: {} and {}",
+                open.len(),
+                close.len()
+            )));
+        }
+        match self {
+            AccelKind::Bvh => Ok(Accel::Bvh(Arc::new(Bvh::build_moving(
+                &open.triangles,
+                &close.triangles,
+                BvhConfig::from_params(params)?,
+            )))),
+            AccelKind::Embree => Ok(Accel::Embree(Arc::new(EmbreeScene::build_moving(
+                Device::shared()?,
+                open,
+                close,
+                EmbreeConfig::from_params(params)?,
+            )?))),
+            AccelKind::Obvhs | AccelKind::Grid => Err(Error::usage(format!(
+                "the {} structure has no motion blur (moving geometry needs bvh or embree)",
+                self.name()
+            ))),
+        }
     }
 }
 

@@ -9,6 +9,9 @@ pub struct Ray {
     pub dir: Vec3,
     pub tmin: f32,
     pub tmax: f32,
+    /// When the ray is cast, in [0, 1) of the shutter interval (motion blur); 0 for rays of a
+    /// single instant. Only tracers over moving geometry read it.
+    pub time: f32,
 }
 
 impl Ray {
@@ -18,7 +21,13 @@ impl Ray {
             dir,
             tmin,
             tmax,
+            time: 0.0,
         }
+    }
+
+    /// The same ray cast at `time` of the shutter interval.
+    pub fn at_time(self, time: f32) -> Self {
+        Ray { time, ..self }
     }
 
     pub fn at(&self, t: f32) -> Vec3 {
@@ -97,6 +106,9 @@ pub struct RayBatch {
     /// begins a packet. Empty when the batch has none: packet tracers then group consecutive rays
     /// (camera rays come in Morton-ordered tiles, so consecutive means a screen block).
     pub packet_start: Vec<bool>,
+    /// Ray times (`Ray::time`, motion blur). Empty when every ray is at time 0, as in every batch
+    /// of a single instant; filled from the first ray with a non-zero time on.
+    pub time: Vec<f32>,
 }
 
 impl RayBatch {
@@ -121,6 +133,7 @@ impl RayBatch {
             tmax: v(),
             pixel: Vec::with_capacity(n),
             packet_start: Vec::new(),
+            time: Vec::new(),
         }
     }
 
@@ -145,6 +158,13 @@ impl RayBatch {
         self.tmin.push(ray.tmin);
         self.tmax.push(ray.tmax);
         self.pixel.push(pixel);
+        if !self.time.is_empty() {
+            self.time.push(ray.time);
+        } else if ray.time != 0.0 {
+            // The first timed ray: the rays before it were all at time 0.
+            self.time.resize(self.len() - 1, 0.0);
+            self.time.push(ray.time);
+        }
     }
 
     /// Pushes `ray` as the first ray of a new explicit packet; from then on the batch has explicit
@@ -187,6 +207,7 @@ impl RayBatch {
             tmin: &self.tmin,
             tmax: &self.tmax,
             packet_start: &self.packet_start,
+            time: &self.time,
         }
     }
 }
@@ -205,6 +226,8 @@ pub struct Rays<'a> {
     pub tmax: &'a [f32],
     /// As `RayBatch::packet_start`: empty, or one flag per ray.
     pub packet_start: &'a [bool],
+    /// As `RayBatch::time`: empty (every ray at time 0), or one time per ray.
+    pub time: &'a [f32],
 }
 
 impl<'a> Rays<'a> {
@@ -223,6 +246,17 @@ impl<'a> Rays<'a> {
             dir: Vec3::new(self.dx[i], self.dy[i], self.dz[i]),
             tmin: self.tmin[i],
             tmax: self.tmax[i],
+            time: self.time(i),
+        }
+    }
+
+    /// The time of ray `i` (`Ray::time`).
+    #[inline(always)]
+    pub fn time(&self, i: usize) -> f32 {
+        if self.time.is_empty() {
+            0.0
+        } else {
+            self.time[i]
         }
     }
 
@@ -240,7 +274,12 @@ impl<'a> Rays<'a> {
             packet_start: if self.packet_start.is_empty() {
                 &[]
             } else {
-                &self.packet_start[range]
+                &self.packet_start[range.clone()]
+            },
+            time: if self.time.is_empty() {
+                &[]
+            } else {
+                &self.time[range]
             },
         }
     }
@@ -304,5 +343,17 @@ mod tests {
         // A sub-view keeps its part of the flags.
         let tail: Vec<_> = b.view().slice(5..10).packets(8).collect();
         assert_eq!(tail, vec![0..4, 4..5]);
+    }
+
+    #[test]
+    fn time_lane_appears_with_the_first_timed_ray() {
+        let mut b = RayBatch::new(RayKind::Primary);
+        b.push(ray(0.0), 0);
+        assert!(b.time.is_empty() && b.view().time(0) == 0.0);
+        b.push_packet_start(ray(1.0).at_time(0.25), 1);
+        b.push(ray(2.0), 2);
+        assert_eq!(b.time, vec![0.0, 0.25, 0.0]);
+        assert_eq!(b.ray(1).time, 0.25);
+        assert_eq!(b.view().slice(1..3).time, &[0.25, 0.0]);
     }
 }

@@ -37,6 +37,19 @@ impl Triangle {
         self.v.iter().all(|p| p.is_finite())
     }
 
+    /// Each vertex moved linearly from this triangle's to `other`'s by `t` (motion blur: the
+    /// triangle at time `t` of a shutter interval that starts at `self` and ends at `other`).
+    #[inline(always)]
+    pub fn lerp(&self, other: &Triangle, t: f32) -> Triangle {
+        Triangle {
+            v: [
+                self.v[0].lerp(other.v[0], t),
+                self.v[1].lerp(other.v[1], t),
+                self.v[2].lerp(other.v[2], t),
+            ],
+        }
+    }
+
     /// The point with Embree-convention barycentrics: `(1 − u − v)·v0 + u·v1 + v·v2`.
     pub fn point(&self, u: f32, v: f32) -> Vec3 {
         self.v[0] * (1.0 - u - v) + self.v[1] * u + self.v[2] * v

@@ -1,6 +1,11 @@
 //! From scene to rays and back: camera rays, secondary-ray generation, shading, images.
 
+pub mod area_light;
+pub mod distribution;
+pub mod glossy;
 pub mod image;
+pub mod interleaved;
+pub mod motion;
 pub mod offset;
 pub mod raycast;
 pub mod rays;

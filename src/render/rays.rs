@@ -3,7 +3,7 @@
 
 use glam::Vec3;
 
-use crate::geometry::{Hit, Ray, RayBatch, RayKind};
+use crate::geometry::{Hit, Ray, RayBatch, RayKind, Triangle};
 use crate::render::offset::{coordinate_scale, offset_ray_origin};
 use crate::render::sampling::{concentric_disk, cosine_hemisphere, uniform};
 use crate::scene::{Camera, Light, Mesh, Scene};
@@ -119,7 +119,11 @@ pub struct SurfacePoint {
 
 impl SurfacePoint {
     pub fn of_hit(mesh: &Mesh, ray: &Ray, hit: &Hit) -> Self {
-        let tri = &mesh.triangles[hit.prim as usize];
+        Self::on_triangle(&mesh.triangles[hit.prim as usize], ray, hit)
+    }
+
+    /// Where `ray` hit `tri` (the hit's triangle, as the ray saw it).
+    pub fn on_triangle(tri: &Triangle, ray: &Ray, hit: &Hit) -> Self {
         let n = tri.normal().normalize_or_zero();
         SurfacePoint {
             p: tri.point(hit.u, hit.v),

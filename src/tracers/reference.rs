@@ -2,7 +2,8 @@
 //! construction — conservative slab test (Ize 2013) and watertight triangle test (Woop et al. 2013)
 //! — it is the yardstick the packet, grid and stream tracers are checked and measured against.
 //! Both children of a node are tested at once with SSE on the child-pair layout
-//! (`accel::child_pairs`).
+//! (`accel::child_pairs`). Over a moving mesh (`Bvh::build_moving`) it tests each triangle where it
+//! is at the ray's time (motion blur).
 
 use std::sync::Arc;
 
@@ -80,7 +81,17 @@ impl SingleRayKernel for ReferenceTracer {
                     if S::ENABLED {
                         stats.triangle_test(depth(node.index));
                     }
-                    if let Some((t, u, v)) = tris.intersect(&bvh.triangles[i], tmin, tmax) {
+                    // A moving triangle is tested where it is at the ray's time: the watertight
+                    // test precomputes per ray, not per triangle (Boulos et al. 2007 §4).
+                    let moved;
+                    let tri = match &bvh.motion_end {
+                        None => &bvh.triangles[i],
+                        Some(end) => {
+                            moved = bvh.triangles[i].lerp(&end[i], ray.time);
+                            &moved
+                        }
+                    };
+                    if let Some((t, u, v)) = tris.intersect(tri, tmin, tmax) {
                         best = Hit {
                             t,
                             prim: bvh.prim_ids[i],

@@ -1,5 +1,6 @@
 //! Our rays and hits to and from Embree's: tnear/tfar from tmin/tmax, every mask bit set (ray
-//! masks are compiled into the Debian library, so a zero mask would miss everything), time 0;
+//! masks are compiled into the Debian library, so a zero mask would miss everything), the ray's time
+//! (motion blur; 0 without a time lane);
 //! back, tfar is the hit distance, primID our triangle index, and (u, v) already our convention
 //! (`Triangle::point(u, v)`).
 
@@ -19,7 +20,7 @@ pub fn ray(rays: &Rays<'_>, i: usize) -> RTCRay {
         dir_x: rays.dx[i],
         dir_y: rays.dy[i],
         dir_z: rays.dz[i],
-        time: 0.0,
+        time: rays.time(i),
         tfar: rays.tmax[i],
         mask: ALL_MASK_BITS,
         id: 0,

@@ -17,6 +17,8 @@ pub struct EmbreeScene {
     /// which Embree takes as a committed scene without geometry that every ray misses.
     geometry: Option<ffi::RTCGeometry>,
     triangle_count: usize,
+    /// Two time steps (shutter open and close, `build_moving`): rays are traced at their time.
+    moving: bool,
     pub config: EmbreeConfig,
     /// Wall time of the last build or refit: buffer fill plus commit.
     pub build_seconds: f64,
@@ -29,6 +31,35 @@ unsafe impl Sync for EmbreeScene {}
 
 impl EmbreeScene {
     pub fn build(device: Arc<Device>, mesh: &Mesh, config: EmbreeConfig) -> Result<EmbreeScene> {
+        Self::build_timed(device, mesh, None, config)
+    }
+
+    /// A scene whose triangles move linearly from `open` to `close` (same count and order) over
+    /// the shutter interval: Embree's motion blur with two time steps
+    /// (`rtcSetGeometryTimeStepCount`, one vertex buffer per step); each ray is traced at its
+    /// `time` in [0, 1].
+    pub fn build_moving(
+        device: Arc<Device>,
+        open: &Mesh,
+        close: &Mesh,
+        config: EmbreeConfig,
+    ) -> Result<EmbreeScene> {
+        if open.len() != close.len() {
+            return Err(Error::runtime(format!(
+                "a moving Embree scene needs the same triangles at both ends: {} and {}",
+                open.len(),
+                close.len()
+            )));
+        }
+        Self::build_timed(device, open, Some(close), config)
+    }
+
+    fn build_timed(
+        device: Arc<Device>,
+        mesh: &Mesh,
+        close: Option<&Mesh>,
+        config: EmbreeConfig,
+    ) -> Result<EmbreeScene> {
         let start = Instant::now();
         // Vertex indices are 32-bit: three per triangle.
         if mesh.len() > (u32::MAX / 3) as usize {
@@ -45,6 +76,7 @@ impl EmbreeScene {
             raw,
             geometry: None,
             triangle_count: mesh.len(),
+            moving: close.is_some(),
             config,
             build_seconds: 0.0,
         };
@@ -55,14 +87,14 @@ impl EmbreeScene {
             ffi::rtcSetSceneBuildQuality(raw, config.quality.scene());
         }
         if !mesh.is_empty() {
-            scene.attach_triangles(mesh)?;
+            scene.attach_triangles(mesh, close)?;
         }
         scene.commit("building a scene")?;
         scene.build_seconds = start.elapsed().as_secs_f64();
         Ok(scene)
     }
 
-    fn attach_triangles(&mut self, mesh: &Mesh) -> Result<()> {
+    fn attach_triangles(&mut self, mesh: &Mesh, close: Option<&Mesh>) -> Result<()> {
         let n = mesh.len();
         let device = self.device.raw();
         // SAFETY: a live device.
@@ -75,16 +107,21 @@ impl EmbreeScene {
         // SAFETY: a live geometry. Embree allocates both buffers (padding the vertex buffer for
         // its 16-byte loads) and owns them. Three vertices per triangle, none shared: triangle i
         // reads vertices 3i, 3i+1, 3i+2 and keeps primitive id i.
+        // With motion, one vertex buffer per time step (slot 0: open, slot 1: close).
+        let steps = if close.is_some() { 2 } else { 1 };
         let indices = unsafe {
             ffi::rtcSetGeometryBuildQuality(geometry, self.config.quality.geometry());
-            ffi::rtcSetNewGeometryBuffer(
-                geometry,
-                RTC_BUFFER_TYPE_VERTEX,
-                0,
-                RTC_FORMAT_FLOAT3,
-                12,
-                3 * n,
-            );
+            ffi::rtcSetGeometryTimeStepCount(geometry, steps);
+            for slot in 0..steps {
+                ffi::rtcSetNewGeometryBuffer(
+                    geometry,
+                    RTC_BUFFER_TYPE_VERTEX,
+                    slot,
+                    RTC_FORMAT_FLOAT3,
+                    12,
+                    3 * n,
+                );
+            }
             ffi::rtcSetNewGeometryBuffer(
                 geometry,
                 RTC_BUFFER_TYPE_INDEX,
@@ -105,7 +142,10 @@ impl EmbreeScene {
             let first = 3 * i as u32;
             *index = [first, first + 1, first + 2];
         }
-        self.write_vertices(mesh);
+        self.write_vertices(mesh, 0);
+        if let Some(close) = close {
+            self.write_vertices(close, 1);
+        }
         // SAFETY: live geometry and scene; the scene takes its own reference to the geometry.
         let id = unsafe {
             ffi::rtcCommitGeometry(geometry);
@@ -116,16 +156,16 @@ impl EmbreeScene {
         Ok(())
     }
 
-    /// Copies the mesh's vertices into the geometry's vertex buffer.
-    fn write_vertices(&mut self, mesh: &Mesh) {
+    /// Copies the mesh's vertices into the geometry's vertex buffer of time step `slot`.
+    fn write_vertices(&mut self, mesh: &Mesh, slot: u32) {
         let Some(geometry) = self.geometry else {
             return;
         };
-        // SAFETY: the vertex buffer set in `attach_triangles` holds 3 · triangle_count FLOAT3
-        // items, and `mesh` has triangle_count triangles (checked by callers).
+        // SAFETY: the vertex buffer `slot` set in `attach_triangles` holds 3 · triangle_count
+        // FLOAT3 items, and `mesh` has triangle_count triangles (checked by callers).
         let vertices = unsafe {
-            let data =
-                ffi::rtcGetGeometryBufferData(geometry, RTC_BUFFER_TYPE_VERTEX, 0) as *mut [f32; 3];
+            let data = ffi::rtcGetGeometryBufferData(geometry, RTC_BUFFER_TYPE_VERTEX, slot)
+                as *mut [f32; 3];
             std::slice::from_raw_parts_mut(data, 3 * self.triangle_count)
         };
         for (corners, tri) in vertices.chunks_exact_mut(3).zip(&mesh.triangles) {
@@ -145,6 +185,11 @@ impl EmbreeScene {
     /// quality `refit` Embree refits the existing tree's boxes; with the other qualities it
     /// rebuilds the tree. `build_seconds` becomes the time of this update.
     pub fn refit(&mut self, mesh: &Mesh) -> Result<()> {
+        if self.moving {
+            return Err(Error::runtime(
+                "a moving Embree scene is built per shutter interval, not refitted",
+            ));
+        }
         if mesh.len() != self.triangle_count {
             return Err(Error::runtime(format!(
                 "Embree refit needs the same {} triangles, got {}",
@@ -153,7 +198,7 @@ impl EmbreeScene {
             )));
         }
         let start = Instant::now();
-        self.write_vertices(mesh);
+        self.write_vertices(mesh, 0);
         if let Some(geometry) = self.geometry {
             // SAFETY: a live geometry whose vertex buffer was just rewritten.
             unsafe {

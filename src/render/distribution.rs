@@ -1,0 +1,389 @@
+//! Distribution ray tracing (Cook et al. 1984; interactive form: Boulos et al. 2007 §4), breadth
+//! first over any `Tracer`: n samples per pixel, each with its own image position, lens position
+//! (thin-lens depth of field), time in the shutter interval (motion blur), point on each area
+//! light (soft shadows) and glossy direction at each bounce. Samples come from the static
+//! interleaved sample table (`interleaved`), so a frame renders identically every time.
+//!
+//! Breadth first: the camera rays of a wave of 32×32 tiles are one batch, their shadow rays the
+//! next, their reflection rays the next, and so on to `max_depth` bounces. **A packet is one
+//! pixel's samples** (Boulos §5.3, Table 3: "each setting uses a packet of rays equivalent to 1
+//! pixel"): the camera batch starts an explicit packet at each pixel, pixels in the 32×32-tile
+//! Morton order of `rays::CameraProjection::tile_rays`, and each secondary batch keeps the rays of
+//! one pixel's samples together in one packet per kind.
+//!
+//! Shading, per sample path: emission + ambient + Lambert under each light sample, and one
+//! reflection ray chosen between the material's mirror and glossy parts in proportion to their
+//! reflectances (multisampling instead of branching, Boulos §4). Dielectric transmission is not
+//! rendered here (a dielectric surface shows its diffuse and reflective parts only).
+
+use std::time::Instant;
+
+use glam::Vec3;
+
+use crate::error::{Error, Result};
+use crate::geometry::{Hit, Ray, RayBatch, RayKind};
+use crate::render::area_light::sample_light;
+use crate::render::glossy::{mirror, sample_phong_lobe};
+use crate::render::image::Image;
+use crate::render::interleaved::{SampleTable, DIMENSION_PAIRS};
+use crate::render::motion::MovingMesh;
+use crate::render::rays::{morton_decode, shadow_ray, CameraProjection, SurfacePoint, TILE};
+use crate::scene::{Camera, Frame, Scene};
+use crate::tracers::batch::{trace_hits, trace_occlusion};
+use crate::tracers::Tracer;
+
+/// Light reaching surfaces from everywhere, so shadows are dark but not black (as renderer v0).
+const AMBIENT: f32 = 0.08;
+/// Colour of rays that leave the scene (as renderer v0).
+const BACKGROUND: Vec3 = Vec3::new(0.05, 0.06, 0.08);
+/// A wave holds at least this many camera rays (whole tiles), so each traced batch spreads over
+/// many `tracers::batch` chunks and every core has work even at 1 sample per pixel.
+const WAVE_RAYS: usize = 1 << 16;
+
+/// Dimension pairs of the sample table: image position, lens, time (first coordinate); then
+/// three per bounce: light position, glossy direction, mirror-or-glossy choice (first coordinate).
+const PAIR_PIXEL: usize = 0;
+const PAIR_LENS: usize = 1;
+const PAIR_TIME: usize = 2;
+const PAIRS_BEFORE_BOUNCES: usize = 3;
+const PAIRS_PER_BOUNCE: usize = 3;
+/// The most reflection bounces the sample table has dimensions for.
+pub const MAX_DEPTH: u32 = ((DIMENSION_PAIRS - PAIRS_BEFORE_BOUNCES) / PAIRS_PER_BOUNCE - 1) as u32;
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DrtSettings {
+    pub width: u32,
+    pub height: u32,
+    /// Samples per pixel: a perfect square (1, 4, 16, 64, ...).
+    pub spp: u32,
+    /// Lens radius; `None` keeps the camera's own (0 = pinhole).
+    pub aperture: Option<f32>,
+    /// Distance to the plane in focus; `None` keeps the camera's own.
+    pub focus_distance: Option<f32>,
+    /// Reflection bounces after the camera ray (0: direct light only).
+    pub max_depth: u32,
+    /// Seed of the static sample table.
+    pub seed: u64,
+}
+
+impl Default for DrtSettings {
+    fn default() -> Self {
+        DrtSettings {
+            width: 256,
+            height: 256,
+            spp: 16,
+            aperture: None,
+            focus_distance: None,
+            max_depth: 2,
+            seed: 0x0D57_7ACE,
+        }
+    }
+}
+
+impl DrtSettings {
+    pub fn check(&self) -> Result<()> {
+        let lens_ok = self.aperture.is_none_or(|a| a.is_finite() && a >= 0.0)
+            && self.focus_distance.is_none_or(|f| f.is_finite() && f > 0.0);
+        if self.width == 0 || self.height == 0 || !lens_ok || self.max_depth > MAX_DEPTH {
+            return Err(Error::usage(format!(
+                "distribution settings out of range: width, height ≥ 1, aperture ≥ 0, focus > 0, max_depth ≤ {MAX_DEPTH} (got {self:?})"
+            )));
+        }
+        Ok(())
+    }
+
+    /// The frame's camera with this run's lens.
+    pub fn camera(&self, camera: &Camera) -> Camera {
+        Camera {
+            aperture: self.aperture.unwrap_or(camera.aperture),
+            focus_distance: self.focus_distance.unwrap_or(camera.focus_distance),
+            ..*camera
+        }
+    }
+}
+
+/// The kinds of rays a distribution frame traces; timings and counts are kept per kind.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum DrtRayKind {
+    Primary,
+    Shadow,
+    /// Mirror and glossy reflection rays.
+    Reflection,
+}
+
+impl DrtRayKind {
+    pub const ALL: [DrtRayKind; 3] = [
+        DrtRayKind::Primary,
+        DrtRayKind::Shadow,
+        DrtRayKind::Reflection,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            DrtRayKind::Primary => "primary",
+            DrtRayKind::Shadow => "shadow",
+            DrtRayKind::Reflection => "reflection",
+        }
+    }
+
+    /// The batch kind handed to tracers. Reflection rays are closest-hit secondary rays; until
+    /// `RayKind` names reflection rays of its own they travel as `Diffuse` batches.
+    fn batch_kind(self) -> RayKind {
+        match self {
+            DrtRayKind::Primary => RayKind::Primary,
+            DrtRayKind::Shadow => RayKind::Shadow,
+            DrtRayKind::Reflection => RayKind::Diffuse,
+        }
+    }
+}
+
+/// Rays, explicit packets and tracing wall time of one kind over a frame.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct KindTotals {
+    pub rays: u64,
+    pub packets: u64,
+    /// Wall time inside the tracer's batch calls.
+    pub seconds: f64,
+}
+
+#[derive(Clone, Debug)]
+pub struct DrtFrame {
+    pub image: Image,
+    /// Indexed like `DrtRayKind::ALL`.
+    pub kinds: [KindTotals; 3],
+    /// Wall time of the whole frame: sampling, shading and tracing.
+    pub seconds: f64,
+}
+
+impl DrtFrame {
+    pub fn totals(&self, kind: DrtRayKind) -> KindTotals {
+        self.kinds[kind as usize]
+    }
+
+    /// Wall time inside the tracer over all kinds.
+    pub fn trace_seconds(&self) -> f64 {
+        self.kinds.iter().map(|k| k.seconds).sum()
+    }
+}
+
+/// The geometry a frame is rendered against: the frame's mesh, moving to another mesh over the
+/// shutter interval when there is motion blur.
+#[derive(Clone, Copy, Debug)]
+pub enum FrameGeometry<'a> {
+    Static(&'a crate::scene::Mesh),
+    Moving(&'a MovingMesh),
+}
+
+impl FrameGeometry<'_> {
+    fn surface(&self, ray: &Ray, hit: &Hit) -> (SurfacePoint, u32) {
+        match self {
+            FrameGeometry::Static(mesh) => (
+                SurfacePoint::of_hit(mesh, ray, hit),
+                mesh.material_ids[hit.prim as usize],
+            ),
+            FrameGeometry::Moving(moving) => (
+                moving.surface_at(ray, hit),
+                moving.material_ids()[hit.prim as usize],
+            ),
+        }
+    }
+
+    fn is_moving(&self) -> bool {
+        matches!(self, FrameGeometry::Moving(_))
+    }
+}
+
+/// One sample's path through the scene: where it adds its colour and how much of it arrives.
+#[derive(Clone, Copy, Debug)]
+struct Path {
+    pixel: u32,
+    x: u32,
+    y: u32,
+    sample: u32,
+    time: f32,
+    weight: Vec3,
+}
+
+/// A batch of one kind under construction, with the path each ray serves and what it carries.
+struct Generation {
+    kind: DrtRayKind,
+    batch: RayBatch,
+    /// Per ray: its path and, for shadow rays, the colour it adds when unoccluded.
+    served: Vec<(usize, Vec3)>,
+    last_pixel: Option<u32>,
+}
+
+impl Generation {
+    fn new(kind: DrtRayKind) -> Self {
+        Generation {
+            kind,
+            batch: RayBatch::new(kind.batch_kind()),
+            served: Vec::new(),
+            last_pixel: None,
+        }
+    }
+
+    /// Adds a ray of `path` at the path's time, starting a packet when the pixel changes.
+    fn push(&mut self, ray: Ray, path: usize, paths: &[Path], carries: Vec3) {
+        let p = &paths[path];
+        let ray = ray.at_time(p.time);
+        if self.last_pixel == Some(p.pixel) {
+            self.batch.push(ray, p.pixel);
+        } else {
+            self.batch.push_packet_start(ray, p.pixel);
+            self.last_pixel = Some(p.pixel);
+        }
+        self.served.push((path, carries));
+    }
+}
+
+/// Renders `frame` of `scene` by distribution ray tracing with `tracer`, which must have been
+/// built over `geometry` (a moving mesh needs a tracer that honours ray times).
+pub fn render_distribution(
+    scene: &Scene,
+    frame: &Frame,
+    geometry: FrameGeometry<'_>,
+    tracer: &dyn Tracer,
+    settings: &DrtSettings,
+) -> Result<DrtFrame> {
+    settings.check()?;
+    let start = Instant::now();
+    let table = SampleTable::new(settings.spp, settings.seed)?;
+    let projection = CameraProjection::new(
+        &settings.camera(&frame.camera),
+        settings.width,
+        settings.height,
+    );
+    let (tiles_x, tiles_y) = projection.tiles();
+    let tiles_per_wave = WAVE_RAYS
+        .div_ceil((TILE * TILE * settings.spp) as usize)
+        .max(1);
+    let tiles: Vec<(u32, u32)> = (0..tiles_y)
+        .flat_map(|ty| (0..tiles_x).map(move |tx| (tx, ty)))
+        .collect();
+
+    let mut sum = vec![Vec3::ZERO; (settings.width * settings.height) as usize];
+    let mut kinds = [KindTotals::default(); 3];
+    for wave in tiles.chunks(tiles_per_wave) {
+        let mut paths = Vec::new();
+        let mut camera = Generation::new(DrtRayKind::Primary);
+        for &(tx, ty) in wave {
+            for code in 0..TILE * TILE {
+                let (dx, dy) = morton_decode(code);
+                let (x, y) = (tx * TILE + dx, ty * TILE + dy);
+                if x >= settings.width || y >= settings.height {
+                    continue;
+                }
+                for sample in 0..settings.spp {
+                    let (jx, jy) = table.get(x, y, sample, PAIR_PIXEL);
+                    let lens = table.get(x, y, sample, PAIR_LENS);
+                    let time = if geometry.is_moving() {
+                        table.get(x, y, sample, PAIR_TIME).0
+                    } else {
+                        0.0
+                    };
+                    paths.push(Path {
+                        pixel: y * settings.width + x,
+                        x,
+                        y,
+                        sample,
+                        time,
+                        weight: Vec3::ONE,
+                    });
+                    let ray = projection.ray(x as f32 + jx, y as f32 + jy, lens);
+                    camera.push(ray, paths.len() - 1, &paths, Vec3::ONE);
+                }
+            }
+        }
+        let mut colour = vec![Vec3::ZERO; paths.len()];
+        let mut current = camera;
+        for depth in 0..=settings.max_depth {
+            if current.batch.is_empty() {
+                break;
+            }
+            let hits = timed(&mut kinds, &current, || trace_hits(tracer, &current.batch));
+            let mut shadows = Generation::new(DrtRayKind::Shadow);
+            let mut reflections = Generation::new(DrtRayKind::Reflection);
+            let pairs = PAIRS_BEFORE_BOUNCES + PAIRS_PER_BOUNCE * depth as usize;
+            for (i, hit) in hits.iter().enumerate() {
+                let path_index = current.served[i].0;
+                let path = paths[path_index];
+                if !hit.is_hit() {
+                    colour[path_index] += path.weight * BACKGROUND;
+                    continue;
+                }
+                let ray = current.batch.ray(i);
+                let (surface, material) = geometry.surface(&ray, hit);
+                let m = &scene.materials[material as usize];
+                colour[path_index] += path.weight * (m.emission + m.diffuse * AMBIENT);
+                let sample = |pair: usize| table.get(path.x, path.y, path.sample, pair);
+
+                // Soft shadows: one ray per light to this sample's point on it.
+                if m.diffuse != Vec3::ZERO {
+                    let (s, t) = sample(pairs);
+                    for light in &scene.lights {
+                        let Some(ls) = sample_light(light, surface.p, surface.n, s, t) else {
+                            continue;
+                        };
+                        if let Some(shadow) = shadow_ray(&surface, ls.point) {
+                            let carries = path.weight * m.diffuse * ls.incident;
+                            shadows.push(shadow, path_index, &paths, carries);
+                        }
+                    }
+                }
+
+                // One reflection ray: mirror or glossy, chosen by reflectance.
+                let glossy = m.glossy.map_or(0.0, |(_, r)| r);
+                let total = m.mirror + glossy;
+                if depth < settings.max_depth && total > 0.0 {
+                    let reflected = mirror(ray.dir, surface.n);
+                    let dir = match m.glossy {
+                        Some((exponent, r)) if sample(pairs + 2).0 * total < r => {
+                            let (u1, u2) = sample(pairs + 1);
+                            sample_phong_lobe(reflected, surface.n, exponent, u1, u2)
+                        }
+                        _ => reflected,
+                    };
+                    let next = Ray::new(surface.ray_origin(), dir, 0.0, f32::INFINITY);
+                    paths[path_index].weight = path.weight * total;
+                    reflections.push(next, path_index, &paths, Vec3::ZERO);
+                }
+            }
+            if !shadows.batch.is_empty() {
+                let occluded = timed(&mut kinds, &shadows, || {
+                    trace_occlusion(tracer, &shadows.batch)
+                });
+                for (&(path, carries), _) in
+                    shadows.served.iter().zip(&occluded).filter(|(_, o)| !**o)
+                {
+                    colour[path] += carries;
+                }
+            }
+            current = reflections;
+        }
+        for (path, c) in paths.iter().zip(&colour) {
+            sum[path.pixel as usize] += *c;
+        }
+    }
+    let mut image = Image::new(settings.width, settings.height);
+    let scale = 1.0 / settings.spp as f32;
+    for (p, s) in image.pixels.iter_mut().zip(&sum) {
+        *p = *s * scale;
+    }
+    Ok(DrtFrame {
+        image,
+        kinds,
+        seconds: start.elapsed().as_secs_f64(),
+    })
+}
+
+/// Runs `trace` on `generation`'s batch and books its rays, packets and wall time to its kind.
+fn timed<T>(kinds: &mut [KindTotals; 3], generation: &Generation, trace: impl FnOnce() -> T) -> T {
+    let start = Instant::now();
+    let out = trace();
+    let totals = &mut kinds[generation.kind as usize];
+    totals.seconds += start.elapsed().as_secs_f64();
+    totals.rays += generation.batch.len() as u64;
+    totals.packets += generation.batch.packet_start.iter().filter(|s| **s).count() as u64;
+    out
+}
