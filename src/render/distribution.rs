@@ -275,8 +275,6 @@ pub fn render_distribution(
                     continue;
                 }
                 for sample in 0..settings.spp {
-                    let (jx, jy) = table.get(x, y, sample, PAIR_PIXEL);
-                    let lens = table.get(x, y, sample, PAIR_LENS);
                     let time = if geometry.is_moving() {
                         table.get(x, y, sample, PAIR_TIME).0
                     } else {
@@ -290,7 +288,7 @@ pub fn render_distribution(
                         time,
                         weight: Vec3::ONE,
                     });
-                    let ray = projection.ray(x as f32 + jx, y as f32 + jy, lens);
+                    let ray = camera_ray(&projection, &table, x, y, sample);
                     camera.push(ray, paths.len() - 1, &paths, Vec3::ONE);
                 }
             }
@@ -377,6 +375,20 @@ pub fn render_distribution(
     })
 }
 
+/// The camera ray of sample `sample` of pixel `(x, y)`: its image position jittered in the pixel
+/// and its lens position, both from the sample table.
+pub fn camera_ray(
+    projection: &CameraProjection,
+    table: &SampleTable,
+    x: u32,
+    y: u32,
+    sample: u32,
+) -> Ray {
+    let (jx, jy) = table.get(x, y, sample, PAIR_PIXEL);
+    let lens = table.get(x, y, sample, PAIR_LENS);
+    projection.ray(x as f32 + jx, y as f32 + jy, lens)
+}
+
 /// Runs `trace` on `generation`'s batch and books its rays, packets and wall time to its kind.
 fn timed<T>(kinds: &mut [KindTotals; 3], generation: &Generation, trace: impl FnOnce() -> T) -> T {
     let start = Instant::now();
@@ -386,4 +398,158 @@ fn timed<T>(kinds: &mut [KindTotals; 3], generation: &Generation, trace: impl Fn
     totals.rays += generation.batch.len() as u64;
     totals.packets += generation.batch.packet_start.iter().filter(|s| **s).count() as u64;
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::builtin::room::EXTENT;
+    use crate::scene::{library::load_scene, Light};
+    use crate::tracers::Params;
+    use crate::verify::tracer_for_frame;
+
+    fn lens_camera(aperture: f32) -> Camera {
+        Camera {
+            position: Vec3::new(0.5, 1.0, 6.0),
+            target: Vec3::new(0.0, 0.8, 0.0),
+            aperture,
+            focus_distance: 5.0,
+            ..Camera::default()
+        }
+    }
+
+    #[test]
+    fn aperture_zero_gives_the_pinhole_rays() {
+        let table = SampleTable::new(16, 1).unwrap();
+        let settings = DrtSettings {
+            aperture: Some(0.0),
+            ..DrtSettings::default()
+        };
+        let lens = CameraProjection::new(&settings.camera(&lens_camera(0.3)), 64, 48);
+        let pinhole = CameraProjection::new(&lens_camera(0.0), 64, 48);
+        for (x, y) in [(0, 0), (17, 5), (63, 47)] {
+            for s in 0..16 {
+                let (jx, jy) = table.get(x, y, s, PAIR_PIXEL);
+                let ray = camera_ray(&lens, &table, x, y, s);
+                let expected = pinhole.ray(x as f32 + jx, y as f32 + jy, (0.5, 0.5));
+                assert_eq!(ray, expected);
+                assert_eq!(ray.origin, Vec3::new(0.5, 1.0, 6.0));
+            }
+        }
+    }
+
+    #[test]
+    fn lens_samples_of_a_pixel_meet_on_the_focal_plane() {
+        let camera = lens_camera(0.4);
+        let projection = CameraProjection::new(&camera, 64, 48);
+        let table = SampleTable::new(64, 2).unwrap();
+        let (_, _, forward) = camera.basis();
+        for (x, y) in [(3u32, 40u32), (32, 24)] {
+            let rays: Vec<Ray> = (0..64)
+                .map(|s| {
+                    let lens = table.get(x, y, s, PAIR_LENS);
+                    projection.ray(x as f32 + 0.5, y as f32 + 0.5, lens)
+                })
+                .collect();
+            let spread = rays
+                .iter()
+                .map(|r| r.origin.distance(camera.position))
+                .fold(0.0, f32::max);
+            assert!(spread > 0.3, "lens samples cover the aperture: {spread}");
+            // Where each ray crosses the plane at focus distance along the view direction.
+            let on_plane = |r: &Ray| {
+                let t = (5.0 - (r.origin - camera.position).dot(forward)) / r.dir.dot(forward);
+                r.at(t)
+            };
+            let first = on_plane(&rays[0]);
+            for r in &rays {
+                assert!(
+                    on_plane(r).distance(first) < 1e-4,
+                    "{:?} vs {first:?}",
+                    on_plane(r)
+                );
+            }
+        }
+    }
+
+    /// The built-in room with its point light replaced by a 1×1 quad light 1 mm under the
+    /// ceiling (not lower: the ceiling right above a lower quad would be lit from 1/d² close,
+    /// fireflies that need thousands of samples), and a glossy floor.
+    fn quad_lit_room() -> Scene {
+        let mut scene = load_scene("room", None).unwrap();
+        let Light::Point {
+            position,
+            intensity,
+        } = scene.lights[0]
+        else {
+            panic!("the room has a point light");
+        };
+        let under_ceiling = Vec3::new(position.x, EXTENT.y - 1e-3, position.z);
+        scene.lights = vec![Light::Quad {
+            corner: under_ceiling - Vec3::new(0.5, 0.0, 0.5),
+            edge_u: Vec3::X,
+            edge_v: Vec3::Z,
+            emission: intensity,
+        }];
+        for m in &mut scene.materials {
+            if m.name == "floor" {
+                m.glossy = Some((30.0, 0.4));
+            }
+        }
+        scene
+    }
+
+    fn render(scene: &Scene, spp: u32, aperture: f32) -> DrtFrame {
+        let frame = scene.frame(0, 1);
+        let tracer = tracer_for_frame("reference", &Params::new(), &frame).unwrap();
+        let settings = DrtSettings {
+            width: 64,
+            height: 64,
+            spp,
+            aperture: Some(aperture),
+            focus_distance: Some(6.0),
+            ..DrtSettings::default()
+        };
+        render_distribution(
+            scene,
+            &frame,
+            FrameGeometry::Static(&frame.mesh),
+            tracer.as_ref(),
+            &settings,
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn more_samples_converge_to_the_reference_image() {
+        let scene = quad_lit_room();
+        let reference = render(&scene, 256, 0.1).image;
+        let rmse: Vec<f64> = [1, 4, 16]
+            .iter()
+            .map(|&spp| render(&scene, spp, 0.1).image.rmse(&reference))
+            .collect();
+        assert!(rmse[1] < rmse[0] && rmse[2] < rmse[1], "{rmse:?}");
+        assert!(rmse[2] < 0.6 * rmse[0], "{rmse:?}");
+    }
+
+    #[test]
+    fn a_frame_renders_identically_and_packets_are_pixels() {
+        let scene = quad_lit_room();
+        let a = render(&scene, 4, 0.1);
+        let b = render(&scene, 4, 0.1);
+        assert_eq!(a.image, b.image);
+        let primary = a.totals(DrtRayKind::Primary);
+        assert_eq!(primary.rays, 64 * 64 * 4);
+        assert_eq!(primary.packets, 64 * 64);
+        // Per bounce (camera hit and two reflections): at most one shadow packet per pixel, one
+        // shadow ray per sample (one light).
+        let shadow = a.totals(DrtRayKind::Shadow);
+        assert!(shadow.packets <= 3 * 64 * 64 && shadow.rays <= 3 * 64 * 64 * 4);
+        assert!(shadow.rays > shadow.packets, "pixels share shadow packets");
+        let reflection = a.totals(DrtRayKind::Reflection);
+        assert!(reflection.rays > 0 && reflection.packets <= 2 * 64 * 64);
+        assert!(reflection.rays <= 2 * 64 * 64 * 4);
+        // The same frame at 1 spp differs from 4 spp (it is not the same estimate).
+        assert_ne!(render(&scene, 1, 0.1).image, a.image);
+    }
 }
