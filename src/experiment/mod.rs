@@ -3,6 +3,7 @@
 //! histograms.csv, PNG plots and meta.json — all at once or not at all.
 
 pub mod config;
+pub mod error_plot;
 pub mod measure;
 pub mod meta;
 pub mod output;

@@ -1,6 +1,7 @@
 //! From scene to rays and back: camera rays, secondary-ray generation, shading, images.
 
 pub mod area_light;
+pub mod convergence;
 pub mod distribution;
 pub mod glossy;
 pub mod image;
