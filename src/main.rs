@@ -9,8 +9,12 @@ use clap::{Parser, Subcommand};
 use raylab::error::{Error, Result};
 use raylab::experiment::results_dir::PendingResults;
 use raylab::experiment::{run_experiment, RunOverrides};
+use raylab::render::distribution::{render_distribution, DrtRayKind, DrtSettings, FrameGeometry};
+use raylab::render::image::Image;
+use raylab::render::motion::{tracer_for_motion, MovingMesh};
 use raylab::render::raycast::render_raycast;
 use raylab::scene::library::{list_scenes, load_scene};
+use raylab::scene::{Frame, Scene};
 use raylab::tracers::Params;
 use raylab::verify::{self, format_table, Tolerance};
 
@@ -72,6 +76,11 @@ enum Command {
         frames: usize,
         #[arg(long, short, default_value = "render.png")]
         output: PathBuf,
+        /// `raycast` (v0) or `distribution` (DRT: depth of field, glossy, soft shadows, motion blur).
+        #[arg(long, default_value = "raycast")]
+        renderer: String,
+        #[command(flatten)]
+        drt: DrtArgs,
     },
     /// Trace identical rays with a tracer and with Embree (robust) and compare them ray by ray.
     Verify {
@@ -104,6 +113,26 @@ enum Command {
     },
     /// List built-in scenes and the scenes found on the search path, with triangle counts.
     Scenes,
+}
+
+/// Distribution ray tracing options of `render --renderer distribution`.
+#[derive(clap::Args)]
+struct DrtArgs {
+    /// Samples per pixel (a perfect square).
+    #[arg(long, default_value_t = 16)]
+    spp: u32,
+    /// Lens radius (default: the camera's; 0 = pinhole).
+    #[arg(long)]
+    aperture: Option<f32>,
+    /// Distance to the plane in focus (default: the camera's).
+    #[arg(long)]
+    focus: Option<f32>,
+    /// Shutter interval in seconds of the scene's animation, from the frame's time (motion blur).
+    #[arg(long)]
+    shutter: Option<f32>,
+    /// Reflection bounces.
+    #[arg(long, default_value_t = 2)]
+    max_depth: u32,
 }
 
 fn parse_param(s: &str) -> std::result::Result<(String, String), String> {
@@ -159,12 +188,27 @@ fn execute(command: Command) -> Result<bool> {
             frame,
             frames,
             output,
+            renderer,
+            drt,
         } => {
             check_frame(frame, frames)?;
             let scene = load_scene(&scene, size)?;
             let frame = scene.frame(frame, frames);
-            let tracer = verify::tracer_for_frame(&tracer, &params_of(params), &frame)?;
-            let image = render_raycast(&scene, &frame, tracer.as_ref(), width, height);
+            let params = params_of(params);
+            let image = match renderer.as_str() {
+                "raycast" => {
+                    let tracer = verify::tracer_for_frame(&tracer, &params, &frame)?;
+                    render_raycast(&scene, &frame, tracer.as_ref(), width, height)
+                }
+                "distribution" => {
+                    render_drt(&scene, &frame, &tracer, &params, width, height, &drt)?
+                }
+                other => {
+                    return Err(Error::usage(format!(
+                        "unknown renderer {other:?} (known: raycast, distribution)"
+                    )))
+                }
+            };
             image.save_png(&output)?;
             println!(
                 "wrote {} ({}×{}, {} triangles)",
@@ -233,6 +277,54 @@ fn execute(command: Command) -> Result<bool> {
         }
     }
     Ok(true)
+}
+
+/// A distribution-ray-traced frame; prints the rays, packets and tracing time of each kind.
+fn render_drt(
+    scene: &Scene,
+    frame: &Frame,
+    tracer: &str,
+    params: &Params,
+    width: u32,
+    height: u32,
+    args: &DrtArgs,
+) -> Result<Image> {
+    let settings = DrtSettings {
+        width,
+        height,
+        spp: args.spp,
+        aperture: args.aperture,
+        focus_distance: args.focus,
+        max_depth: args.max_depth,
+        ..DrtSettings::default()
+    };
+    let moving = match args.shutter {
+        Some(shutter) => Some(MovingMesh::of_scene(scene, frame.time, shutter)?),
+        None => None,
+    };
+    let (tracer, geometry) = match &moving {
+        Some(m) => (
+            tracer_for_motion(tracer, params, m)?,
+            FrameGeometry::Moving(m),
+        ),
+        None => (
+            verify::tracer_for_frame(tracer, params, frame)?,
+            FrameGeometry::Static(&frame.mesh),
+        ),
+    };
+    let drt = render_distribution(scene, frame, geometry, tracer.as_ref(), &settings)?;
+    for kind in DrtRayKind::ALL {
+        let t = drt.totals(kind);
+        println!(
+            "{:<10} {:>11} rays {:>9} packets {:>9.3} s",
+            kind.name(),
+            t.rays,
+            t.packets,
+            t.seconds
+        );
+    }
+    println!("frame: {:.3} s", drt.seconds);
+    Ok(drt.image)
 }
 
 fn main() -> ExitCode {
