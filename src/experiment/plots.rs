@@ -44,6 +44,8 @@ fn kind_colour(kind: RayKind) -> RGBColor {
         RayKind::Primary => RGBColor(31, 119, 180),
         RayKind::Shadow => RGBColor(255, 127, 14),
         RayKind::Diffuse => RGBColor(44, 160, 44),
+        RayKind::Reflection => RGBColor(214, 39, 40),
+        RayKind::Refraction => RGBColor(148, 103, 189),
     }
 }
 

@@ -15,6 +15,7 @@ use crate::error::{Error, Result};
 use crate::geometry::{RayBatch, RayKind};
 use crate::random::mix64;
 use crate::render::rays::{diffuse_rays, primary_rays, shadow_rays};
+use crate::render::specular::specular_rays;
 use crate::scene::{Frame, Scene};
 use crate::tracers::batch::trace_hits;
 use crate::tracers::{build_tracer, Params, Tracer, TracerInfo};
@@ -245,6 +246,13 @@ fn generate_batches(
             RayKind::Diffuse => {
                 batches.push(diffuse_rays(&frame.mesh, &primary, hits(), seed(kind)))
             }
+            RayKind::Reflection | RayKind::Refraction => batches.push(specular_rays(
+                kind,
+                &frame.mesh,
+                &scene.materials,
+                &primary,
+                hits(),
+            )),
         }
     }
     if let Some(at) = scene_plan
