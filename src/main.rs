@@ -9,8 +9,13 @@ use clap::{Parser, Subcommand};
 use raylab::error::{Error, Result};
 use raylab::experiment::results_dir::PendingResults;
 use raylab::experiment::{run_experiment, RunOverrides};
+use raylab::render::assembly::Assembly;
 use raylab::render::raycast::render_raycast;
+use raylab::render::whitted::{
+    render_whitted, Tracing, WhittedSettings, DEFAULT_PRUNING_THRESHOLD,
+};
 use raylab::scene::library::{list_scenes, load_scene};
+use raylab::scene::scene_file::Preset;
 use raylab::tracers::Params;
 use raylab::verify::{self, format_table, Tolerance};
 
@@ -49,7 +54,8 @@ enum Command {
         #[arg(long)]
         repeats: Option<usize>,
     },
-    /// Render a frame with ray casting, point-light shadows and Lambert shading to a PNG.
+    /// Render a frame to a PNG: ray casting with point-light shadows and Lambert shading, or
+    /// Whitted ray tracing (mirror reflection, Fresnel refraction, packet-assembled batches).
     Render {
         #[arg(long)]
         scene: String,
@@ -72,6 +78,29 @@ enum Command {
         frames: usize,
         #[arg(long, short, default_value = "render.png")]
         output: PathBuf,
+        #[arg(long, value_enum, default_value_t = Renderer::Raycast)]
+        renderer: Renderer,
+        /// Whitted: deepest reflection/refraction generation (0 = ray casting with shadows).
+        #[arg(long, default_value_t = 5)]
+        max_depth: u32,
+        /// Whitted: no shadow rays (lights reach every surface they face).
+        #[arg(long)]
+        no_shadows: bool,
+        /// Whitted: trace every specular ray up to --max-depth (no ray-tree attenuation).
+        #[arg(long, conflicts_with = "pruning_threshold")]
+        no_pruning: bool,
+        /// Whitted: ray-tree attenuation threshold (default 1/256).
+        #[arg(long)]
+        pruning_threshold: Option<f32>,
+        /// Whitted: packet assembly of secondary rays: none, runs, groups, ray_types, blind.
+        #[arg(long, default_value = "ray_types", value_parser = parse_assembly)]
+        assembly: Assembly,
+        /// Whitted: side n of the n×n packets whose secondary rays are assembled together.
+        #[arg(long, default_value_t = 8)]
+        packet: usize,
+        /// Whitted: a preset on every material: scene (as loaded), diffuse, mirror, glossy, glass.
+        #[arg(long, default_value = "scene")]
+        materials: String,
     },
     /// Trace identical rays with a tracer and with Embree (robust) and compare them ray by ray.
     Verify {
@@ -104,6 +133,26 @@ enum Command {
     },
     /// List built-in scenes and the scenes found on the search path, with triangle counts.
     Scenes,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum Renderer {
+    Raycast,
+    Whitted,
+}
+
+fn parse_assembly(s: &str) -> std::result::Result<Assembly, String> {
+    Assembly::parse(s)
+        .ok_or_else(|| format!("unknown assembly {s:?} (known: {})", Assembly::names()))
+}
+
+fn parse_materials(s: &str) -> std::result::Result<Option<Preset>, String> {
+    match s {
+        "scene" => Ok(None),
+        _ => Preset::parse(s).map(Some).ok_or_else(|| {
+            format!("unknown materials {s:?} (scene, diffuse, mirror, glossy, glass)")
+        }),
+    }
 }
 
 fn parse_param(s: &str) -> std::result::Result<(String, String), String> {
@@ -159,12 +208,61 @@ fn execute(command: Command) -> Result<bool> {
             frame,
             frames,
             output,
+            renderer,
+            max_depth,
+            no_shadows,
+            no_pruning,
+            pruning_threshold,
+            assembly,
+            packet,
+            materials,
         } => {
             check_frame(frame, frames)?;
+            if packet == 0 {
+                return Err(Error::usage("--packet must be at least 1"));
+            }
+            if pruning_threshold.is_some_and(|t| !(t > 0.0 && t.is_finite())) {
+                return Err(Error::usage("--pruning-threshold must be > 0"));
+            }
             let scene = load_scene(&scene, size)?;
             let frame = scene.frame(frame, frames);
             let tracer = verify::tracer_for_frame(&tracer, &params_of(params), &frame)?;
-            let image = render_raycast(&scene, &frame, tracer.as_ref(), width, height);
+            let image = match renderer {
+                Renderer::Raycast => render_raycast(&scene, &frame, tracer.as_ref(), width, height),
+                Renderer::Whitted => {
+                    let settings = WhittedSettings {
+                        max_depth,
+                        shadows: !no_shadows,
+                        pruning: match no_pruning {
+                            true => None,
+                            false => Some(pruning_threshold.unwrap_or(DEFAULT_PRUNING_THRESHOLD)),
+                        },
+                        assembly,
+                        packet,
+                        materials: parse_materials(&materials).map_err(Error::usage)?,
+                    };
+                    let out = render_whitted(
+                        &scene,
+                        &frame,
+                        tracer.as_ref(),
+                        width,
+                        height,
+                        &settings,
+                        Tracing::Timed,
+                    );
+                    for b in &out.batches {
+                        println!(
+                            "  depth {} {:<10} {:>9} rays {:>9} hits {:>9.3} ms",
+                            b.depth,
+                            b.kind.name(),
+                            b.rays,
+                            b.hits,
+                            b.seconds * 1e3
+                        );
+                    }
+                    out.image
+                }
+            };
             image.save_png(&output)?;
             println!(
                 "wrote {} ({}×{}, {} triangles)",
