@@ -127,11 +127,14 @@ impl Answers {
     }
 }
 
+/// A spawned ray: the ray, its pixel, what it carries.
+type Child = (Ray, u32, Role);
+
 /// What shading one incoming packet produced.
 #[derive(Default)]
 struct PacketOutput {
     radiance: Vec<(u32, Vec3)>,
-    packets: Vec<(BatchKind, Vec<(Ray, u32, Role)>)>,
+    packets: Vec<(BatchKind, Vec<Child>)>,
 }
 
 /// Scene data every shading call reads.
@@ -154,7 +157,7 @@ impl Shader<'_> {
     ) -> PacketOutput {
         let mut out = PacketOutput::default();
         let mut candidates = Vec::new();
-        let mut children = Vec::new();
+        let mut children: Vec<Child> = Vec::new();
         let mesh = &*self.frame.mesh;
         let s = self.settings;
         let keep = |w: f32| w > 0.0 && s.pruning.is_none_or(|t| w >= t);
