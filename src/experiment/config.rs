@@ -13,6 +13,7 @@
 //!                                      # refraction leave the primary hits (bounce 1)
 //! # A rendering workload (optional): every tracer instance renders each frame with the Whitted
 //! # renderer, once per combination of the lists below (a single value is a one-value list).
+//! # Or `[[render]]` tables, each its own grid (e.g. one per workload of Overbeck 2008, Fig. 5).
 //! render = { renderer = "whitted",     # the only renderer with per-batch records so far
 //!            max_depth = [1, 2],       # deepest reflection/refraction generation (default 5)
 //!            shadows = true,           # shadow rays (default true)
@@ -233,9 +234,9 @@ struct ExperimentFile {
     params: Option<Spanned<BTreeMap<String, toml::Value>>>,
     #[serde(default)]
     rays: Option<Spanned<Vec<Spanned<String>>>>,
-    /// The render workload grid.
+    /// The render workload grid: a table, or an array of tables (each its own grid).
     #[serde(default)]
-    render: Option<Spanned<BTreeMap<String, toml::Value>>>,
+    render: Option<Spanned<toml::Value>>,
     resolution: Spanned<Resolution>,
     #[serde(default = "one")]
     frames: Spanned<usize>,
@@ -473,7 +474,7 @@ impl Experiment {
             }
         }
         let renders = match &file.render {
-            Some(table) => expand_renders(&src, table)?,
+            Some(render) => expand_renders(&src, render)?,
             None => Vec::new(),
         };
         if ray_kinds.is_empty() && renders.is_empty() {
@@ -562,8 +563,35 @@ fn expand_tracers(src: &Source, file: &ExperimentFile) -> Result<Vec<TracerInsta
     Ok(instances)
 }
 
-/// The `render` table's grid, one workload per combination.
-fn expand_renders(
+/// The `render` grids, one workload per combination, each at most once.
+fn expand_renders(src: &Source, render: &Spanned<toml::Value>) -> Result<Vec<RenderWorkload>> {
+    let span = render.span();
+    let not_a_table = || src.input_error(&span, "render must be a table or an array of tables");
+    let tables: Vec<&toml::Table> = match render.get_ref() {
+        toml::Value::Table(t) => vec![t],
+        toml::Value::Array(list) => list
+            .iter()
+            .map(|v| v.as_table().ok_or_else(not_a_table))
+            .collect::<Result<_>>()?,
+        _ => return Err(not_a_table()),
+    };
+    let mut workloads: Vec<RenderWorkload> = Vec::new();
+    for table in tables {
+        let grid = table.iter().map(|(k, v)| (k.clone(), v.clone())).collect();
+        for workload in expand_render_grid(src, &Spanned::new(span.clone(), grid))? {
+            if workloads.contains(&workload) {
+                return Err(
+                    src.usage_error(&span, format!("render workload {workload} is listed twice"))
+                );
+            }
+            workloads.push(workload);
+        }
+    }
+    Ok(workloads)
+}
+
+/// One `render` table's grid, one workload per combination.
+fn expand_render_grid(
     src: &Source,
     table: &Spanned<BTreeMap<String, toml::Value>>,
 ) -> Result<Vec<RenderWorkload>> {
@@ -824,6 +852,37 @@ mod tests {
                 "{msg}"
             );
         }
+        // An array of tables: each its own grid, duplicates rejected.
+        let text = format!(
+            "{BASE}tracers = [\"reference\"]\n[[render]]\nrenderer = \"whitted\"\nmax_depth = 0\nshadows = false\n\
+             [[render]]\nrenderer = \"whitted\"\nmax_depth = 2\nmaterials = [\"mirror\", \"glass\"]\n"
+        );
+        let exp = parse(&text).unwrap();
+        let settings: Vec<(u32, bool, Option<Preset>)> = exp
+            .renders
+            .iter()
+            .map(|r| {
+                (
+                    r.settings.max_depth,
+                    r.settings.shadows,
+                    r.settings.materials,
+                )
+            })
+            .collect();
+        assert_eq!(
+            settings,
+            [
+                (0, false, None),
+                (2, true, Some(Preset::Mirror)),
+                (2, true, Some(Preset::Glass))
+            ]
+        );
+        let twice = format!(
+            "{BASE}tracers = [\"reference\"]\nrender = [{{ renderer = \"whitted\" }}, {{ renderer = \"whitted\", max_depth = 5 }}]\n"
+        );
+        let msg = usage_message(parse(&twice).unwrap_err());
+        assert!(msg.contains("listed twice"), "{msg}");
+
         let none = "name = \"t\"\nscenes = [\"room\"]\nresolution = { width = 8, height = 4 }\ntracers = [\"reference\"]\n";
         let (_, msg) = line_of_error(parse(none).unwrap_err());
         assert!(msg.contains("no ray kinds and no render workload"), "{msg}");
