@@ -50,7 +50,8 @@ pub struct WhittedSettings {
     pub pruning: Option<f32>,
     pub assembly: Assembly,
     /// Side n of the incoming n×n packets whose secondary rays are assembled together: the
-    /// packet size of the tracer being measured.
+    /// packet size of the tracer being measured. Camera rays come in Morton-ordered tiles, so
+    /// their packets are square screen blocks when n is a power of two ≤ 32.
     pub packet: usize,
     /// Material override applied to every material (`None`: the scene's materials as loaded).
     pub materials: Option<Preset>,
