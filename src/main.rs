@@ -9,11 +9,16 @@ use clap::{Parser, Subcommand};
 use raylab::error::{Error, Result};
 use raylab::experiment::results_dir::PendingResults;
 use raylab::experiment::{run_experiment, RunOverrides};
+use raylab::render::assembly::Assembly;
 use raylab::render::distribution::{render_distribution, DrtRayKind, DrtSettings, FrameGeometry};
 use raylab::render::image::Image;
 use raylab::render::motion::{tracer_for_motion, MovingMesh};
 use raylab::render::raycast::render_raycast;
+use raylab::render::whitted::{
+    render_whitted, Tracing, WhittedSettings, DEFAULT_PRUNING_THRESHOLD,
+};
 use raylab::scene::library::{list_scenes, load_scene};
+use raylab::scene::scene_file::Preset;
 use raylab::scene::{Frame, Scene};
 use raylab::tracers::Params;
 use raylab::verify::{self, format_table, Tolerance};
@@ -53,7 +58,8 @@ enum Command {
         #[arg(long)]
         repeats: Option<usize>,
     },
-    /// Render a frame with ray casting, point-light shadows and Lambert shading to a PNG.
+    /// Render a frame to a PNG: ray casting with point-light shadows and Lambert shading, or
+    /// Whitted ray tracing (mirror reflection, Fresnel refraction, packet-assembled batches).
     Render {
         #[arg(long)]
         scene: String,
@@ -76,9 +82,14 @@ enum Command {
         frames: usize,
         #[arg(long, short, default_value = "render.png")]
         output: PathBuf,
-        /// `raycast` (v0) or `distribution` (DRT: depth of field, glossy, soft shadows, motion blur).
-        #[arg(long, default_value = "raycast")]
-        renderer: String,
+        #[arg(long, value_enum, default_value_t = Renderer::Raycast)]
+        renderer: Renderer,
+        /// Whitted: deepest reflection/refraction generation (default 5; 0 = ray casting with
+        /// shadows). Distribution: reflection bounces (default 2).
+        #[arg(long)]
+        max_depth: Option<u32>,
+        #[command(flatten)]
+        whitted: WhittedArgs,
         #[command(flatten)]
         drt: DrtArgs,
     },
@@ -115,24 +126,69 @@ enum Command {
     Scenes,
 }
 
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum Renderer {
+    /// Renderer v0: ray casting, point-light shadows, Lambert.
+    Raycast,
+    /// Whitted ray tracing with packet assembly (Boulos 2007 §3, Overbeck 2008 §5–6).
+    Whitted,
+    /// Distribution ray tracing (Boulos 2007 §4): depth of field, glossy, soft shadows, motion blur.
+    Distribution,
+}
+
+/// Whitted ray tracing options of `render --renderer whitted`.
+#[derive(clap::Args)]
+struct WhittedArgs {
+    /// Whitted: no shadow rays (lights reach every surface they face).
+    #[arg(long)]
+    no_shadows: bool,
+    /// Whitted: trace every specular ray up to --max-depth (no ray-tree attenuation).
+    #[arg(long, conflicts_with = "pruning_threshold")]
+    no_pruning: bool,
+    /// Whitted: ray-tree attenuation threshold (default 1/256).
+    #[arg(long)]
+    pruning_threshold: Option<f32>,
+    /// Whitted: packet assembly of secondary rays: none, runs, groups, ray_types, blind.
+    #[arg(long, default_value = "ray_types", value_parser = parse_assembly)]
+    assembly: Assembly,
+    /// Whitted: side n of the n×n packets whose secondary rays are assembled together.
+    #[arg(long, default_value_t = 8)]
+    packet: usize,
+    /// Whitted: a preset on every material: scene (as loaded), diffuse, mirror, glossy, glass.
+    #[arg(long, default_value = "scene")]
+    materials: String,
+}
+
 /// Distribution ray tracing options of `render --renderer distribution`.
 #[derive(clap::Args)]
 struct DrtArgs {
-    /// Samples per pixel (a perfect square).
+    /// Distribution: samples per pixel (a perfect square).
     #[arg(long, default_value_t = 16)]
     spp: u32,
-    /// Lens radius (default: the camera's; 0 = pinhole).
+    /// Distribution: lens radius (default: the camera's; 0 = pinhole).
     #[arg(long)]
     aperture: Option<f32>,
-    /// Distance to the plane in focus (default: the camera's).
+    /// Distribution: distance to the plane in focus (default: the camera's).
     #[arg(long)]
     focus: Option<f32>,
-    /// Shutter interval in seconds of the scene's animation, from the frame's time (motion blur).
+    /// Distribution: shutter interval in seconds of the scene's animation, from the frame's time
+    /// (motion blur).
     #[arg(long)]
     shutter: Option<f32>,
-    /// Reflection bounces.
-    #[arg(long, default_value_t = 2)]
-    max_depth: u32,
+}
+
+fn parse_assembly(s: &str) -> std::result::Result<Assembly, String> {
+    Assembly::parse(s)
+        .ok_or_else(|| format!("unknown assembly {s:?} (known: {})", Assembly::names()))
+}
+
+fn parse_materials(s: &str) -> std::result::Result<Option<Preset>, String> {
+    match s {
+        "scene" => Ok(None),
+        _ => Preset::parse(s).map(Some).ok_or_else(|| {
+            format!("unknown materials {s:?} (scene, diffuse, mirror, glossy, glass)")
+        }),
+    }
 }
 
 fn parse_param(s: &str) -> std::result::Result<(String, String), String> {
@@ -189,24 +245,35 @@ fn execute(command: Command) -> Result<bool> {
             frames,
             output,
             renderer,
+            max_depth,
+            whitted,
             drt,
         } => {
             check_frame(frame, frames)?;
             let scene = load_scene(&scene, size)?;
             let frame = scene.frame(frame, frames);
             let params = params_of(params);
-            let image = match renderer.as_str() {
-                "raycast" => {
+            let image = match renderer {
+                Renderer::Raycast => {
                     let tracer = verify::tracer_for_frame(&tracer, &params, &frame)?;
                     render_raycast(&scene, &frame, tracer.as_ref(), width, height)
                 }
-                "distribution" => {
-                    render_drt(&scene, &frame, &tracer, &params, width, height, &drt)?
+                Renderer::Whitted => {
+                    let tracer = verify::tracer_for_frame(&tracer, &params, &frame)?;
+                    let depth = max_depth.unwrap_or(5);
+                    render_whitted_cli(
+                        &scene,
+                        &frame,
+                        tracer.as_ref(),
+                        width,
+                        height,
+                        depth,
+                        &whitted,
+                    )?
                 }
-                other => {
-                    return Err(Error::usage(format!(
-                        "unknown renderer {other:?} (known: raycast, distribution)"
-                    )))
+                Renderer::Distribution => {
+                    let depth = max_depth.unwrap_or(2);
+                    render_drt(&scene, &frame, &tracer, &params, width, height, depth, &drt)?
                 }
             };
             image.save_png(&output)?;
@@ -279,7 +346,57 @@ fn execute(command: Command) -> Result<bool> {
     Ok(true)
 }
 
-/// A distribution-ray-traced frame; prints the rays, packets and tracing time of each kind.
+fn render_whitted_cli(
+    scene: &Scene,
+    frame: &Frame,
+    tracer: &dyn raylab::tracers::Tracer,
+    width: u32,
+    height: u32,
+    max_depth: u32,
+    args: &WhittedArgs,
+) -> Result<Image> {
+    if args.packet == 0 {
+        return Err(Error::usage("--packet must be at least 1"));
+    }
+    if args
+        .pruning_threshold
+        .is_some_and(|t| !(t > 0.0 && t.is_finite()))
+    {
+        return Err(Error::usage("--pruning-threshold must be > 0"));
+    }
+    let settings = WhittedSettings {
+        max_depth,
+        shadows: !args.no_shadows,
+        pruning: match args.no_pruning {
+            true => None,
+            false => Some(args.pruning_threshold.unwrap_or(DEFAULT_PRUNING_THRESHOLD)),
+        },
+        assembly: args.assembly,
+        packet: args.packet,
+        materials: parse_materials(&args.materials).map_err(Error::usage)?,
+    };
+    let out = render_whitted(
+        scene,
+        frame,
+        tracer,
+        width,
+        height,
+        &settings,
+        Tracing::Timed,
+    );
+    for b in &out.batches {
+        println!(
+            "  depth {} {:<10} {:>9} rays {:>9} hits {:>9.3} ms",
+            b.depth,
+            b.kind.name(),
+            b.rays,
+            b.hits,
+            b.seconds * 1e3
+        );
+    }
+    Ok(out.image)
+}
+
 fn render_drt(
     scene: &Scene,
     frame: &Frame,
@@ -287,6 +404,7 @@ fn render_drt(
     params: &Params,
     width: u32,
     height: u32,
+    max_depth: u32,
     args: &DrtArgs,
 ) -> Result<Image> {
     let settings = DrtSettings {
@@ -295,7 +413,7 @@ fn render_drt(
         spp: args.spp,
         aperture: args.aperture,
         focus_distance: args.focus,
-        max_depth: args.max_depth,
+        max_depth,
         ..DrtSettings::default()
     };
     let moving = match args.shutter {

@@ -167,3 +167,32 @@ fn bad_experiments_fail_cleanly() {
     fails_with(&dir, &["run", &scene], "no-such-scene");
     no_results(&dir);
 }
+
+#[test]
+fn whitted_render_writes_a_png_and_rejects_unknown_settings() {
+    let dir = scratch("whitted");
+    let args = |extra: &[&'static str]| {
+        let mut a = vec![
+            "render",
+            "--scene",
+            "room",
+            "--renderer",
+            "whitted",
+            "--width",
+            "16",
+            "--height",
+            "12",
+            "-o",
+            "w.png",
+        ];
+        a.extend_from_slice(extra);
+        a
+    };
+    fails_with(&dir, &args(&["--assembly", "octants"]), "octants");
+    fails_with(&dir, &args(&["--materials", "chrome"]), "chrome");
+    assert!(!dir.join("w.png").exists());
+    let (code, stderr) = raylab(&dir, &args(&["--materials", "glass", "--max-depth", "2"]));
+    assert_eq!(code, 0, "{stderr}");
+    let png = image::open(dir.join("w.png")).unwrap();
+    assert_eq!((png.width(), png.height()), (16, 12));
+}

@@ -1,9 +1,12 @@
 //! The foundation's correctness bar: the reference, obvhs and cgt tracers agree with Embree (robust
 //! mode) on well over a million rays — primary, shadow and diffuse bounces — over three built-in
-//! scenes and two real ones (conference, bunny), with zero unexplained disagreements. Ties are
-//! classified and printed, not hidden.
+//! scenes and two real ones (conference, bunny), with zero unexplained disagreements; and the
+//! reference tracer agrees on Whitted's reflection and refraction rays. Ties are classified and
+//! printed, not hidden.
 
+use raylab::geometry::RayKind;
 use raylab::scene::library::load_scene;
+use raylab::scene::scene_file::Preset;
 use raylab::tracers::Params;
 use raylab::verify::{format_table, verify_frame, Tolerance};
 
@@ -78,4 +81,51 @@ fn obvhs_agrees_with_embree() {
 #[test]
 fn cgt_agrees_with_embree() {
     agrees_with_embree("cgt");
+}
+
+/// Reflection rays on the room with every surface a mirror (scenes/room-reflective.toml), and
+/// reflection and refraction rays on the room with every surface glass.
+#[test]
+fn reference_agrees_with_embree_on_reflection_and_refraction() {
+    let tol = Tolerance::default();
+    let mirrors = load_scene("room-reflective", None).unwrap();
+    let mut glass = load_scene("room", None).unwrap();
+    Preset::Glass.apply_to_all(&mut glass.materials);
+    for (scene, kinds) in [
+        (&mirrors, &[RayKind::Reflection][..]),
+        (&glass, &[RayKind::Reflection, RayKind::Refraction][..]),
+    ] {
+        let frame = scene.frame(0, 1);
+        let reports = verify_frame(
+            scene,
+            &frame,
+            "reference",
+            &Params::new(),
+            RESOLUTION,
+            RESOLUTION,
+            SEED,
+        )
+        .unwrap();
+        println!("{}:\n{}", scene.name, format_table(&reports, &tol));
+        let rays = |kind| {
+            reports
+                .iter()
+                .find(|r| r.kind == kind)
+                .map_or(0, |r| r.rays)
+        };
+        // The room is closed: every camera ray hits a wall, and every hit reflects (mirrors
+        // always; glass by Fresnel, or totally). Refraction rays: all hits but the totally
+        // internally reflected ones.
+        assert_eq!(rays(RayKind::Primary), (RESOLUTION * RESOLUTION) as usize);
+        assert_eq!(rays(RayKind::Reflection), rays(RayKind::Primary));
+        assert!(rays(RayKind::Refraction) <= rays(RayKind::Reflection));
+        for &kind in kinds {
+            assert!(rays(kind) > 0, "{} {}", scene.name, kind.name());
+            let r = reports.iter().find(|r| r.kind == kind).unwrap();
+            assert!(r.passes(&tol), "{} {}", scene.name, kind.name());
+        }
+        if scene.name == "room-reflective" {
+            assert!(reports.iter().all(|r| r.kind != RayKind::Refraction));
+        }
+    }
 }

@@ -8,7 +8,23 @@
 //! scenes = ["room", { name = "balls", size = 3 }]
 //! tracers = ["reference", { name = "embree16", params = { quality = ["low", "high"] } }]
 //! params = { leaf_size = [2, 4] }      # shared grid: applies to every tracer that reads the key
-//! rays = ["primary", "shadow", "diffuse"]
+//! rays = ["primary", "shadow", "diffuse", "reflection", "refraction"]   # ray batches (optional
+//!                                      # with `render`): each kind traced on its own; reflection and
+//!                                      # refraction leave the primary hits (bounce 1)
+//! # A rendering workload (optional): every tracer instance renders each frame with the Whitted
+//! # renderer, once per combination of the lists below (a single value is a one-value list).
+//! # Or `[[render]]` tables, each its own grid (e.g. one per workload of Overbeck 2008, Fig. 5).
+//! render = { renderer = "whitted",     # the only renderer with per-batch records so far
+//!            max_depth = [1, 2],       # deepest reflection/refraction generation (default 5)
+//!            shadows = true,           # shadow rays (default true)
+//!            pruning = [true, false],  # ray-tree attenuation: true (threshold 1/256), false, or a
+//!                                      # threshold such as 0.01 (default true)
+//!            assembly = ["runs", "ray_types"],  # none | runs | groups | ray_types | blind
+//!                                      # (default ray_types; Boulos et al. 2007 §3.2)
+//!            packet = [4, 8],          # side n of the incoming n×n packets (default 8): match the
+//!                                      # tracer's packet size
+//!            materials = ["scene", "glass"] }   # scene (as loaded) | diffuse | mirror | glossy |
+//!                                      # glass: that preset on every material (default scene)
 //! resolution = { width = 1024, height = 1024 }
 //! frames = 2
 //! threads = [1, 2]
@@ -17,6 +33,12 @@
 //! seed = 1
 //! output = "results"                   # relative to the working directory
 //! ```
+//!
+//! runs.csv gets one row per (tracer instance, ray kind, thread count) for ray batches, and for
+//! each render combination one row per traced batch — `ray_kind` (shadow, reflection, refraction,
+//! or blind for blind assembly's mixed batches) and bounce `depth` (camera rays 0) — plus one
+//! `ray_kind = frame` row for the whole frame (all rays; time includes shading and assembly). The
+//! `render` column holds the combination (`assembly=..;materials=..;max_depth=..;...`).
 
 use std::collections::BTreeMap;
 use std::fmt;
@@ -31,6 +53,9 @@ use toml::Spanned;
 use crate::accel::AccelKind;
 use crate::error::{Error, Result};
 use crate::geometry::RayKind;
+use crate::render::assembly::Assembly;
+use crate::render::whitted::{WhittedSettings, DEFAULT_PRUNING_THRESHOLD};
+use crate::scene::scene_file::Preset;
 use crate::tracers::{Params, TracerInfo};
 
 /// A parsed, checked experiment with its tracer grid expanded.
@@ -44,6 +69,8 @@ pub struct Experiment {
     /// Every (tracer, parameter combination) to measure, in file order, grid in key order.
     pub instances: Vec<TracerInstance>,
     pub ray_kinds: Vec<RayKind>,
+    /// Whitted render workloads, one per combination of the `render` grid.
+    pub renders: Vec<RenderWorkload>,
     pub width: u32,
     pub height: u32,
     pub frames: usize,
@@ -62,6 +89,84 @@ pub struct SceneSpec {
     pub name: String,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub size: Option<u32>,
+}
+
+/// One combination of the `render` grid: rendering a frame with the Whitted renderer.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RenderWorkload {
+    pub settings: WhittedSettings,
+}
+
+impl fmt::Display for RenderWorkload {
+    /// Every setting, defaults included: the `render` column of runs.csv.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let s = &self.settings;
+        write!(
+            f,
+            "renderer=whitted;assembly={};materials={};max_depth={};packet={};pruning={};shadows={}",
+            s.assembly,
+            s.materials.map_or("scene", |p| p.name()),
+            s.max_depth,
+            s.packet,
+            s.pruning.map_or("false".to_string(), |t| t.to_string()),
+            s.shadows
+        )
+    }
+}
+
+/// The keys of the `render` table besides `renderer`.
+const RENDER_KEYS: [&str; 6] = [
+    "max_depth",
+    "shadows",
+    "pruning",
+    "assembly",
+    "packet",
+    "materials",
+];
+
+/// One combination of the `render` grid as settings, or what is wrong with it.
+fn whitted_settings(params: &Params) -> std::result::Result<WhittedSettings, String> {
+    let mut s = WhittedSettings::default();
+    for (key, value) in &params.0 {
+        let bad = || format!("render {key} = {value:?} is not valid");
+        match key.as_str() {
+            "max_depth" => s.max_depth = value.parse().map_err(|_| bad())?,
+            "shadows" => s.shadows = value.parse().map_err(|_| bad())?,
+            "pruning" => {
+                s.pruning = match value.as_str() {
+                    "true" => Some(DEFAULT_PRUNING_THRESHOLD),
+                    "false" => None,
+                    v => match v.parse::<f32>() {
+                        Ok(t) if t > 0.0 && t.is_finite() => Some(t),
+                        _ => return Err(format!("{} (true, false or a threshold > 0)", bad())),
+                    },
+                }
+            }
+            "assembly" => {
+                s.assembly = Assembly::parse(value)
+                    .ok_or_else(|| format!("{} (known: {})", bad(), Assembly::names()))?
+            }
+            "packet" => match value.parse::<usize>() {
+                Ok(n) if n > 0 => s.packet = n,
+                _ => return Err(format!("{} (a packet side ≥ 1)", bad())),
+            },
+            "materials" => {
+                s.materials = match value.as_str() {
+                    "scene" => None,
+                    v => Some(Preset::parse(v).ok_or_else(|| {
+                        format!("{} (scene, diffuse, mirror, glossy or glass)", bad())
+                    })?),
+                }
+            }
+            _ => {
+                return Err(format!(
+                    "unknown render key {key:?} (known: renderer, {})",
+                    RENDER_KEYS.join(", ")
+                ))
+            }
+        }
+    }
+    Ok(s)
 }
 
 /// One tracer with one combination of parameters: one column of every comparison.
@@ -127,7 +232,11 @@ struct ExperimentFile {
     /// The shared grid.
     #[serde(default)]
     params: Option<Spanned<BTreeMap<String, toml::Value>>>,
-    rays: Spanned<Vec<Spanned<String>>>,
+    #[serde(default)]
+    rays: Option<Spanned<Vec<Spanned<String>>>>,
+    /// The render workload grid: a table, or an array of tables (each its own grid).
+    #[serde(default)]
+    render: Option<Spanned<toml::Value>>,
     resolution: Spanned<Resolution>,
     #[serde(default = "one")]
     frames: Spanned<usize>,
@@ -346,7 +455,9 @@ impl Experiment {
         }
 
         let mut ray_kinds = Vec::new();
-        for name in file.rays.get_ref() {
+        let no_rays = Vec::new();
+        let rays = file.rays.as_ref().map_or(&no_rays, |r| r.get_ref());
+        for name in rays {
             let kind = RayKind::parse(name.get_ref()).ok_or_else(|| {
                 let known: Vec<&str> = RayKind::ALL.iter().map(|k| k.name()).collect();
                 src.usage_error(
@@ -362,8 +473,13 @@ impl Experiment {
                 ray_kinds.push(kind);
             }
         }
-        if ray_kinds.is_empty() {
-            return Err(src.input_error(&file.rays.span(), "no ray kinds"));
+        let renders = match &file.render {
+            Some(render) => expand_renders(&src, render)?,
+            None => Vec::new(),
+        };
+        if ray_kinds.is_empty() && renders.is_empty() {
+            let span = file.rays.as_ref().map_or(0..0, |r| r.span());
+            return Err(src.input_error(&span, "no ray kinds and no render workload"));
         }
 
         let instances = expand_tracers(&src, &file)?;
@@ -374,6 +490,7 @@ impl Experiment {
             scenes,
             instances,
             ray_kinds,
+            renders,
             width: resolution.width,
             height: resolution.height,
             frames,
@@ -444,6 +561,58 @@ fn expand_tracers(src: &Source, file: &ExperimentFile) -> Result<Vec<TracerInsta
         ));
     }
     Ok(instances)
+}
+
+/// The `render` grids, one workload per combination, each at most once.
+fn expand_renders(src: &Source, render: &Spanned<toml::Value>) -> Result<Vec<RenderWorkload>> {
+    let span = render.span();
+    let not_a_table = || src.input_error(&span, "render must be a table or an array of tables");
+    let tables: Vec<&toml::Table> = match render.get_ref() {
+        toml::Value::Table(t) => vec![t],
+        toml::Value::Array(list) => list
+            .iter()
+            .map(|v| v.as_table().ok_or_else(not_a_table))
+            .collect::<Result<_>>()?,
+        _ => return Err(not_a_table()),
+    };
+    let mut workloads: Vec<RenderWorkload> = Vec::new();
+    for table in tables {
+        let grid = table.iter().map(|(k, v)| (k.clone(), v.clone())).collect();
+        for workload in expand_render_grid(src, &Spanned::new(span.clone(), grid))? {
+            if workloads.contains(&workload) {
+                return Err(
+                    src.usage_error(&span, format!("render workload {workload} is listed twice"))
+                );
+            }
+            workloads.push(workload);
+        }
+    }
+    Ok(workloads)
+}
+
+/// One `render` table's grid, one workload per combination.
+fn expand_render_grid(
+    src: &Source,
+    table: &Spanned<BTreeMap<String, toml::Value>>,
+) -> Result<Vec<RenderWorkload>> {
+    let mut axes = src.param_axes(table)?;
+    match axes.remove("renderer").as_deref() {
+        Some([name]) if name == "whitted" => {}
+        _ => {
+            return Err(src.usage_error(
+                &table.span(),
+                "render needs renderer = \"whitted\" (the renderer that records its batches)",
+            ))
+        }
+    }
+    cartesian(&axes)
+        .iter()
+        .map(|params| {
+            whitted_settings(params)
+                .map(|settings| RenderWorkload { settings })
+                .map_err(|e| src.usage_error(&table.span(), e))
+        })
+        .collect()
 }
 
 /// All combinations of one value per key, the first key varying slowest.
@@ -633,5 +802,89 @@ mod tests {
             parse(&format!("{BASE}tracers = [\"reference\", \"reference\"]\n")).unwrap_err(),
         );
         assert!(msg.contains("listed twice"), "{msg}");
+    }
+
+    #[test]
+    fn the_render_grid_expands_to_every_combination() {
+        let text = "name = \"t\"\nscenes = [\"room\"]\nresolution = { width = 8, height = 4 }\n\
+                    tracers = [\"reference\"]\nrender = { renderer = \"whitted\", max_depth = [1, 2], \
+                    assembly = [\"runs\", \"blind\"], pruning = [false, 0.01], materials = \"glass\" }\n";
+        let exp = parse(text).unwrap();
+        assert!(exp.ray_kinds.is_empty());
+        let labels: Vec<String> = exp.renders.iter().map(|r| r.to_string()).collect();
+        // Keys vary slowest in name order: assembly, materials, max_depth, pruning.
+        let label = |a: &str, d: u32, p: &str| {
+            format!("renderer=whitted;assembly={a};materials=glass;max_depth={d};packet=8;pruning={p};shadows=true")
+        };
+        assert_eq!(
+            labels,
+            [
+                label("runs", 1, "false"),
+                label("runs", 1, "0.01"),
+                label("runs", 2, "false"),
+                label("runs", 2, "0.01"),
+                label("blind", 1, "false"),
+                label("blind", 1, "0.01"),
+                label("blind", 2, "false"),
+                label("blind", 2, "0.01"),
+            ]
+        );
+        assert_eq!(exp.renders[1].settings.pruning, Some(0.01));
+        assert_eq!(exp.renders[4].settings.assembly, Assembly::Blind);
+        assert_eq!(exp.renders[0].settings.materials, Some(Preset::Glass));
+
+        for (bad, word) in [
+            ("render = { renderer = \"path\" }", "renderer"),
+            (
+                "render = { renderer = \"whitted\", assembly = \"octants\" }",
+                "octants",
+            ),
+            ("render = { renderer = \"whitted\", depth = 2 }", "depth"),
+            (
+                "render = { renderer = \"whitted\", pruning = -1 }",
+                "pruning",
+            ),
+        ] {
+            let text = format!("{BASE}tracers = [\"reference\"]\n{bad}\n");
+            let msg = usage_message(parse(&text).unwrap_err());
+            assert!(
+                msg.starts_with("exp.toml:6:") && msg.contains(word),
+                "{msg}"
+            );
+        }
+        // An array of tables: each its own grid, duplicates rejected.
+        let text = format!(
+            "{BASE}tracers = [\"reference\"]\n[[render]]\nrenderer = \"whitted\"\nmax_depth = 0\nshadows = false\n\
+             [[render]]\nrenderer = \"whitted\"\nmax_depth = 2\nmaterials = [\"mirror\", \"glass\"]\n"
+        );
+        let exp = parse(&text).unwrap();
+        let settings: Vec<(u32, bool, Option<Preset>)> = exp
+            .renders
+            .iter()
+            .map(|r| {
+                (
+                    r.settings.max_depth,
+                    r.settings.shadows,
+                    r.settings.materials,
+                )
+            })
+            .collect();
+        assert_eq!(
+            settings,
+            [
+                (0, false, None),
+                (2, true, Some(Preset::Mirror)),
+                (2, true, Some(Preset::Glass))
+            ]
+        );
+        let twice = format!(
+            "{BASE}tracers = [\"reference\"]\nrender = [{{ renderer = \"whitted\" }}, {{ renderer = \"whitted\", max_depth = 5 }}]\n"
+        );
+        let msg = usage_message(parse(&twice).unwrap_err());
+        assert!(msg.contains("listed twice"), "{msg}");
+
+        let none = "name = \"t\"\nscenes = [\"room\"]\nresolution = { width = 8, height = 4 }\ntracers = [\"reference\"]\n";
+        let (_, msg) = line_of_error(parse(none).unwrap_err());
+        assert!(msg.contains("no ray kinds and no render workload"), "{msg}");
     }
 }

@@ -52,14 +52,20 @@ pub fn time_passes(
             pass(rays, out, &|r, h| tracer.intersect(r, h))
         })
     };
+    timing_of(pool.current_num_threads(), seconds)
+}
+
+/// The fastest and the median of `seconds` (one per timed pass, at least one).
+pub fn timing_of(threads: usize, mut seconds: Vec<f64>) -> Timing {
+    seconds.sort_by(f64::total_cmp);
     Timing {
-        threads: pool.current_num_threads(),
+        threads,
         seconds_min: seconds[0],
         seconds_median: median_of_sorted(&seconds),
     }
 }
 
-/// Seconds of each timed pass, sorted.
+/// Seconds of each timed pass.
 fn timed<T: Send>(
     pool: &ThreadPool,
     out: &mut [T],
@@ -72,7 +78,7 @@ fn timed<T: Send>(
             run(out);
             black_box(&mut *out);
         }
-        let mut seconds: Vec<f64> = (0..repeats)
+        (0..repeats)
             .map(|_| {
                 let start = Instant::now();
                 run(out);
@@ -80,9 +86,7 @@ fn timed<T: Send>(
                 black_box(&mut *out);
                 elapsed
             })
-            .collect();
-        seconds.sort_by(f64::total_cmp);
-        seconds
+            .collect()
     })
 }
 

@@ -367,6 +367,83 @@ mod tests {
         fs::remove_dir_all(&out).unwrap();
     }
 
+    /// A glass quad (diffuse 0.7 under a dielectric coat) lit from above, 32×32 pixels: 900 camera
+    /// rays hit it, and each hit spawns one shadow ray (towards the unblocked light), one
+    /// reflection and one refraction ray (both leave the scene): 900 each, none hitting.
+    #[test]
+    fn a_whitted_workload_gives_one_row_per_batch_and_depth_plus_the_frame() {
+        let out = scratch("whitted");
+        let text = "name = \"t\"\nscenes = [\"glass\"]\ntracers = [\"reference\"]\n\
+                    render = { renderer = \"whitted\", max_depth = [0, 1], assembly = [\"ray_types\", \"blind\"] }\n\
+                    resolution = { width = 32, height = 32 }\nthreads = [1, 2]\nwarmup = 0\nrepeats = 2\n";
+        let mut exp = Experiment::parse(Path::new("t.toml"), text).unwrap();
+        exp.output = out.clone();
+        let dir = run(
+            &exp,
+            text,
+            &RunOverrides::default(),
+            &plan::tests::load_quads,
+        )
+        .unwrap();
+        let (_, runs) = read_csv(&dir.join(output::RUNS_CSV));
+        let rows: Vec<(String, String, String, String, String, String)> = runs
+            .iter()
+            .filter(|r| r["threads"] == "2")
+            .map(|r| {
+                let render = &r["render"];
+                let assembly = if render.contains("assembly=blind") {
+                    "blind"
+                } else {
+                    "ray_types"
+                };
+                let depth = if render.contains("max_depth=0") {
+                    "0"
+                } else {
+                    "1"
+                };
+                (
+                    format!("{assembly}/{depth}"),
+                    r["ray_kind"].clone(),
+                    r["bounce_depth"].clone(),
+                    r["rays"].clone(),
+                    r["hits"].clone(),
+                    r["counted_rays"].clone(),
+                )
+            })
+            .collect();
+        let row = |w: &str, kind: &str, depth: &str, rays: &str, hits: &str| {
+            let s = String::from;
+            (s(w), s(kind), s(depth), s(rays), s(hits), s(rays))
+        };
+        assert_eq!(
+            rows,
+            [
+                row("ray_types/0", "primary", "0", "1024", "900"),
+                row("ray_types/0", "shadow", "1", "900", "0"),
+                row("ray_types/0", "frame", "", "1924", "900"),
+                row("ray_types/1", "primary", "0", "1024", "900"),
+                row("ray_types/1", "shadow", "1", "900", "0"),
+                row("ray_types/1", "reflection", "1", "900", "0"),
+                row("ray_types/1", "refraction", "1", "900", "0"),
+                row("ray_types/1", "frame", "", "3724", "900"),
+                row("blind/0", "primary", "0", "1024", "900"),
+                row("blind/0", "blind", "1", "900", "0"),
+                row("blind/0", "frame", "", "1924", "900"),
+                row("blind/1", "primary", "0", "1024", "900"),
+                row("blind/1", "blind", "1", "2700", "0"),
+                row("blind/1", "frame", "", "3724", "900"),
+            ]
+        );
+        // Workloads in file order (ray_types, then blind); the same rows at 1 thread.
+        assert_eq!(runs.len(), 2 * rows.len());
+        for r in &runs {
+            assert!(r["seconds_min"].parse::<f64>().unwrap() > 0.0);
+        }
+        let (_, histograms) = read_csv(&dir.join(output::HISTOGRAMS_CSV));
+        assert!(histograms.is_empty());
+        fs::remove_dir_all(&out).unwrap();
+    }
+
     #[test]
     fn the_quick_experiment_plans_as_documented() {
         let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments/quick.toml");

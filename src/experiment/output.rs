@@ -1,5 +1,7 @@
 //! The tidy CSV files of a run. runs.csv: one row per (scene, frame, tracer, parameters, ray kind,
-//! threads). histograms.csv: one row per (scene, frame, tracer, parameters, ray kind, BVH depth).
+//! threads), and for render workloads one per (scene, frame, tracer, parameters, render, ray kind,
+//! bounce depth, threads) plus a `frame` row (see `config.rs`). histograms.csv: one row per
+//! (scene, frame, tracer, parameters, ray kind, BVH depth), for the ray batches.
 //! Counts a tracer cannot measure (Embree's box and triangle tests) are empty cells, not zeros.
 
 use std::path::Path;
@@ -8,7 +10,7 @@ use crate::error::{Error, Result};
 use crate::stats::Event;
 
 use super::plan::Plan;
-use super::runner::Case;
+use super::runner::{Case, Traced};
 
 pub const RUNS_CSV: &str = "runs.csv";
 pub const HISTOGRAMS_CSV: &str = "histograms.csv";
@@ -21,7 +23,9 @@ pub const RUNS_COLUMNS: &[&str] = &[
     "tracer",
     "parameters",
     "structure",
+    "render",
     "ray_kind",
+    "bounce_depth",
     "threads",
     "rays",
     "hits",
@@ -105,7 +109,9 @@ pub fn write_runs(path: &Path, plan: &Plan, cases: &[Case]) -> Result<()> {
                 instance.tracer.clone(),
                 instance.params.to_string(),
                 instance.structure.to_string(),
-                case.kind.name().to_string(),
+                cell(case.traced.render().map(|r| &plan.renders[r])),
+                case.traced.kind_name().to_string(),
+                cell(case.traced.depth()),
                 timing.threads.to_string(),
                 case.rays.to_string(),
                 case.counted.hits.to_string(),
@@ -137,7 +143,10 @@ pub fn write_histograms(path: &Path, plan: &Plan, cases: &[Case]) -> Result<()> 
     let mut w = csv::Writer::from_path(path).map_err(|e| csv_error(path, e))?;
     w.write_record(HISTOGRAM_COLUMNS)
         .map_err(|e| csv_error(path, e))?;
-    for case in cases.iter().filter(|c| c.counts_internals) {
+    for case in cases
+        .iter()
+        .filter(|c| c.counts_internals && matches!(c.traced, Traced::Batch(_)))
+    {
         let instance = &plan.instances[case.instance];
         let c = &case.counted.counters;
         let depths = c.aabb_by_depth.len().max(c.triangle_by_depth.len());
@@ -148,7 +157,7 @@ pub fn write_histograms(path: &Path, plan: &Plan, cases: &[Case]) -> Result<()> 
                 case.frame.to_string(),
                 instance.tracer.clone(),
                 instance.params.to_string(),
-                case.kind.name().to_string(),
+                case.traced.kind_name().to_string(),
                 depth.to_string(),
                 c.aabb_by_depth.get(depth).copied().unwrap_or(0).to_string(),
                 c.triangle_by_depth

@@ -1,5 +1,6 @@
 //! What a run needs, and only that, derived before anything is timed: per scene, which ray kinds
-//! make sense (no shadow rays without lights), which acceleration structures to build (one per
+//! make sense (no shadow rays without lights, no reflection or refraction rays without materials
+//! that reflect or refract), which acceleration structures to build (one per
 //! distinct kind and structure parameters among the requested tracers, plus our BVH when secondary
 //! rays must be generated), and whether geometry changes per frame (rebuild) or not (build once,
 //! reuse). Printed before the run and stored in meta.json.
@@ -13,7 +14,7 @@ use serde::{Serialize, Serializer};
 use crate::accel::AccelKind;
 use crate::error::{Error, Result};
 use crate::geometry::{RayKind, Triangle};
-use crate::scene::{Mesh, Scene};
+use crate::scene::{Material, Mesh, Scene};
 use crate::tracers::{build_tracer, Params};
 
 use super::config::{Experiment, SceneSpec, StructureKey};
@@ -37,6 +38,8 @@ pub struct Plan {
     pub repeats: usize,
     pub seed: u64,
     pub instances: Vec<InstancePlan>,
+    /// The render workloads (`RenderWorkload` labels), measured for every instance and scene.
+    pub renders: Vec<String>,
     pub scenes: Vec<ScenePlan>,
     /// Run-wide remarks (oversubscribed threads).
     pub notes: Vec<String>,
@@ -151,18 +154,19 @@ impl Plan {
             repeats: exp.repeats,
             seed: exp.seed,
             instances,
+            renders: exp.renders.iter().map(|r| r.to_string()).collect(),
             scenes,
             notes,
         })
     }
 
-    /// Timed measurements (one per scene × frame × instance × ray kind × thread count): the
-    /// progress bar's length.
+    /// Timed measurements (one per scene × frame × instance × (ray kind or render workload) ×
+    /// thread count): the progress bar's length.
     pub fn measurements(&self) -> usize {
         let per_kind = self.frames * self.instances.len() * self.threads.len();
         self.scenes
             .iter()
-            .map(|s| s.ray_kinds.len() * per_kind)
+            .map(|s| (s.ray_kinds.len() + self.renders.len()) * per_kind)
             .sum()
     }
 }
@@ -201,14 +205,34 @@ fn plan_instances(exp: &Experiment) -> Result<Vec<InstancePlan>> {
 
 fn plan_scene(exp: &Experiment, spec: &SceneSpec, scene: &Scene) -> ScenePlan {
     let mut notes = Vec::new();
-    let ray_kinds: Vec<RayKind> = exp
-        .ray_kinds
-        .iter()
-        .copied()
-        .filter(|&k| k != RayKind::Shadow || !scene.lights.is_empty())
-        .collect();
-    if ray_kinds.len() < exp.ray_kinds.len() {
-        notes.push("no shadow rays: the scene has no lights".to_string());
+    // What the scene's triangles are made of decides which secondary rays exist.
+    let mut used = vec![false; scene.materials.len()];
+    for &m in &scene.mesh.material_ids {
+        used[m as usize] = true;
+    }
+    let used = |test: fn(&Material) -> bool| {
+        scene
+            .materials
+            .iter()
+            .zip(&used)
+            .any(|(m, &u)| u && test(m))
+    };
+    let (reflects, refracts) = (
+        used(|m| m.is_reflective() || m.is_refractive()),
+        used(Material::is_refractive),
+    );
+    let mut ray_kinds = Vec::new();
+    for &kind in &exp.ray_kinds {
+        let missing = match kind {
+            RayKind::Shadow if scene.lights.is_empty() => Some("the scene has no lights"),
+            RayKind::Reflection if !reflects => Some("no material reflects"),
+            RayKind::Refraction if !refracts => Some("no material refracts"),
+            _ => None,
+        };
+        match missing {
+            Some(why) => notes.push(format!("no {} rays: {why}", kind.name())),
+            None => ray_kinds.push(kind),
+        }
     }
 
     let mut structures: Vec<StructurePlan> = Vec::new();
@@ -302,6 +326,9 @@ impl fmt::Display for Plan {
                 instance.label, instance.structure
             )?;
         }
+        for render in &self.renders {
+            writeln!(f, "  render workload: {render}")?;
+        }
         for scene in &self.scenes {
             let size = scene.size.map_or(String::new(), |s| format!(" size {s}"));
             writeln!(
@@ -350,7 +377,7 @@ pub(crate) mod tests {
     use glam::Vec3;
 
     use super::*;
-    use crate::scene::{Animation, Camera, Light, Material};
+    use crate::scene::{Animation, Camera, Light};
 
     /// A unit quad at z = 0 facing +z (two triangles), lit or not, static or spinning.
     pub fn quad_scene(name: &str, lit: bool, animated: bool) -> Scene {
@@ -408,6 +435,11 @@ pub(crate) mod tests {
             "lit" => Ok(quad_scene("lit", true, false)),
             "dark" => Ok(quad_scene("dark", false, false)),
             "moving" => Ok(quad_scene("moving", true, true)),
+            "glass" => {
+                let mut scene = quad_scene("glass", true, false);
+                scene.materials[0].dielectric = Some((1.5, 1.0));
+                Ok(scene)
+            }
             other => Err(Error::usage(format!("unknown scene {other:?}"))),
         }
     }
@@ -420,7 +452,7 @@ pub(crate) mod tests {
     #[test]
     fn a_scene_without_lights_gets_no_shadow_rays() {
         let exp = experiment(
-            "scenes = [\"dark\", \"lit\"]\ntracers = [\"reference\"]\nrays = [\"primary\", \"shadow\", \"diffuse\"]\n",
+            "scenes = [\"dark\", \"lit\"]\ntracers = [\"reference\"]\nrays = [\"primary\", \"shadow\", \"diffuse\", \"reflection\", \"refraction\"]\n",
         );
         let plan = Plan::derive(&exp, &load_quads).unwrap();
         assert_eq!(
@@ -428,15 +460,35 @@ pub(crate) mod tests {
             vec![RayKind::Primary, RayKind::Diffuse]
         );
         assert_eq!(
-            plan.scenes[0].notes[0],
-            "no shadow rays: the scene has no lights"
+            plan.scenes[0].notes[..3],
+            [
+                "no shadow rays: the scene has no lights",
+                "no reflection rays: no material reflects",
+                "no refraction rays: no material refracts"
+            ]
         );
-        assert_eq!(plan.scenes[1].ray_kinds, RayKind::ALL.to_vec());
+        assert_eq!(
+            plan.scenes[1].ray_kinds,
+            [RayKind::Primary, RayKind::Shadow, RayKind::Diffuse]
+        );
         // 1 frame × 1 instance × 1 thread count × (2 + 3) kinds.
         assert_eq!(plan.measurements(), 5);
         assert!(plan
             .to_string()
             .contains("note: no shadow rays: the scene has no lights"));
+        // Glass reflects and refracts.
+        let exp = experiment(
+            "scenes = [\"glass\"]\ntracers = [\"reference\"]\nrays = [\"reflection\", \"refraction\"]\n\
+             render = { renderer = \"whitted\", max_depth = [1, 2] }\nthreads = [1, 2]\n",
+        );
+        let plan = Plan::derive(&exp, &load_quads).unwrap();
+        assert_eq!(
+            plan.scenes[0].ray_kinds,
+            [RayKind::Reflection, RayKind::Refraction]
+        );
+        assert!(plan.scenes[0].notes.iter().all(|n| !n.starts_with("no ")));
+        // (2 kinds + 2 render workloads) × 2 thread counts.
+        assert_eq!(plan.measurements(), 8);
     }
 
     #[test]

@@ -15,7 +15,7 @@ use crate::geometry::RayKind;
 
 use super::output::mrays_per_s;
 use super::plan::Plan;
-use super::runner::Case;
+use super::runner::{Case, Traced};
 
 const FONT_PATH: &str = "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf";
 const FONT: &str = "sans-serif";
@@ -44,6 +44,8 @@ fn kind_colour(kind: RayKind) -> RGBColor {
         RayKind::Primary => RGBColor(31, 119, 180),
         RayKind::Shadow => RGBColor(255, 127, 14),
         RayKind::Diffuse => RGBColor(44, 160, 44),
+        RayKind::Reflection => RGBColor(214, 39, 40),
+        RayKind::Refraction => RGBColor(148, 103, 189),
     }
 }
 
@@ -73,7 +75,8 @@ fn scene_stem(plan: &Plan, scene: usize) -> String {
 pub fn write_plots(dir: &Path, plan: &Plan, cases: &[Case]) -> Result<Vec<PathBuf>> {
     register_font()?;
     let mut written = Vec::new();
-    for scene in 0..plan.scenes.len() {
+    // Plots of the ray batches; a scene with render workloads only has none.
+    for scene in (0..plan.scenes.len()).filter(|&s| !plan.scenes[s].ray_kinds.is_empty()) {
         let path = dir.join(format!("throughput_{}.png", scene_stem(plan, scene)));
         throughput(&path, plan, scene, cases).map_err(|e| plot_error(&path, e))?;
         written.push(path);
@@ -110,7 +113,7 @@ fn throughput_over_frames(
 ) -> Option<f64> {
     let (rays, seconds) = cases
         .iter()
-        .filter(|c| c.scene == scene && c.instance == instance && c.kind == kind)
+        .filter(|c| c.scene == scene && c.instance == instance && c.traced == Traced::Batch(kind))
         .flat_map(|c| {
             c.timings
                 .iter()
@@ -248,7 +251,7 @@ fn tests_per_ray_by_depth(
     let mut sums: BTreeMap<bool, Vec<u64>> = BTreeMap::new();
     for c in cases
         .iter()
-        .filter(|c| c.scene == scene && c.instance == instance && c.kind == kind)
+        .filter(|c| c.scene == scene && c.instance == instance && c.traced == Traced::Batch(kind))
     {
         let counters = &c.counted.counters;
         rays += counters.rays;

@@ -1,9 +1,11 @@
 //! Executes a plan: per scene and frame, build the structures the plan lists (timed), generate the
-//! ray batches once (primary, then shadow and diffuse rays from the reference tracer's primary
-//! hits), and measure every tracer instance on every ray kind at every thread count. Every tracer
-//! gets the very same batch.
+//! ray batches once (primary, then shadow, diffuse, reflection and refraction rays from the
+//! reference tracer's primary hits), and measure every tracer instance on every ray kind at every
+//! thread count. Every tracer gets the very same batch. Then each instance renders the frame with
+//! every render workload (Whitted), timed like the batches, and once more counting.
 
 use std::collections::BTreeMap;
+use std::hint::black_box;
 use std::io::IsTerminal;
 use std::time::{Duration, Instant};
 
@@ -14,17 +16,64 @@ use crate::accel::Accel;
 use crate::error::{Error, Result};
 use crate::geometry::{RayBatch, RayKind};
 use crate::random::mix64;
+use crate::render::assembly::BatchKind;
 use crate::render::rays::{diffuse_rays, primary_rays, shadow_rays};
+use crate::render::specular::specular_rays;
+use crate::render::whitted::{render_whitted, Tracing, WhittedFrame, WhittedSettings};
 use crate::scene::{Frame, Scene};
 use crate::tracers::batch::trace_hits;
 use crate::tracers::{build_tracer, Params, Tracer, TracerInfo};
 
 use super::config::{Experiment, StructureKey};
-use super::measure::{count_pass, time_passes, Counted, Timing};
+use super::measure::{count_pass, time_passes, timing_of, Counted, Timing};
 use super::plan::{secondary_ray_structure, Plan, SceneLoader, ScenePlan, SECONDARY_RAY_TRACER};
 
-/// One tracer instance on one ray kind of one frame of one scene: its counts and its timing at
-/// every thread count. One row of runs.csv per timing.
+/// What a case measured.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Traced {
+    /// A batch of one ray kind, traced on its own.
+    Batch(RayKind),
+    /// One batch of a Whitted frame of render workload `render` (an index into `Plan::renders`).
+    Render {
+        render: usize,
+        batch: BatchKind,
+        depth: u32,
+    },
+    /// A whole Whitted frame: all its batches plus shading and packet assembly.
+    Frame { render: usize },
+}
+
+impl Traced {
+    /// runs.csv's `ray_kind`.
+    pub fn kind_name(self) -> &'static str {
+        match self {
+            Traced::Batch(kind) => kind.name(),
+            Traced::Render { batch, .. } => batch.name(),
+            Traced::Frame { .. } => "frame",
+        }
+    }
+
+    /// Bounce depth: camera rays 0, rays leaving their hits 1; none for a whole frame.
+    pub fn depth(self) -> Option<u32> {
+        match self {
+            Traced::Batch(RayKind::Primary) => Some(0),
+            Traced::Batch(_) => Some(1),
+            Traced::Render { depth, .. } => Some(depth),
+            Traced::Frame { .. } => None,
+        }
+    }
+
+    pub fn render(self) -> Option<usize> {
+        match self {
+            Traced::Batch(_) => None,
+            Traced::Render { render, .. } | Traced::Frame { render } => Some(render),
+        }
+    }
+}
+
+/// One tracer instance on one ray kind (or one batch of a rendered frame, or a whole frame) of one
+/// frame of one scene: its counts and its timing at every thread count. One row of runs.csv per
+/// timing.
 #[derive(Clone, Debug)]
 pub struct Case {
     /// Index into `Plan::scenes`.
@@ -33,7 +82,7 @@ pub struct Case {
     pub frame: usize,
     /// Index into `Plan::instances`.
     pub instance: usize,
-    pub kind: RayKind,
+    pub traced: Traced,
     pub rays: usize,
     /// From the one counting pass (the same at every thread count).
     pub counted: Counted,
@@ -157,7 +206,7 @@ pub fn run_plan(
                         triangles: frame.mesh.len(),
                         frame: f,
                         instance: i,
-                        kind,
+                        traced: Traced::Batch(kind),
                         rays: batch.len(),
                         counted,
                         counts_internals: tracer.counts_internals(),
@@ -166,10 +215,139 @@ pub fn run_plan(
                         timings,
                     });
                 }
+                for (r, workload) in exp.renders.iter().enumerate() {
+                    let case = |traced, rays, counted, timings| Case {
+                        scene: scene_index,
+                        triangles: frame.mesh.len(),
+                        frame: f,
+                        instance: i,
+                        traced,
+                        rays,
+                        counted,
+                        counts_internals: tracer.counts_internals(),
+                        build_seconds,
+                        built: built_now,
+                        timings,
+                    };
+                    let job = RenderJob {
+                        scene: &scene,
+                        frame: &frame,
+                        tracer: tracer.as_ref(),
+                        exp,
+                        settings: &workload.settings,
+                    };
+                    let timed: Vec<RenderTimings> = pools
+                        .iter()
+                        .map(|pool| {
+                            progress.set_message(format!(
+                                "{} frame {}/{}: {instance} whitted {} ×{}",
+                                spec.name,
+                                f + 1,
+                                exp.frames,
+                                plan.renders[r],
+                                pool.current_num_threads()
+                            ));
+                            let timing = job.time(pool);
+                            progress.inc(1);
+                            timing
+                        })
+                        .collect();
+                    let (counted, seconds) = job.count(widest);
+                    let threads = widest.current_num_threads();
+                    let mut total = Counted {
+                        threads,
+                        seconds,
+                        ..Counted::default()
+                    };
+                    for (b, record) in counted.batches.iter().enumerate() {
+                        total.counters.merge(&record.counters);
+                        total.hits += record.hits;
+                        let traced = Traced::Render {
+                            render: r,
+                            batch: record.kind,
+                            depth: record.depth,
+                        };
+                        let timings = timed.iter().map(|t| t.batches[b]).collect();
+                        let counted = Counted {
+                            counters: record.counters.clone(),
+                            hits: record.hits,
+                            seconds: record.seconds,
+                            threads,
+                        };
+                        cases.push(case(traced, record.rays, counted, timings));
+                    }
+                    let rays = counted.batches.iter().map(|b| b.rays).sum();
+                    let timings = timed.iter().map(|t| t.frame).collect();
+                    cases.push(case(Traced::Frame { render: r }, rays, total, timings));
+                }
             }
         }
     }
     Ok(cases)
+}
+
+/// The timings of one render workload at one thread count: each batch's trace, and the frame.
+struct RenderTimings {
+    batches: Vec<Timing>,
+    frame: Timing,
+}
+
+/// One tracer rendering one frame with one workload's settings.
+struct RenderJob<'a> {
+    scene: &'a Scene,
+    frame: &'a Frame<'a>,
+    tracer: &'a dyn Tracer,
+    exp: &'a Experiment,
+    settings: &'a WhittedSettings,
+}
+
+impl RenderJob<'_> {
+    fn render(&self, tracing: Tracing) -> WhittedFrame {
+        let (width, height) = (self.exp.width, self.exp.height);
+        render_whitted(
+            self.scene,
+            self.frame,
+            self.tracer,
+            width,
+            height,
+            self.settings,
+            tracing,
+        )
+    }
+
+    /// `warmup` untimed renders, then `repeats` timed ones, in `pool`. The renders are
+    /// deterministic, so every render traces the same batches in the same order.
+    fn time(&self, pool: &ThreadPool) -> RenderTimings {
+        pool.install(|| {
+            for _ in 0..self.exp.warmup {
+                black_box(self.render(Tracing::Timed));
+            }
+            let mut frame = Vec::with_capacity(self.exp.repeats);
+            let mut batches: Vec<Vec<f64>> = Vec::new();
+            for _ in 0..self.exp.repeats {
+                let start = Instant::now();
+                let out = self.render(Tracing::Timed);
+                frame.push(start.elapsed().as_secs_f64());
+                batches.resize(out.batches.len(), Vec::new());
+                for (seconds, record) in batches.iter_mut().zip(&out.batches) {
+                    seconds.push(record.seconds);
+                }
+                black_box(out);
+            }
+            let threads = pool.current_num_threads();
+            RenderTimings {
+                batches: batches.into_iter().map(|s| timing_of(threads, s)).collect(),
+                frame: timing_of(threads, frame),
+            }
+        })
+    }
+
+    /// One render with the counting calls, in `pool`, and its wall time.
+    fn count(&self, pool: &ThreadPool) -> (WhittedFrame, f64) {
+        let start = Instant::now();
+        let out = pool.install(|| self.render(Tracing::Counted));
+        (out, start.elapsed().as_secs_f64())
+    }
 }
 
 /// Builds the plan's structures over `frame`'s geometry, timing each, and the tracers over them.
@@ -245,6 +423,13 @@ fn generate_batches(
             RayKind::Diffuse => {
                 batches.push(diffuse_rays(&frame.mesh, &primary, hits(), seed(kind)))
             }
+            RayKind::Reflection | RayKind::Refraction => batches.push(specular_rays(
+                kind,
+                &frame.mesh,
+                &scene.materials,
+                &primary,
+                hits(),
+            )),
         }
     }
     if let Some(at) = scene_plan

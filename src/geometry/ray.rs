@@ -41,16 +41,28 @@ pub enum RayKind {
     Primary,
     Shadow,
     Diffuse,
+    /// Perfect mirror reflection (Whitted).
+    Reflection,
+    /// Refraction through a dielectric (Whitted).
+    Refraction,
 }
 
 impl RayKind {
-    pub const ALL: [RayKind; 3] = [RayKind::Primary, RayKind::Shadow, RayKind::Diffuse];
+    pub const ALL: [RayKind; 5] = [
+        RayKind::Primary,
+        RayKind::Shadow,
+        RayKind::Diffuse,
+        RayKind::Reflection,
+        RayKind::Refraction,
+    ];
 
     pub fn name(self) -> &'static str {
         match self {
             RayKind::Primary => "primary",
             RayKind::Shadow => "shadow",
             RayKind::Diffuse => "diffuse",
+            RayKind::Reflection => "reflection",
+            RayKind::Refraction => "refraction",
         }
     }
 

@@ -1,6 +1,7 @@
 //! From scene to rays and back: camera rays, secondary-ray generation, shading, images.
 
 pub mod area_light;
+pub mod assembly;
 pub mod convergence;
 pub mod distribution;
 pub mod glossy;
@@ -11,3 +12,6 @@ pub mod offset;
 pub mod raycast;
 pub mod rays;
 pub mod sampling;
+pub mod shading;
+pub mod specular;
+pub mod whitted;

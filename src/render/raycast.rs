@@ -9,33 +9,9 @@ use rayon::prelude::*;
 use crate::geometry::{Hit, RayBatch, RayKind};
 use crate::render::image::Image;
 use crate::render::rays::{shadow_ray, CameraProjection, SurfacePoint};
-use crate::scene::{Frame, Light, Scene};
+use crate::render::shading::{light_as_point, AMBIENT, BACKGROUND};
+use crate::scene::{Frame, Scene};
 use crate::tracers::Tracer;
-
-/// Light reaching surfaces from everywhere, so shadows are dark but not black.
-const AMBIENT: f32 = 0.08;
-/// Colour of rays that leave the scene.
-const BACKGROUND: Vec3 = Vec3::new(0.05, 0.06, 0.08);
-
-/// Where a light shines from and how strongly, for Lambert shading: point lights as they are, quad
-/// lights as a point at their centre carrying their total power (v0 does not sample areas).
-fn light_as_point(light: &Light) -> (Vec3, Vec3) {
-    match *light {
-        Light::Point {
-            position,
-            intensity,
-        } => (position, intensity),
-        Light::Quad {
-            corner,
-            edge_u,
-            edge_v,
-            emission,
-        } => (
-            corner + (edge_u + edge_v) * 0.5,
-            emission * edge_u.cross(edge_v).length(),
-        ),
-    }
-}
 
 pub fn render_raycast(
     scene: &Scene,

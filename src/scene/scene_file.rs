@@ -112,6 +112,38 @@ pub enum Preset {
     Glass,
 }
 
+impl Preset {
+    pub const ALL: [Preset; 4] = [
+        Preset::Diffuse,
+        Preset::Mirror,
+        Preset::Glossy,
+        Preset::Glass,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Preset::Diffuse => "diffuse",
+            Preset::Mirror => "mirror",
+            Preset::Glossy => "glossy",
+            Preset::Glass => "glass",
+        }
+    }
+
+    pub fn parse(name: &str) -> Option<Preset> {
+        Self::ALL.into_iter().find(|p| p.name() == name)
+    }
+
+    /// What `[materials] all = "<preset>"` does: the preset on every material (Overbeck et al.
+    /// 2008 §5.1: "all scene materials reflective or refractive").
+    pub fn apply_to_all(self, materials: &mut [Material]) {
+        let change = MaterialOverride {
+            preset: Some(self),
+            ..MaterialOverride::default()
+        };
+        materials.iter_mut().for_each(|m| change.apply(m));
+    }
+}
+
 /// Changes to one material: a preset first, then the fields given.
 #[derive(Clone, Debug, Default, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]

@@ -68,6 +68,21 @@ fn same_distance(a: f32, b: f32) -> bool {
     (a - b).abs() <= SAME_DISTANCE * a.abs().max(b.abs())
 }
 
+/// Whether two hits on `ray` lie closer together than the intersection arithmetic can tell apart:
+/// within `EDGE_GRAZE_ULPS` ULPs of the largest coordinate involved (both triangles, the ray
+/// origin). This decides for very short hits — a refracted ray leaving a glass box where it stands
+/// on the floor meets box and floor 1e-5 further on — where `same_distance`'s relative test asks
+/// for more precision than the coordinates carry.
+fn indistinguishable(mesh: &Mesh, ray: &Ray, a: &Hit, b: &Hit) -> bool {
+    let scale = [a.prim, b.prim]
+        .iter()
+        .flat_map(|&p| mesh.triangles[p as usize].v)
+        .fold(ray.origin.abs().max_element(), |m, v| {
+            m.max(v.abs().max_element())
+        });
+    (a.t - b.t).abs() * ray.dir.length() <= EDGE_GRAZE_ULPS * scale * f32::EPSILON
+}
+
 fn grazes_edge(mesh: &Mesh, hit: &Hit) -> bool {
     let tri = &mesh.triangles[hit.prim as usize];
     let p = tri.point(hit.u, hit.v);
@@ -142,7 +157,9 @@ fn closest_as(
         (true, true) if tested.prim == reference.prim => Agreement::Agree,
         (true, true) => {
             let mismatch = as_mismatch.unwrap_or(Mismatch::Primitive);
-            if same_distance(tested.t, reference.t) {
+            if same_distance(tested.t, reference.t)
+                || indistinguishable(mesh, ray, tested, reference)
+            {
                 Agreement::Tie(mismatch, tie_between(mesh, tested.prim, reference.prim))
             } else {
                 // One side missed the nearer triangle: fine only if that hit grazes an edge.
@@ -279,6 +296,18 @@ mod tests {
         assert_eq!(
             closest(&m, &r, &Hit::MISS, &hit(1.0, 0, 0.3, 1e-7)),
             Agreement::Tie(Mismatch::HitMiss, Tie::EdgeGraze)
+        );
+        // A ray starting 1e-4 above the plane: 1e-6 apart is 1% of the distance but below the
+        // coordinates' precision (16 ULPs of 1 = 1.9e-6).
+        let close = Ray::new(Vec3::new(0.5, 0.5, 1e-4), -Vec3::Z, 0.0, f32::INFINITY);
+        assert_eq!(
+            closest(
+                &m,
+                &close,
+                &hit(1e-4, 0, 0.3, 0.3),
+                &hit(1.01e-4, 2, 0.3, 0.3)
+            ),
+            Agreement::Tie(Mismatch::Primitive, Tie::Coplanar)
         );
         let short = Ray::new(Vec3::new(0.5, 0.5, 1.0), -Vec3::Z, 0.0, 1.0);
         assert_eq!(

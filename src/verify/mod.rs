@@ -1,4 +1,5 @@
-//! Verification against Embree: identical rays (primary, shadow, diffuse bounce) traced by a tracer
+//! Verification against Embree: identical rays (primary, shadow, diffuse bounce, mirror reflection,
+//! refraction) traced by a tracer
 //! under test and by Embree in robust mode, compared ray by ray. Disagreements that are ties —
 //! shared edges or vertices, coplanar triangles at the same distance, rays grazing an edge, hits on
 //! the boundary of the ray's interval — are classified and counted, never hidden; the rest are
@@ -12,6 +13,7 @@ use rayon::prelude::*;
 use crate::error::Result;
 use crate::geometry::{RayBatch, RayKind};
 use crate::render::rays::{diffuse_rays, primary_rays, shadow_rays};
+use crate::render::specular::specular_rays;
 use crate::scene::{Frame, Scene};
 use crate::tracers::batch::{trace_hits, trace_occlusion};
 use crate::tracers::{build_tracer, Params, Tracer, TracerInfo};
@@ -35,9 +37,10 @@ pub fn tracer_for_frame(name: &str, params: &Params, frame: &Frame) -> Result<Bo
     build_tracer(info, params, &accel)
 }
 
-/// The verification batches of one frame: camera rays, and the shadow and diffuse rays leaving the
-/// oracle's primary hits (so the rays do not depend on the tracer under test). No shadow rays
-/// when the scene has no lights.
+/// The verification batches of one frame: camera rays, and the shadow, diffuse, reflection and
+/// refraction rays leaving the oracle's primary hits (so the rays do not depend on the tracer
+/// under test). No shadow rays when the scene has no lights, no reflection or refraction batch
+/// when no primary hit spawns one.
 pub fn verification_batches(
     scene: &Scene,
     frame: &Frame,
@@ -53,6 +56,12 @@ pub fn verification_batches(
         batches.push(shadow_rays(scene, &frame.mesh, &primary, &hits, seed));
     }
     batches.push(diffuse_rays(&frame.mesh, &primary, &hits, seed));
+    for kind in [RayKind::Reflection, RayKind::Refraction] {
+        let batch = specular_rays(kind, &frame.mesh, &scene.materials, &primary, &hits);
+        if !batch.is_empty() {
+            batches.push(batch);
+        }
+    }
     batches.insert(0, primary);
     batches
 }

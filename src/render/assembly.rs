@@ -1,0 +1,303 @@
+//! Packet assembly of secondary rays (Boulos et al. 2007 §3.2): how the shadow, reflection and
+//! refraction rays spawned by one incoming packet are grouped into outgoing packets. The property
+//! runs and groups share is the material the parent ray hit (§3.2.1).
+//!
+//! - `none`: every secondary ray is a packet of its own (single-ray tracing).
+//! - `runs`: rays of one kind whose parents hit the same material and are adjacent in the
+//!   incoming packet (or are the same parent: one shadow ray per light).
+//! - `groups`: rays of one kind whose parents hit the same material, adjacent or not.
+//! - `ray_types`: one packet per kind (shadow, reflection, refraction).
+//! - `blind`: one packet of all secondary rays. Such a packet mixes occlusion and closest-hit
+//!   queries, so the Whitted renderer puts it in one mixed batch traced with closest-hit calls and
+//!   reads a shadow ray's answer as "occluded" when it hit anything within its interval — the
+//!   same answer an occlusion call gives, at the price of a closest-hit search (part of what
+//!   §3.2.1 holds against blind assembly).
+
+use std::fmt;
+
+use crate::geometry::RayKind;
+
+/// The secondary kinds, in the order their packets are produced.
+pub const SECONDARY_KINDS: [RayKind; 3] =
+    [RayKind::Shadow, RayKind::Reflection, RayKind::Refraction];
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Assembly {
+    None,
+    Runs,
+    Groups,
+    RayTypes,
+    Blind,
+}
+
+impl Assembly {
+    pub const ALL: [Assembly; 5] = [
+        Assembly::None,
+        Assembly::Runs,
+        Assembly::Groups,
+        Assembly::RayTypes,
+        Assembly::Blind,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Assembly::None => "none",
+            Assembly::Runs => "runs",
+            Assembly::Groups => "groups",
+            Assembly::RayTypes => "ray_types",
+            Assembly::Blind => "blind",
+        }
+    }
+
+    pub fn parse(name: &str) -> Option<Assembly> {
+        Self::ALL.into_iter().find(|a| a.name() == name)
+    }
+
+    pub fn names() -> String {
+        Self::ALL.map(|a| a.name()).join(", ")
+    }
+}
+
+impl fmt::Display for Assembly {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// Which batch an outgoing packet joins: the batch of its ray kind, or the one mixed batch of
+/// blind assembly.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum BatchKind {
+    Rays(RayKind),
+    Blind,
+}
+
+impl BatchKind {
+    /// The runs.csv `ray_kind` of the batch.
+    pub fn name(self) -> &'static str {
+        match self {
+            BatchKind::Rays(kind) => kind.name(),
+            BatchKind::Blind => "blind",
+        }
+    }
+}
+
+/// A secondary ray waiting for a packet: the index of its parent in the incoming packet, the
+/// material the parent hit, and its kind. Candidates come in parent order.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Candidate {
+    pub parent: usize,
+    pub material: u32,
+    pub kind: RayKind,
+}
+
+/// One outgoing packet: the candidates (indices into the candidate list) it holds, in order.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct OutPacket {
+    pub batch: BatchKind,
+    pub members: Vec<usize>,
+}
+
+/// The outgoing packets of one incoming packet's `candidates`: per kind in `SECONDARY_KINDS`
+/// order (blind: one packet), each packet's members in candidate order.
+pub fn assemble(method: Assembly, candidates: &[Candidate]) -> Vec<OutPacket> {
+    let of_kind = |kind: RayKind| {
+        candidates
+            .iter()
+            .enumerate()
+            .filter(move |(_, c)| c.kind == kind)
+    };
+    let mut packets = Vec::new();
+    match method {
+        Assembly::None => {
+            for kind in SECONDARY_KINDS {
+                packets.extend(of_kind(kind).map(|(i, _)| OutPacket {
+                    batch: BatchKind::Rays(kind),
+                    members: vec![i],
+                }));
+            }
+        }
+        Assembly::Blind => {
+            if !candidates.is_empty() {
+                packets.push(OutPacket {
+                    batch: BatchKind::Blind,
+                    members: (0..candidates.len()).collect(),
+                });
+            }
+        }
+        Assembly::RayTypes => {
+            for kind in SECONDARY_KINDS {
+                let members: Vec<usize> = of_kind(kind).map(|(i, _)| i).collect();
+                if !members.is_empty() {
+                    packets.push(OutPacket {
+                        batch: BatchKind::Rays(kind),
+                        members,
+                    });
+                }
+            }
+        }
+        Assembly::Runs => {
+            for kind in SECONDARY_KINDS {
+                let mut run: Vec<usize> = Vec::new();
+                for (i, c) in of_kind(kind) {
+                    let continues = run.last().is_some_and(|&last| {
+                        let prev = &candidates[last];
+                        prev.material == c.material && c.parent - prev.parent <= 1
+                    });
+                    if !continues && !run.is_empty() {
+                        packets.push(OutPacket {
+                            batch: BatchKind::Rays(kind),
+                            members: std::mem::take(&mut run),
+                        });
+                    }
+                    run.push(i);
+                }
+                if !run.is_empty() {
+                    packets.push(OutPacket {
+                        batch: BatchKind::Rays(kind),
+                        members: run,
+                    });
+                }
+            }
+        }
+        Assembly::Groups => {
+            for kind in SECONDARY_KINDS {
+                // Materials in order of first appearance, each with its rays.
+                let mut groups: Vec<(u32, Vec<usize>)> = Vec::new();
+                for (i, c) in of_kind(kind) {
+                    match groups.iter_mut().find(|(m, _)| *m == c.material) {
+                        Some((_, members)) => members.push(i),
+                        None => groups.push((c.material, vec![i])),
+                    }
+                }
+                packets.extend(groups.into_iter().map(|(_, members)| OutPacket {
+                    batch: BatchKind::Rays(kind),
+                    members,
+                }));
+            }
+        }
+    }
+    packets
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const DIFFUSE: u32 = 0;
+    const FLOOR: u32 = 1;
+    const METAL: u32 = 2;
+    const GLASS: u32 = 3;
+
+    /// Boulos et al. 2007, Figure 3: 16 primary rays (numbered 1–16 in the paper, 0–15 here).
+    /// 1–4 hit diffuse surfaces (shadow only); 5–6 the floor (reflection and shadow); 7, 8, 11, 12
+    /// the metal teapot (reflection only); the others glass (reflection and refraction).
+    fn figure_3() -> Vec<Candidate> {
+        let material = |ray: usize| match ray {
+            1..=4 => DIFFUSE,
+            5 | 6 => FLOOR,
+            7 | 8 | 11 | 12 => METAL,
+            _ => GLASS,
+        };
+        let mut candidates = Vec::new();
+        for ray in 1..=16 {
+            let m = material(ray);
+            let kinds: &[RayKind] = match m {
+                DIFFUSE => &[RayKind::Shadow],
+                FLOOR => &[RayKind::Shadow, RayKind::Reflection],
+                METAL => &[RayKind::Reflection],
+                _ => &[RayKind::Reflection, RayKind::Refraction],
+            };
+            candidates.extend(kinds.iter().map(|&kind| Candidate {
+                parent: ray - 1,
+                material: m,
+                kind,
+            }));
+        }
+        candidates
+    }
+
+    /// The packets as (kind, paper ray numbers).
+    fn packets(method: Assembly) -> Vec<(&'static str, Vec<usize>)> {
+        let candidates = figure_3();
+        assemble(method, &candidates)
+            .into_iter()
+            .map(|p| {
+                let rays = p.members.iter().map(|&i| candidates[i].parent + 1);
+                (p.batch.name(), rays.collect())
+            })
+            .collect()
+    }
+
+    #[test]
+    fn figure_3_runs_groups_and_ray_types_match_section_3_2_1() {
+        // 6 shadow, 12 reflection and 6 refraction rays (§3.2).
+        let candidates = figure_3();
+        let count = |k| candidates.iter().filter(|c| c.kind == k).count();
+        let counts = [RayKind::Shadow, RayKind::Reflection, RayKind::Refraction].map(count);
+        assert_eq!(counts, [6, 12, 6]);
+
+        let (s, rl, rr) = ("shadow", "reflection", "refraction");
+        assert_eq!(
+            packets(Assembly::Runs),
+            vec![
+                (s, vec![1, 2, 3, 4]),
+                (s, vec![5, 6]),
+                (rl, vec![5, 6]),
+                (rl, vec![7, 8]),
+                (rl, vec![9, 10]),
+                (rl, vec![11, 12]),
+                (rl, vec![13, 14, 15, 16]),
+                (rr, vec![9, 10]),
+                (rr, vec![13, 14, 15, 16]),
+            ]
+        );
+        assert_eq!(
+            packets(Assembly::Groups),
+            vec![
+                (s, vec![1, 2, 3, 4]),
+                (s, vec![5, 6]),
+                (rl, vec![5, 6]),
+                (rl, vec![7, 8, 11, 12]),
+                (rl, vec![9, 10, 13, 14, 15, 16]),
+                (rr, vec![9, 10, 13, 14, 15, 16]),
+            ]
+        );
+        assert_eq!(
+            packets(Assembly::RayTypes),
+            vec![
+                (s, vec![1, 2, 3, 4, 5, 6]),
+                (rl, (5..=16).collect()),
+                (rr, vec![9, 10, 13, 14, 15, 16]),
+            ]
+        );
+    }
+
+    #[test]
+    fn figure_3_single_rays_and_blind() {
+        let single = packets(Assembly::None);
+        assert_eq!(single.len(), 24);
+        assert!(single.iter().all(|(_, rays)| rays.len() == 1));
+        let blind = packets(Assembly::Blind);
+        assert_eq!(blind.len(), 1);
+        assert_eq!(blind[0].0, "blind");
+        assert_eq!(blind[0].1.len(), 24);
+        assert!(assemble(Assembly::Blind, &[]).is_empty());
+    }
+
+    #[test]
+    fn runs_keep_the_shadow_rays_of_one_parent_together() {
+        // Two lights: parent 0 spawns two shadow rays, parent 1 two more, parent 3 (not adjacent) two.
+        let c = |parent| Candidate {
+            parent,
+            material: 0,
+            kind: RayKind::Shadow,
+        };
+        let candidates = [c(0), c(0), c(1), c(1), c(3), c(3)];
+        let out = assemble(Assembly::Runs, &candidates);
+        let members: Vec<Vec<usize>> = out.into_iter().map(|p| p.members).collect();
+        assert_eq!(members, vec![vec![0, 1, 2, 3], vec![4, 5]]);
+        assert_eq!(Assembly::parse("ray_types"), Some(Assembly::RayTypes));
+        assert_eq!(Assembly::parse("rays"), None);
+    }
+}
