@@ -43,7 +43,13 @@
 //!
 //! Counters: `ray` per ray; `node(0)` per grid cell visited (per packet); `triangle_test(0)` per
 //! ray–triangle test (one per active ray of a packet for each triangle neither mailboxed nor
-//! culled). Rays whose direction is zero or not finite, or whose origin is not finite, hit nothing.
+//! culled). Events: `Packets` per packet walked (each sub-packet of a split; a packet that is split
+//! is not walked itself); `MailboxHits` per triangle reference a packet skips because it tested
+//! (or culled) the triangle before; `TrianglesCulled` per triangle a packet culls;
+//! `LeavesVisited` per visited cell holding triangles and `LeafActiveRays` the active rays there;
+//! `SlicesStepped` and `MacrocellsSkipped` as in `traversal`. So with culling off, every
+//! triangle reference met by a packet with r active rays is either r tests or one mailbox hit.
+//! Rays whose direction is zero or not finite, or whose origin is not finite, hit nothing.
 
 mod frustum;
 mod mailbox;
@@ -56,7 +62,7 @@ use glam::Vec3;
 use crate::accel::Grid;
 use crate::error::{Error, Result};
 use crate::geometry::{Hit, RayBoxTest, Rays, WatertightRay};
-use crate::stats::{NoStats, Stats};
+use crate::stats::{Event, NoStats, Stats};
 use crate::tracers::{Kernel, Params};
 
 use frustum::{Frustum, MarchFrame, MarchRays};
@@ -257,6 +263,9 @@ impl CgtTracer {
                 self.split::<S, O, ANY>(rays, back, ws, hits, stats, observer);
                 return;
             }
+            if S::ENABLED {
+                stats.event(Event::Packets, 1);
+            }
             let mut packet = Packet::<S, O, ANY> {
                 grid: &self.grid,
                 frame: &frame,
@@ -388,6 +397,12 @@ impl<S: Stats, O: CellObserver, const ANY: bool> SliceVisitor for Packet<'_, S, 
         !self.ws.active.is_empty()
     }
 
+    fn count(&mut self, event: Event, n: u64) {
+        if S::ENABLED {
+            self.stats.event(event, n);
+        }
+    }
+
     fn cell(&mut self, index: usize, cell: [u32; 3]) {
         if self.ws.active.is_empty() {
             return; // every ray found its occluder earlier in this slice
@@ -399,8 +414,16 @@ impl<S: Stats, O: CellObserver, const ANY: bool> SliceVisitor for Packet<'_, S, 
         let grid = self.grid;
         let ids =
             &grid.cell_tris[grid.cell_start[index] as usize..grid.cell_start[index + 1] as usize];
+        if S::ENABLED && !ids.is_empty() {
+            self.stats.event(Event::LeavesVisited, 1);
+            self.stats
+                .event(Event::LeafActiveRays, self.ws.active.len() as u64);
+        }
         for &id in ids {
             if self.config.mailbox && !self.ws.mailbox.insert(id) {
+                if S::ENABLED {
+                    self.stats.event(Event::MailboxHits, 1);
+                }
                 continue;
             }
             // Culling costs about a 4-ray triangle test (§2.3): it pays only for more rays.
@@ -408,6 +431,9 @@ impl<S: Stats, O: CellObserver, const ANY: bool> SliceVisitor for Packet<'_, S, 
                 && self.ws.active.len() > CULL_MIN_RAYS
                 && self.frustum.culls(&self.march_vertices(id))
             {
+                if S::ENABLED {
+                    self.stats.event(Event::TrianglesCulled, 1);
+                }
                 continue;
             }
             let tri = &grid.triangles[id as usize];
