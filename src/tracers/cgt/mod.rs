@@ -52,6 +52,7 @@
 //! Rays whose direction is zero or not finite, or whose origin is not finite, hit nothing.
 
 mod frustum;
+mod lanes;
 mod mailbox;
 mod traversal;
 
@@ -66,6 +67,7 @@ use crate::stats::{Event, NoStats, Stats};
 use crate::tracers::{Kernel, Params};
 
 use frustum::{Frustum, MarchFrame, MarchRays};
+use lanes::LaneRays;
 use mailbox::Mailbox;
 use traversal::{walk, SliceVisitor};
 
@@ -121,6 +123,9 @@ const MAX_SLOPE_SPREAD: f32 = 1.0;
 /// shadow rays from hit points on both sides of a silhouette).
 const MAX_ORIGIN_SPREAD: f32 = 4.0;
 
+/// SIMD width of the ray–triangle tests (`lanes`): 16 f32 lanes fill an AVX-512 register.
+const LANES: usize = 16;
+
 /// Packets with at most this many active rays test triangles without culling them first.
 const CULL_MIN_RAYS: usize = 4;
 
@@ -152,17 +157,13 @@ pub struct CgtTracer {
 struct Workspace {
     /// Chunk indices of the packet being split or traversed.
     group: Vec<u32>,
-    /// The traversed packet's rays in march coordinates, and per ray: its speed along s, its
-    /// triangle-test form, its interval (`tmax` shrinks to the closest hit), and the `s` where
-    /// it stops needing cells (its segment's end, then its closest hit).
+    /// The traversed packet's rays in march coordinates, and per ray its speed along s and its
+    /// triangle-test form (indexed by position in the packet).
     march: MarchRays,
     d_s: Vec<f32>,
     tests: Vec<WatertightRay>,
-    tmin: Vec<f32>,
-    tmax: Vec<f32>,
-    s_limit: Vec<f32>,
-    /// Positions (into the packet) of the rays still active.
-    active: Vec<u32>,
+    /// The rays still active, in SIMD lanes.
+    lanes: LaneRays<LANES>,
     mailbox: Mailbox,
 }
 
@@ -312,8 +313,7 @@ impl CgtTracer {
         ws.march.clear();
         ws.d_s.clear();
         ws.tests.clear();
-        ws.tmin.clear();
-        ws.tmax.clear();
+        ws.lanes.clear();
         let first_origin = rays.ray(group[0] as usize).origin;
         let mut common_origin = true;
         for &i in group {
@@ -337,15 +337,13 @@ impl CgtTracer {
             m.s_start.push(o[0] + t0.max(ray.tmin) * d[0]);
             m.s_end.push(o[0] + t1.max(t0) * d[0]);
             ws.d_s.push(d[0]);
-            ws.tests.push(WatertightRay::new(ray.origin, ray.dir));
-            ws.tmin.push(ray.tmin);
-            ws.tmax.push(ray.tmax);
+            let test = WatertightRay::new(ray.origin, ray.dir);
+            let s_end = *m.s_end.last().unwrap();
+            ws.lanes
+                .push(ws.tests.len() as u32, &test, ray.tmin, ray.tmax, s_end);
+            ws.tests.push(test);
         }
         let apex = common_origin.then(|| frame.point(to_grid(first_origin)));
-        ws.s_limit.clear();
-        ws.s_limit.extend_from_slice(&ws.march.s_end);
-        ws.active.clear();
-        ws.active.extend(0..group.len() as u32);
         ws.mailbox.clear();
         Frustum::new(&ws.march, apex, self.scale)
     }
@@ -392,9 +390,8 @@ impl<S: Stats, O: CellObserver, const ANY: bool> SliceVisitor for Packet<'_, S, 
         // A ray is done when the slab about to be entered starts past its hit or its end
         // (§2.3 early termination, per ray); the margin covers rounding of s.
         let start = slice as f32 - self.frustum.eps();
-        let s_limit = &self.ws.s_limit;
-        self.ws.active.retain(|&l| s_limit[l as usize] >= start);
-        !self.ws.active.is_empty()
+        self.ws.lanes.retain(|s_limit| s_limit >= start);
+        !self.ws.lanes.is_empty()
     }
 
     fn count(&mut self, event: Event, n: u64) {
@@ -404,7 +401,7 @@ impl<S: Stats, O: CellObserver, const ANY: bool> SliceVisitor for Packet<'_, S, 
     }
 
     fn cell(&mut self, index: usize, cell: [u32; 3]) {
-        if self.ws.active.is_empty() {
+        if self.ws.lanes.is_empty() {
             return; // every ray found its occluder earlier in this slice
         }
         if S::ENABLED {
@@ -417,7 +414,7 @@ impl<S: Stats, O: CellObserver, const ANY: bool> SliceVisitor for Packet<'_, S, 
         if S::ENABLED && !ids.is_empty() {
             self.stats.event(Event::LeavesVisited, 1);
             self.stats
-                .event(Event::LeafActiveRays, self.ws.active.len() as u64);
+                .event(Event::LeafActiveRays, self.ws.lanes.len() as u64);
         }
         for &id in ids {
             if self.config.mailbox && !self.ws.mailbox.insert(id) {
@@ -428,7 +425,7 @@ impl<S: Stats, O: CellObserver, const ANY: bool> SliceVisitor for Packet<'_, S, 
             }
             // Culling costs about a 4-ray triangle test (§2.3): it pays only for more rays.
             if self.config.cull
-                && self.ws.active.len() > CULL_MIN_RAYS
+                && self.ws.lanes.len() > CULL_MIN_RAYS
                 && self.frustum.culls(&self.march_vertices(id))
             {
                 if S::ENABLED {
@@ -438,28 +435,26 @@ impl<S: Stats, O: CellObserver, const ANY: bool> SliceVisitor for Packet<'_, S, 
             }
             let tri = &grid.triangles[id as usize];
             let ws = &mut *self.ws;
-            let mut any_done = false;
-            for &l in &ws.active {
-                let l = l as usize;
-                if S::ENABLED {
+            if S::ENABLED {
+                for _ in 0..ws.lanes.len() {
                     self.stats.triangle_test(0);
                 }
-                if let Some((t, u, v)) = ws.tests[l].intersect(tri, ws.tmin[l], ws.tmax[l]) {
-                    self.hits[self.group[l] as usize] = Hit { t, prim: id, u, v };
-                    ws.tmax[l] = t;
-                    if ANY {
-                        ws.s_limit[l] = f32::NEG_INFINITY;
-                        any_done = true;
-                    } else {
-                        ws.s_limit[l] = ws.s_limit[l].min(ws.march.o_s[l] + t * ws.d_s[l]);
-                    }
-                }
             }
+            let (hits, group, march, d_s) = (&mut *self.hits, self.group, &ws.march, &ws.d_s);
+            let mut any_done = false;
+            ws.lanes.intersect(tri, &ws.tests, |lanes, slot, t, u, v| {
+                let p = lanes.ray[slot] as usize;
+                hits[group[p] as usize] = Hit { t, prim: id, u, v };
+                if ANY {
+                    lanes.s_limit[slot] = f32::NEG_INFINITY;
+                    any_done = true;
+                } else {
+                    lanes.s_limit[slot] = lanes.s_limit[slot].min(march.o_s[p] + t * d_s[p]);
+                }
+            });
             if any_done {
-                let s_limit = &ws.s_limit;
-                ws.active
-                    .retain(|&l| s_limit[l as usize] != f32::NEG_INFINITY);
-                if ws.active.is_empty() {
+                ws.lanes.retain(|s_limit| s_limit != f32::NEG_INFINITY);
+                if ws.lanes.is_empty() {
                     return;
                 }
             }
