@@ -192,11 +192,20 @@ impl GridDdaTracer {
 impl SingleRayKernel for GridDdaTracer {
     #[inline(always)]
     fn trace<S: Stats, const ANY: bool>(&self, ray: &Ray, stats: &mut S) -> Hit {
-        let g = &*self.grid;
-        let mut best = Hit::MISS;
         if S::ENABLED {
             stats.ray();
         }
+        self.walk::<S, ANY>(ray, stats)
+    }
+}
+
+impl GridDdaTracer {
+    /// `trace` without counting the ray: for tracers that hand single rays to the DDA (`cgt`'s
+    /// lone rays) and have counted them already.
+    #[inline(always)]
+    pub fn walk<S: Stats, const ANY: bool>(&self, ray: &Ray, stats: &mut S) -> Hit {
+        let g = &*self.grid;
+        let mut best = Hit::MISS;
         if g.cell_tris.is_empty() {
             return best;
         }

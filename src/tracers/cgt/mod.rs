@@ -64,9 +64,10 @@ use crate::accel::Grid;
 use crate::error::{Error, Result};
 use crate::geometry::{Hit, RayBoxTest, Rays, WatertightRay};
 use crate::stats::{Event, NoStats, Stats};
+use crate::tracers::dda::GridDdaTracer;
 use crate::tracers::{Kernel, Params};
 
-use frustum::{Frustum, MarchFrame, MarchRays};
+use frustum::{Frustum, MarchFrame, MarchRays, SplitKey};
 use lanes::LaneRays;
 use mailbox::Mailbox;
 use traversal::{walk, SliceVisitor};
@@ -150,6 +151,8 @@ pub struct CgtTracer {
     config: CgtConfig,
     /// Rounding scale of the world → grid transform (see `frustum`).
     scale: f32,
+    /// Lone rays (packets split down to one ray) take the single-ray 3D-DDA.
+    dda: GridDdaTracer,
 }
 
 /// Per-call scratch space, reused by every packet of a chunk.
@@ -165,6 +168,8 @@ struct Workspace {
     /// The rays still active, in SIMD lanes.
     lanes: LaneRays<LANES>,
     mailbox: Mailbox,
+    /// Split keys with chunk indices, for the median split.
+    keys: Vec<(f32, u32)>,
 }
 
 impl CgtTracer {
@@ -174,6 +179,7 @@ impl CgtTracer {
         let res = grid.res.iter().copied().max().unwrap_or(1) as f32;
         let scale = res.max(world * grid.inv_cell_size.max_element());
         CgtTracer {
+            dda: GridDdaTracer::new(grid.clone()),
             grid,
             config,
             scale,
@@ -229,7 +235,8 @@ impl CgtTracer {
     }
 
     /// Traverses the packet `group` along the dominant axis of its first ray if all its rays
-    /// agree in direction along it; otherwise splits it by that direction (module doc).
+    /// agree in direction along it and are coherent; otherwise splits it (module doc). A lone ray
+    /// takes the 3D-DDA.
     fn split<S: Stats, O: CellObserver, const ANY: bool>(
         &self,
         rays: Rays<'_>,
@@ -239,6 +246,13 @@ impl CgtTracer {
         stats: &mut S,
         observer: &mut O,
     ) {
+        if let [i] = *group {
+            if S::ENABLED {
+                stats.event(Event::Packets, 1);
+            }
+            hits[i as usize] = self.dda.walk::<S, ANY>(&rays.ray(i as usize), stats);
+            return;
+        }
         let grid_dir = |i: u32| rays.ray(i as usize).dir * self.grid.inv_cell_size;
         let k = dominant_axis(grid_dir(group[0]));
         // 0: +K, 1: −K, 2: zero along K.
@@ -253,54 +267,75 @@ impl CgtTracer {
             }
         };
         let first = class(&group[0]);
-        if group.iter().all(|i| class(i) == first) {
-            let frame = MarchFrame::new(k, first == 1, self.grid.res);
-            let frustum = self.setup(rays, group, &frame, ws);
-            let (slopes, origins) = frustum.spread();
-            if group.len() > 1 && (slopes > MAX_SLOPE_SPREAD || origins > MAX_ORIGIN_SPREAD) {
-                // §4.7: an incoherent packet would drag a wide frustum through the grid.
-                let (front, back) = group.split_at_mut(group.len() / 2);
+        if !group.iter().all(|i| class(i) == first) {
+            group.sort_unstable_by_key(class);
+            let mut rest: &mut [u32] = group;
+            while !rest.is_empty() {
+                let c = class(&rest[0]);
+                let n = rest.iter().take_while(|i| class(i) == c).count();
+                let (part, tail) = std::mem::take(&mut rest).split_at_mut(n);
+                self.split::<S, O, ANY>(rays, part, ws, hits, stats, observer);
+                rest = tail;
+            }
+            return;
+        }
+        let frame = MarchFrame::new(k, first == 1, self.grid.res);
+        let frustum = self.march(rays, group, &frame, ws);
+        if group.len() > 1 {
+            if let Some(key) = frustum.split_key(MAX_SLOPE_SPREAD, MAX_ORIGIN_SPREAD) {
+                // §4.7: an incoherent packet would drag a wide frustum through the grid. Halve
+                // it at the median of the key, so each half is narrower along the frustum's
+                // widest extent.
+                ws.keys.clear();
+                let m = &ws.march;
+                ws.keys.extend(group.iter().enumerate().map(|(p, &i)| {
+                    let v = match key {
+                        SplitKey::SlopeU => m.a[p],
+                        SplitKey::SlopeV => m.b[p],
+                        SplitKey::OriginU => m.o_u[p] + (frustum.s_ref() - m.o_s[p]) * m.a[p],
+                        SplitKey::OriginV => m.o_v[p] + (frustum.s_ref() - m.o_s[p]) * m.b[p],
+                    };
+                    (v, i)
+                }));
+                let half = group.len() / 2;
+                ws.keys
+                    .select_nth_unstable_by(half, |x, y| x.0.total_cmp(&y.0));
+                for (g, &(_, i)) in group.iter_mut().zip(&ws.keys) {
+                    *g = i;
+                }
+                let (front, back) = group.split_at_mut(half);
                 self.split::<S, O, ANY>(rays, front, ws, hits, stats, observer);
                 self.split::<S, O, ANY>(rays, back, ws, hits, stats, observer);
                 return;
             }
-            if S::ENABLED {
-                stats.event(Event::Packets, 1);
-            }
-            let mut packet = Packet::<S, O, ANY> {
-                grid: &self.grid,
-                frame: &frame,
-                frustum: &frustum,
-                config: &self.config,
-                group,
-                ws,
-                hits,
-                stats,
-                observer,
-            };
-            walk(
-                &self.grid,
-                &frame,
-                &frustum,
-                self.config.macrocells,
-                &mut packet,
-            );
-            return;
         }
-        group.sort_unstable_by_key(class);
-        let mut rest: &mut [u32] = group;
-        while !rest.is_empty() {
-            let c = class(&rest[0]);
-            let n = rest.iter().take_while(|i| class(i) == c).count();
-            let (part, tail) = std::mem::take(&mut rest).split_at_mut(n);
-            self.split::<S, O, ANY>(rays, part, ws, hits, stats, observer);
-            rest = tail;
+        if S::ENABLED {
+            stats.event(Event::Packets, 1);
         }
+        self.load_lanes(rays, group, ws);
+        let mut packet = Packet::<S, O, ANY> {
+            grid: &self.grid,
+            frame: &frame,
+            frustum: &frustum,
+            config: &self.config,
+            group,
+            ws,
+            hits,
+            stats,
+            observer,
+        };
+        walk(
+            &self.grid,
+            &frame,
+            &frustum,
+            self.config.macrocells,
+            &mut packet,
+        );
     }
 
-    /// Fills the workspace for the packet `group`, whose rays all travel towards +s in `frame`,
-    /// and returns its frustum.
-    fn setup(
+    /// Fills the workspace's march coordinates for the packet `group`, whose rays all travel
+    /// towards +s in `frame`, and returns its frustum.
+    fn march(
         &self,
         rays: Rays<'_>,
         group: &[u32],
@@ -312,8 +347,6 @@ impl CgtTracer {
         let n_box = Vec3::new(grid.res[0] as f32, grid.res[1] as f32, grid.res[2] as f32);
         ws.march.clear();
         ws.d_s.clear();
-        ws.tests.clear();
-        ws.lanes.clear();
         let first_origin = rays.ray(group[0] as usize).origin;
         let mut common_origin = true;
         for &i in group {
@@ -337,15 +370,24 @@ impl CgtTracer {
             m.s_start.push(o[0] + t0.max(ray.tmin) * d[0]);
             m.s_end.push(o[0] + t1.max(t0) * d[0]);
             ws.d_s.push(d[0]);
-            let test = WatertightRay::new(ray.origin, ray.dir);
-            let s_end = *m.s_end.last().unwrap();
-            ws.lanes
-                .push(ws.tests.len() as u32, &test, ray.tmin, ray.tmax, s_end);
-            ws.tests.push(test);
         }
         let apex = common_origin.then(|| frame.point(to_grid(first_origin)));
-        ws.mailbox.clear();
         Frustum::new(&ws.march, apex, self.scale)
+    }
+
+    /// Loads the rays of the packet `group` (marched by `march`) into the lanes, all active, and
+    /// empties the mailbox.
+    fn load_lanes(&self, rays: Rays<'_>, group: &[u32], ws: &mut Workspace) {
+        ws.tests.clear();
+        ws.lanes.clear();
+        for (p, &i) in group.iter().enumerate() {
+            let ray = rays.ray(i as usize);
+            let test = WatertightRay::new(ray.origin, ray.dir);
+            ws.lanes
+                .push(p as u32, &test, ray.tmin, ray.tmax, ws.march.s_end[p]);
+            ws.tests.push(test);
+        }
+        ws.mailbox.clear();
     }
 }
 
