@@ -481,7 +481,11 @@ fn hand_worked_counts_of_a_packet_down_one_column() {
             .all(|h| h.prim == big && (h.t - 12.3).abs() < 1e-5));
         let (nodes, skipped) = if macro_size == 2 { (6, 1) } else { (7, 0) };
         assert_eq!(c.nodes_visited, 16 * nodes, "M = {macro_size}");
-        assert_eq!(c.get(Event::MacrocellsSkipped), 16 * skipped, "M = {macro_size}");
+        assert_eq!(
+            c.get(Event::MacrocellsSkipped),
+            16 * skipped,
+            "M = {macro_size}"
+        );
         assert_eq!(c.get(Event::MailboxHits), 16 * 3);
         assert_eq!(c.triangle_tests, 16 * 2);
     }
@@ -515,5 +519,9 @@ fn a_packet_split_by_direction_counts_one_packet_per_part() {
     // 7 and 6 stepped (layer 6..=7 holds the large triangle).
     assert_eq!(c.get(Event::SlicesStepped), 5 + 2);
     assert_eq!(c.get(Event::MacrocellsSkipped), 1 + 1);
-    assert_eq!(c.triangle_tests, 8 + 8, "the sliver culled, the large triangle once per ray");
+    assert_eq!(
+        c.triangle_tests,
+        8 + 8,
+        "the sliver culled, the large triangle once per ray"
+    );
 }

@@ -314,6 +314,27 @@ impl Frustum {
         ]
     }
 
+    /// How many halvings of its extents the packet needs before its slopes spread at most
+    /// `max_slope` and its origins at most `max_origin` (u + v, in cells): each extent halved
+    /// until it is at most half its limit. A median split halves about one extent (an estimate:
+    /// it assumes the rays spread evenly).
+    pub fn halvings(&self, max_slope: f32, max_origin: f32) -> u32 {
+        let [slope_u, slope_v, origin_u, origin_v] = self.extents();
+        let halvings = |extent: f32, limit: f32| {
+            let ratio = extent / (0.5 * limit);
+            if ratio > 1.0 {
+                // `as` saturates: an infinite or huge ratio is many halvings.
+                ratio.log2().ceil() as u32
+            } else {
+                0
+            }
+        };
+        // Splitting rays apart by origin separates their slopes too when they share an end
+        // point (shadow rays), so the two needs overlap: the larger one counts.
+        (halvings(slope_u, max_slope) + halvings(slope_v, max_slope))
+            .max(halvings(origin_u, max_origin) + halvings(origin_v, max_origin))
+    }
+
     /// What to split the packet by when its slopes spread more than `max_slope` or its origins
     /// more than `max_origin` (u + v, in cells; module doc of `cgt`): the wider of its slope
     /// extents, else the wider of its origin extents. `None`: coherent enough.
@@ -409,13 +430,20 @@ impl Frustum {
             return false; // apex (nearly) in the triangle's plane: which side is inside is unclear
         }
         let sign = volume.signum();
-        [(a, b, la, lb), (b, c, lb, lc), (c, a, lc, la)]
-            .iter()
-            .any(|&(x, y, lx, ly)| {
-                let n = cross(x, y);
-                let tol = MARGIN * apex.corner_len * lx * ly;
-                apex.corners.iter().all(|d| sign * dot(*d, n) < -tol)
-            })
+        // SIMD over the corner rays (§2.3): lane 4·e + c tests corner c against edge e.
+        let edges = [(a, b, la, lb), (b, c, lb, lc), (c, a, lc, la)].map(|(x, y, lx, ly)| {
+            (
+                cross(x, y).map(|n| sign * n),
+                MARGIN * apex.corner_len * lx * ly,
+            )
+        });
+        let mut outside = [false; 12];
+        for (l, out) in outside.iter_mut().enumerate() {
+            let (n, tol) = edges[l / 4];
+            let d = apex.corners[l % 4];
+            *out = dot(d, n) < -tol;
+        }
+        outside.chunks(4).any(|corners| corners.iter().all(|&o| o))
     }
 }
 

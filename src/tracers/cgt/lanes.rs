@@ -257,8 +257,10 @@ mod tests {
                     }
                 })
                 .collect();
-            let scalar: Vec<WatertightRay> =
-                rays.iter().map(|&(o, d)| WatertightRay::new(o, d)).collect();
+            let scalar: Vec<WatertightRay> = rays
+                .iter()
+                .map(|&(o, d)| WatertightRay::new(o, d))
+                .collect();
             let mut lanes = LaneRays::<L>::default();
             for (p, s) in scalar.iter().enumerate() {
                 lanes.push(p as u32, s, 0.0, f32::INFINITY, 0.0);

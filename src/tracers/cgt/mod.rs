@@ -3,7 +3,8 @@
 //! inside their bounding frustum (§2.2), test the triangles of every overlapped cell with mailboxing
 //! and SIMD frustum culling (§2.3), and skip empty space with macrocells (§2.4).
 //!
-//! - **Packets.** Consecutive groups of n² rays of the chunk (`Rays::packets`: an explicit packet of the batch is never merged with the next) (parameter `packet` = n). The runner
+//! - **Packets.** Consecutive groups of n² rays of the chunk (parameter `packet` = n;
+//!   `Rays::packets`: an explicit packet of the batch is never merged with the next). The runner
 //!   orders camera rays in 32×32 tiles with Morton order inside, so each group of camera rays is
 //!   an n×n screen block; shadow and diffuse batches are grouped the same way (consecutive rays
 //!   descend from neighbouring pixels). The last group of a chunk may be partial.
@@ -34,22 +35,35 @@
 //!   than reversed from the light. Reversed rays would be other rays — the watertight test is not
 //!   symmetric in the ray's direction, so at edges they could disagree with the rays every other
 //!   tracer answers.
-//! - **Incoherent packets are halved (§4.7).** The paper splits shadow packets whose hit points
+//! - **Incoherent packets are split (§4.7).** The paper splits shadow packets whose hit points
 //!   lie too far apart. We measure that on the frustum: a packet whose rays start more than
 //!   `MAX_ORIGIN_SPREAD` cells apart, or whose frustum widens by more than `MAX_SLOPE_SPREAD`
-//!   cells per slice (diffuse bounces), is split into its first and second half, recursively
-//!   down to single rays. Camera packets stay below both limits unless they are very wide: a
-//!   32×32 packet of a 60° image spreads by 0.6 at 128² pixels and by 0.07 at 1024².
+//!   cells per slice (diffuse bounces), is split in two at the median of the quantity it spreads
+//!   most in (`Frustum::split_key`: its u or v slope, else where its rays cross the frustum's
+//!   start along u or v), recursively; median halves are each narrower along that extent, where
+//!   halves in batch order need not be. Camera packets stay below both limits unless they are
+//!   very wide: a 32×32 packet of a 60° image spreads by 0.6 at 128² pixels and by 0.07 at 1024².
+//! - **Lone rays take the 3D-DDA.** A packet split down to one ray, or so incoherent that its
+//!   halves would be single rays before they are coherent (`Frustum::halvings`: the halvings
+//!   its extents need, against the halvings its ray count allows), sends each ray through the
+//!   single-ray 3D-DDA of `grid-dda` on the same grid: a frustum around one ray still covers up
+//!   to four cells per slice, and splitting costs a march per level. Diffuse bounces mostly end
+//!   here; coherent primary and shadow packets never do.
+//! - **SIMD (§2.3).** The active rays of a packet live in SoA lanes (`lanes`), and each triangle
+//!   is tested against `LANES` of them at a time, with hits bit for bit those of the scalar
+//!   watertight test.
 //!
-//! Counters: `ray` per ray; `node(0)` per grid cell visited (per packet); `triangle_test(0)` per
-//! ray–triangle test (one per active ray of a packet for each triangle neither mailboxed nor
-//! culled). Events: `Packets` per packet walked (each sub-packet of a split; a packet that is split
-//! is not walked itself); `MailboxHits` per triangle reference a packet skips because it tested
-//! (or culled) the triangle before; `TrianglesCulled` per triangle a packet culls;
-//! `LeavesVisited` per visited cell holding triangles and `LeafActiveRays` the active rays there;
-//! `SlicesStepped` and `MacrocellsSkipped` as in `traversal`. So with culling off, every
-//! triangle reference met by a packet with r active rays is either r tests or one mailbox hit.
-//! Rays whose direction is zero or not finite, or whose origin is not finite, hit nothing.
+//! Counters: `ray` per ray; `node(0)` per grid cell visited (per packet, and per cell a lone
+//! ray's DDA visits); `triangle_test(0)` per ray–triangle test (one per active ray of a packet for
+//! each triangle neither mailboxed nor culled, and the DDA's tests). Events: `Packets` per packet
+//! walked (each sub-packet of a split; a packet that is split is not walked itself) and per lone
+//! ray; `MailboxHits` per triangle reference a packet skips because it tested (or culled) the
+//! triangle before (and the DDA's own mailbox hits); `TrianglesCulled` per triangle a packet
+//! culls; `LeavesVisited` per visited cell holding triangles and `LeafActiveRays` the active rays
+//! there; `SlicesStepped` and `MacrocellsSkipped` as in `traversal` (and the DDA's skipped
+//! macrocells). So with culling off, every triangle reference met by a packet with r active rays
+//! is either r tests or one mailbox hit. Rays whose direction is zero or not finite, or whose
+//! origin is not finite, hit nothing.
 
 mod frustum;
 mod lanes;
@@ -191,7 +205,7 @@ impl CgtTracer {
     }
 
     /// The cells the packets of `rays` visit, packet by packet in visiting order (the closest-hit
-    /// query's walk, hits written to `hits`).
+    /// query's walk, hits written to `hits`); lone rays (DDA) add none.
     pub fn visited_cells(&self, rays: Rays<'_>, hits: &mut [Hit]) -> Vec<[u32; 3]> {
         let mut cells = vec![];
         self.trace::<NoStats, _, false>(rays, hits, &mut NoStats, &mut cells);
@@ -246,11 +260,8 @@ impl CgtTracer {
         stats: &mut S,
         observer: &mut O,
     ) {
-        if let [i] = *group {
-            if S::ENABLED {
-                stats.event(Event::Packets, 1);
-            }
-            hits[i as usize] = self.dda.walk::<S, ANY>(&rays.ray(i as usize), stats);
+        if group.len() == 1 {
+            self.trace_alone::<S, ANY>(rays, group, hits, stats);
             return;
         }
         let grid_dir = |i: u32| rays.ray(i as usize).dir * self.grid.inv_cell_size;
@@ -281,33 +292,37 @@ impl CgtTracer {
         }
         let frame = MarchFrame::new(k, first == 1, self.grid.res);
         let frustum = self.march(rays, group, &frame, ws);
-        if group.len() > 1 {
-            if let Some(key) = frustum.split_key(MAX_SLOPE_SPREAD, MAX_ORIGIN_SPREAD) {
-                // §4.7: an incoherent packet would drag a wide frustum through the grid. Halve
-                // it at the median of the key, so each half is narrower along the frustum's
-                // widest extent.
-                ws.keys.clear();
-                let m = &ws.march;
-                ws.keys.extend(group.iter().enumerate().map(|(p, &i)| {
-                    let v = match key {
-                        SplitKey::SlopeU => m.a[p],
-                        SplitKey::SlopeV => m.b[p],
-                        SplitKey::OriginU => m.o_u[p] + (frustum.s_ref() - m.o_s[p]) * m.a[p],
-                        SplitKey::OriginV => m.o_v[p] + (frustum.s_ref() - m.o_s[p]) * m.b[p],
-                    };
-                    (v, i)
-                }));
-                let half = group.len() / 2;
-                ws.keys
-                    .select_nth_unstable_by(half, |x, y| x.0.total_cmp(&y.0));
-                for (g, &(_, i)) in group.iter_mut().zip(&ws.keys) {
-                    *g = i;
-                }
-                let (front, back) = group.split_at_mut(half);
-                self.split::<S, O, ANY>(rays, front, ws, hits, stats, observer);
-                self.split::<S, O, ANY>(rays, back, ws, hits, stats, observer);
+        if let Some(key) = frustum.split_key(MAX_SLOPE_SPREAD, MAX_ORIGIN_SPREAD) {
+            // Halves that would be single rays before they are coherent: the DDA at once.
+            let halvings = frustum.halvings(MAX_SLOPE_SPREAD, MAX_ORIGIN_SPREAD);
+            if (group.len() as u64) < 2u64 << halvings.min(62) {
+                self.trace_alone::<S, ANY>(rays, group, hits, stats);
                 return;
             }
+            // §4.7: an incoherent packet would drag a wide frustum through the grid. Halve
+            // it at the median of the key, so each half is narrower along the frustum's
+            // widest extent.
+            ws.keys.clear();
+            let m = &ws.march;
+            ws.keys.extend(group.iter().enumerate().map(|(p, &i)| {
+                let v = match key {
+                    SplitKey::SlopeU => m.a[p],
+                    SplitKey::SlopeV => m.b[p],
+                    SplitKey::OriginU => m.o_u[p] + (frustum.s_ref() - m.o_s[p]) * m.a[p],
+                    SplitKey::OriginV => m.o_v[p] + (frustum.s_ref() - m.o_s[p]) * m.b[p],
+                };
+                (v, i)
+            }));
+            let half = group.len() / 2;
+            ws.keys
+                .select_nth_unstable_by(half, |x, y| x.0.total_cmp(&y.0));
+            for (g, &(_, i)) in group.iter_mut().zip(&ws.keys) {
+                *g = i;
+            }
+            let (front, back) = group.split_at_mut(half);
+            self.split::<S, O, ANY>(rays, front, ws, hits, stats, observer);
+            self.split::<S, O, ANY>(rays, back, ws, hits, stats, observer);
+            return;
         }
         if S::ENABLED {
             stats.event(Event::Packets, 1);
@@ -331,6 +346,22 @@ impl CgtTracer {
             self.config.macrocells,
             &mut packet,
         );
+    }
+
+    /// Each ray of `group` alone, by the 3D-DDA (a packet of one for the counters).
+    fn trace_alone<S: Stats, const ANY: bool>(
+        &self,
+        rays: Rays<'_>,
+        group: &[u32],
+        hits: &mut [Hit],
+        stats: &mut S,
+    ) {
+        for &i in group {
+            if S::ENABLED {
+                stats.event(Event::Packets, 1);
+            }
+            hits[i as usize] = self.dda.walk::<S, ANY>(&rays.ray(i as usize), stats);
+        }
     }
 
     /// Fills the workspace's march coordinates for the packet `group`, whose rays all travel
