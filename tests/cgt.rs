@@ -525,3 +525,68 @@ fn a_packet_split_by_direction_counts_one_packet_per_part() {
         "the sliver culled, the large triangle once per ray"
     );
 }
+
+#[test]
+fn interleaved_clusters_split_at_the_median_into_two_walked_packets() {
+    let (grid, big) = counting_scene(2);
+    // Two clusters of 8 parallel rays going +z, 5 units (4.8 cells) apart in x, interleaved in
+    // the batch: halves in batch order would each hold both clusters; median halves by where the
+    // rays start along u (x) hold one cluster each, which is coherent.
+    let mut batch = RayBatch::new(RayKind::Primary);
+    for i in 0..16 {
+        let (cluster, k) = (i % 2, i / 2);
+        let x = 4.2 + 0.2 * (k % 4) as f32 + 5.0 * cluster as f32;
+        let y = 4.2 + 0.2 * (k / 4) as f32;
+        batch.push(
+            Ray::new(Vec3::new(x, y, -6.0), Vec3::Z, 0.0, f32::INFINITY),
+            0,
+        );
+    }
+    let cgt = CgtTracer::new(grid, CgtConfig::default());
+    let (hits, c) = count(&cgt, &batch, false);
+    for (i, h) in hits.iter().enumerate() {
+        if i % 2 == 0 {
+            assert_eq!(h.prim, big, "ray {i}");
+            assert!((h.t - 12.3).abs() < 1e-5, "ray {i}: {h:?}");
+        } else {
+            // x + y > 10: beside the large triangle's hypotenuse.
+            assert!(!h.is_hit(), "ray {i}: {h:?}");
+        }
+    }
+    assert_eq!(c.get(Event::Packets), 2);
+    // Cluster 0 as in the column test with M = 2 (5 slices, one cell each, the sliver culled);
+    // cluster 1 walks column (9, 4): layers 0..=1, 2..=3, 4..=5 and 8..=9 are empty in macro
+    // column (4, 2) (one macrocell each); layer 6..=7 is not (the large triangle's bounding box
+    // reaches cells x = 8), so slices 6 and 7 are stepped, through empty cells.
+    assert_eq!(c.get(Event::SlicesStepped), 5 + 2);
+    assert_eq!(c.get(Event::MacrocellsSkipped), 1 + 4);
+    assert_eq!(c.nodes_visited, 5 + 2);
+    assert_eq!(
+        c.triangle_tests, 8,
+        "the large triangle, once per ray of cluster 0"
+    );
+}
+
+#[test]
+fn hopelessly_incoherent_packets_take_the_dda_ray_by_ray() {
+    let (grid, _) = counting_scene(2);
+    // 16 rays from one point down in directions (cos φ, sin φ, −1): slopes spread over [−1, 1]
+    // on both axes, 2 + 2 halvings needed, 2⁴ > 16 / 2 (the halves would be single rays first).
+    let mut batch = RayBatch::new(RayKind::Diffuse);
+    for i in 0..16 {
+        let phi = std::f32::consts::TAU * i as f32 / 16.0;
+        let d = Vec3::new(phi.cos(), phi.sin(), -1.0);
+        batch.push(Ray::new(Vec3::new(4.5, 4.5, 9.0), d, 0.0, f32::INFINITY), 0);
+    }
+    let cgt = CgtTracer::new(grid.clone(), CgtConfig::default());
+    let dda = raylab::tracers::dda::GridDdaTracer::new(grid);
+    for any in [false, true] {
+        let (hits, c) = count(&cgt, &batch, any);
+        let (want_hits, mut want) = count(&dda, &batch, any);
+        assert_eq!(hits, want_hits);
+        assert!(hits.iter().filter(|h| h.is_hit()).count() >= 6);
+        assert_eq!(c.get(Event::Packets), 16, "one per lone ray");
+        want.events[Event::Packets as usize] = 16;
+        assert_eq!(c, want, "exactly the DDA's work");
+    }
+}
