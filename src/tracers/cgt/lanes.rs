@@ -131,6 +131,8 @@ impl<const L: usize> LaneRays<L> {
 
     /// The lanes of slots `base .. base + L` that may hit the triangle with vertices `v` (bit
     /// `l` for slot `base + l`): the scalar test's edge and distance tests, lane by lane.
+    // The negated comparisons are the scalar test's, NaN cases included.
+    #[allow(clippy::neg_cmp_op_on_partial_ord)]
     #[inline(always)]
     fn candidates(&self, base: usize, v: &[[f32; 3]; 3]) -> u32 {
         let lanes = |x: &Vec<f32>| -> [f32; L] { x[base..base + L].try_into().unwrap() };

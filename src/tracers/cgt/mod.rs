@@ -25,7 +25,8 @@
 //!   skipped. Sound because the packet tests a triangle against every ray still active, and a ray
 //!   only ever leaves the active set.
 //! - **Culling (§2.3).** Per packet and triangle (`cull`): the frustum's side planes, and for
-//!   common-origin packets the four corner rays' shaft test (`Frustum::culls`). A cull costs
+//!   common-origin packets the four corner rays' shaft test (`Frustum::culls`, one lane per
+//!   corner and triangle edge). A cull costs
 //!   about as much as testing four rays (§2.3), so packets with at most `CULL_MIN_RAYS` active
 //!   rays (split shadow and diffuse packets, ends of walks) test directly.
 //! - **Macrocells (§2.4).** `macrocells` uses the grid's M³ macrocells (`macro_size`).
