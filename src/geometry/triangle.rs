@@ -90,6 +90,13 @@ impl WatertightRay {
         }
     }
 
+    /// The precomputed origin, axes `[kx, ky, kz]` and shear `[sx, sy, sz]`: for SIMD versions of
+    /// `intersect` over many rays, which must compute bit for bit what it computes.
+    #[inline(always)]
+    pub fn parts(&self) -> ([f32; 3], [usize; 3], [f32; 3]) {
+        (self.origin, self.k, self.shear)
+    }
+
     /// `(t, u, v)` if the ray hits `tri` with `tmin <= t <= tmax`; both faces count.
     #[inline(always)]
     pub fn intersect(&self, tri: &Triangle, tmin: f32, tmax: f32) -> Option<(f32, f32, f32)> {

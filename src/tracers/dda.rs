@@ -12,7 +12,9 @@
 //!
 //! Counters: the grid has no depth, so everything is counted at depth 0 — `node(0)` once per cell
 //! visited (an empty macrocell skipped at once counts as the one cell where the ray entered it),
-//! `triangle_test(0)` per triangle test actually run, `ray()` per ray.
+//! `triangle_test(0)` per triangle test actually run, `ray()` per ray; the event
+//! `MacrocellsSkipped` per empty macrocell jumped over, `MailboxHits` per triangle skipped by the
+//! ray's mailbox.
 //!
 //! Mailboxing (per ray, not the packet mailboxes of CGT): the last `MAILBOX` triangles tested are
 //! remembered and skipped when met again in a later cell. Skipping is exact — a retest of the same
@@ -23,7 +25,7 @@ use std::sync::Arc;
 
 use crate::accel::Grid;
 use crate::geometry::{Hit, Ray, WatertightRay};
-use crate::stats::Stats;
+use crate::stats::{Event, Stats};
 use crate::tracers::SingleRayKernel;
 
 pub struct GridDdaTracer {
@@ -190,11 +192,20 @@ impl GridDdaTracer {
 impl SingleRayKernel for GridDdaTracer {
     #[inline(always)]
     fn trace<S: Stats, const ANY: bool>(&self, ray: &Ray, stats: &mut S) -> Hit {
-        let g = &*self.grid;
-        let mut best = Hit::MISS;
         if S::ENABLED {
             stats.ray();
         }
+        self.walk::<S, ANY>(ray, stats)
+    }
+}
+
+impl GridDdaTracer {
+    /// `trace` without counting the ray: for tracers that hand single rays to the DDA (`cgt`'s
+    /// lone rays) and have counted them already.
+    #[inline(always)]
+    pub fn walk<S: Stats, const ANY: bool>(&self, ray: &Ray, stats: &mut S) -> Hit {
+        let g = &*self.grid;
+        let mut best = Hit::MISS;
         if g.cell_tris.is_empty() {
             return best;
         }
@@ -248,6 +259,9 @@ impl SingleRayKernel for GridDdaTracer {
                 let m = g.config.macro_size;
                 let [x, y, z] = walk.cell;
                 if g.macro_is_empty(x / m, y / m, z / m) {
+                    if S::ENABLED {
+                        stats.event(Event::MacrocellsSkipped, 1);
+                    }
                     match walk.skip_macrocell() {
                         Some(t) if t < tmax => continue,
                         _ => return best,
@@ -256,6 +270,9 @@ impl SingleRayKernel for GridDdaTracer {
             }
             for &id in &g.cell_tris[first..end] {
                 if mailbox.contains(&id) {
+                    if S::ENABLED {
+                        stats.event(Event::MailboxHits, 1);
+                    }
                     continue;
                 }
                 mailbox[slot] = id;

@@ -136,6 +136,16 @@ impl MarchRays {
     }
 }
 
+/// The per-ray quantity an incoherent packet is split by (at its median): a slope, or where the
+/// ray's line crosses the frustum's reference `s` along u or v.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SplitKey {
+    SlopeU,
+    SlopeV,
+    OriginU,
+    OriginV,
+}
+
 /// The apex of a common-origin packet and its four corner-ray directions `(1, a, b)` (§2.3).
 #[derive(Clone, Copy, Debug)]
 struct Apex {
@@ -287,12 +297,64 @@ impl Frustum {
         self.eps
     }
 
-    /// How incoherent the packet is: how many cells (u + v) its overlap box grows per slice, and
-    /// how wide (u + v, in cells) it is where the rays start, margins left out.
-    pub fn spread(&self) -> (f32, f32) {
-        let slopes = (self.du[1] - self.du[0]) + (self.dv[1] - self.dv[0]);
-        let origins = (self.u0[1] - self.u0[0]) + (self.v0[1] - self.v0[0]) - 4.0 * self.eps;
-        (slopes, origins)
+    /// The `s` where the frustum's lines start (the apex, or the packet's first `s`).
+    pub fn s_ref(&self) -> f32 {
+        self.s_ref
+    }
+
+    /// How incoherent the packet is: widths `[du, dv]` of its slope intervals (how many cells its
+    /// overlap box grows per slice) and `[u, v]` of its origin interval at `s_ref` (in cells,
+    /// margins left out).
+    fn extents(&self) -> [f32; 4] {
+        [
+            self.du[1] - self.du[0],
+            self.dv[1] - self.dv[0],
+            self.u0[1] - self.u0[0] - 2.0 * self.eps,
+            self.v0[1] - self.v0[0] - 2.0 * self.eps,
+        ]
+    }
+
+    /// How many halvings of its extents the packet needs before its slopes spread at most
+    /// `max_slope` and its origins at most `max_origin` (u + v, in cells): each extent halved
+    /// until it is at most half its limit. A median split halves about one extent (an estimate:
+    /// it assumes the rays spread evenly).
+    pub fn halvings(&self, max_slope: f32, max_origin: f32) -> u32 {
+        let [slope_u, slope_v, origin_u, origin_v] = self.extents();
+        let halvings = |extent: f32, limit: f32| {
+            let ratio = extent / (0.5 * limit);
+            if ratio > 1.0 {
+                // `as` saturates: an infinite or huge ratio is many halvings.
+                ratio.log2().ceil() as u32
+            } else {
+                0
+            }
+        };
+        // Splitting rays apart by origin separates their slopes too when they share an end
+        // point (shadow rays), so the two needs overlap: the larger one counts.
+        (halvings(slope_u, max_slope) + halvings(slope_v, max_slope))
+            .max(halvings(origin_u, max_origin) + halvings(origin_v, max_origin))
+    }
+
+    /// What to split the packet by when its slopes spread more than `max_slope` or its origins
+    /// more than `max_origin` (u + v, in cells; module doc of `cgt`): the wider of its slope
+    /// extents, else the wider of its origin extents. `None`: coherent enough.
+    pub fn split_key(&self, max_slope: f32, max_origin: f32) -> Option<SplitKey> {
+        let [slope_u, slope_v, origin_u, origin_v] = self.extents();
+        if slope_u + slope_v > max_slope {
+            Some(if slope_u >= slope_v {
+                SplitKey::SlopeU
+            } else {
+                SplitKey::SlopeV
+            })
+        } else if origin_u + origin_v > max_origin {
+            Some(if origin_u >= origin_v {
+                SplitKey::OriginU
+            } else {
+                SplitKey::OriginV
+            })
+        } else {
+            None
+        }
     }
 
     /// The march slices `[first, last]` the packet spans inside a grid `slices` thick, or `None`.
@@ -368,13 +430,20 @@ impl Frustum {
             return false; // apex (nearly) in the triangle's plane: which side is inside is unclear
         }
         let sign = volume.signum();
-        [(a, b, la, lb), (b, c, lb, lc), (c, a, lc, la)]
-            .iter()
-            .any(|&(x, y, lx, ly)| {
-                let n = cross(x, y);
-                let tol = MARGIN * apex.corner_len * lx * ly;
-                apex.corners.iter().all(|d| sign * dot(*d, n) < -tol)
-            })
+        // SIMD over the corner rays (§2.3): lane 4·e + c tests corner c against edge e.
+        let edges = [(a, b, la, lb), (b, c, lb, lc), (c, a, lc, la)].map(|(x, y, lx, ly)| {
+            (
+                cross(x, y).map(|n| sign * n),
+                MARGIN * apex.corner_len * lx * ly,
+            )
+        });
+        let mut outside = [false; 12];
+        for (l, out) in outside.iter_mut().enumerate() {
+            let (n, tol) = edges[l / 4];
+            let d = apex.corners[l % 4];
+            *out = dot(d, n) < -tol;
+        }
+        outside.chunks(4).any(|corners| corners.iter().all(|&o| o))
     }
 }
 

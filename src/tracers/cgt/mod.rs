@@ -3,7 +3,8 @@
 //! inside their bounding frustum (§2.2), test the triangles of every overlapped cell with mailboxing
 //! and SIMD frustum culling (§2.3), and skip empty space with macrocells (§2.4).
 //!
-//! - **Packets.** Consecutive groups of n² rays of the chunk (`Rays::packets`: an explicit packet of the batch is never merged with the next) (parameter `packet` = n). The runner
+//! - **Packets.** Consecutive groups of n² rays of the chunk (parameter `packet` = n;
+//!   `Rays::packets`: an explicit packet of the batch is never merged with the next). The runner
 //!   orders camera rays in 32×32 tiles with Morton order inside, so each group of camera rays is
 //!   an n×n screen block; shadow and diffuse batches are grouped the same way (consecutive rays
 //!   descend from neighbouring pixels). The last group of a chunk may be partial.
@@ -24,7 +25,8 @@
 //!   skipped. Sound because the packet tests a triangle against every ray still active, and a ray
 //!   only ever leaves the active set.
 //! - **Culling (§2.3).** Per packet and triangle (`cull`): the frustum's side planes, and for
-//!   common-origin packets the four corner rays' shaft test (`Frustum::culls`). A cull costs
+//!   common-origin packets the four corner rays' shaft test (`Frustum::culls`, one lane per
+//!   corner and triangle edge). A cull costs
 //!   about as much as testing four rays (§2.3), so packets with at most `CULL_MIN_RAYS` active
 //!   rays (split shadow and diffuse packets, ends of walks) test directly.
 //! - **Macrocells (§2.4).** `macrocells` uses the grid's M³ macrocells (`macro_size`).
@@ -34,18 +36,38 @@
 //!   than reversed from the light. Reversed rays would be other rays — the watertight test is not
 //!   symmetric in the ray's direction, so at edges they could disagree with the rays every other
 //!   tracer answers.
-//! - **Incoherent packets are halved (§4.7).** The paper splits shadow packets whose hit points
+//! - **Incoherent packets are split (§4.7).** The paper splits shadow packets whose hit points
 //!   lie too far apart. We measure that on the frustum: a packet whose rays start more than
 //!   `MAX_ORIGIN_SPREAD` cells apart, or whose frustum widens by more than `MAX_SLOPE_SPREAD`
-//!   cells per slice (diffuse bounces), is split into its first and second half, recursively
-//!   down to single rays. Camera packets stay below both limits unless they are very wide: a
-//!   32×32 packet of a 60° image spreads by 0.6 at 128² pixels and by 0.07 at 1024².
+//!   cells per slice (diffuse bounces), is split in two at the median of the quantity it spreads
+//!   most in (`Frustum::split_key`: its u or v slope, else where its rays cross the frustum's
+//!   start along u or v), recursively; median halves are each narrower along that extent, where
+//!   halves in batch order need not be. Camera packets stay below both limits unless they are
+//!   very wide: a 32×32 packet of a 60° image spreads by 0.6 at 128² pixels and by 0.07 at 1024².
+//! - **Lone rays take the 3D-DDA.** A packet split down to one ray, or so incoherent that its
+//!   halves would be single rays before they are coherent (`Frustum::halvings`: the halvings
+//!   its extents need, against the halvings its ray count allows), sends each ray through the
+//!   single-ray 3D-DDA of `grid-dda` on the same grid: a frustum around one ray still covers up
+//!   to four cells per slice, and splitting costs a march per level. Diffuse bounces mostly end
+//!   here; coherent primary and shadow packets never do.
+//! - **SIMD (§2.3).** The active rays of a packet live in SoA lanes (`lanes`), and each triangle
+//!   is tested against `LANES` of them at a time, with hits bit for bit those of the scalar
+//!   watertight test.
 //!
-//! Counters: `ray` per ray; `node(0)` per grid cell visited (per packet); `triangle_test(0)` per
-//! ray–triangle test (one per active ray of a packet for each triangle neither mailboxed nor
-//! culled). Rays whose direction is zero or not finite, or whose origin is not finite, hit nothing.
+//! Counters: `ray` per ray; `node(0)` per grid cell visited (per packet, and per cell a lone
+//! ray's DDA visits); `triangle_test(0)` per ray–triangle test (one per active ray of a packet for
+//! each triangle neither mailboxed nor culled, and the DDA's tests). Events: `Packets` per packet
+//! walked (each sub-packet of a split; a packet that is split is not walked itself) and per lone
+//! ray; `MailboxHits` per triangle reference a packet skips because it tested (or culled) the
+//! triangle before (and the DDA's own mailbox hits); `TrianglesCulled` per triangle a packet
+//! culls; `LeavesVisited` per visited cell holding triangles and `LeafActiveRays` the active rays
+//! there; `SlicesStepped` and `MacrocellsSkipped` as in `traversal` (and the DDA's skipped
+//! macrocells). So with culling off, every triangle reference met by a packet with r active rays
+//! is either r tests or one mailbox hit. Rays whose direction is zero or not finite, or whose
+//! origin is not finite, hit nothing.
 
 mod frustum;
+mod lanes;
 mod mailbox;
 mod traversal;
 
@@ -56,10 +78,12 @@ use glam::Vec3;
 use crate::accel::Grid;
 use crate::error::{Error, Result};
 use crate::geometry::{Hit, RayBoxTest, Rays, WatertightRay};
-use crate::stats::{NoStats, Stats};
+use crate::stats::{Event, NoStats, Stats};
+use crate::tracers::dda::GridDdaTracer;
 use crate::tracers::{Kernel, Params};
 
-use frustum::{Frustum, MarchFrame, MarchRays};
+use frustum::{Frustum, MarchFrame, MarchRays, SplitKey};
+use lanes::LaneRays;
 use mailbox::Mailbox;
 use traversal::{walk, SliceVisitor};
 
@@ -115,6 +139,9 @@ const MAX_SLOPE_SPREAD: f32 = 1.0;
 /// shadow rays from hit points on both sides of a silhouette).
 const MAX_ORIGIN_SPREAD: f32 = 4.0;
 
+/// SIMD width of the ray–triangle tests (`lanes`): 16 f32 lanes fill an AVX-512 register.
+const LANES: usize = 16;
+
 /// Packets with at most this many active rays test triangles without culling them first.
 const CULL_MIN_RAYS: usize = 4;
 
@@ -139,6 +166,8 @@ pub struct CgtTracer {
     config: CgtConfig,
     /// Rounding scale of the world → grid transform (see `frustum`).
     scale: f32,
+    /// Lone rays (packets split down to one ray) take the single-ray 3D-DDA.
+    dda: GridDdaTracer,
 }
 
 /// Per-call scratch space, reused by every packet of a chunk.
@@ -146,18 +175,16 @@ pub struct CgtTracer {
 struct Workspace {
     /// Chunk indices of the packet being split or traversed.
     group: Vec<u32>,
-    /// The traversed packet's rays in march coordinates, and per ray: its speed along s, its
-    /// triangle-test form, its interval (`tmax` shrinks to the closest hit), and the `s` where
-    /// it stops needing cells (its segment's end, then its closest hit).
+    /// The traversed packet's rays in march coordinates, and per ray its speed along s and its
+    /// triangle-test form (indexed by position in the packet).
     march: MarchRays,
     d_s: Vec<f32>,
     tests: Vec<WatertightRay>,
-    tmin: Vec<f32>,
-    tmax: Vec<f32>,
-    s_limit: Vec<f32>,
-    /// Positions (into the packet) of the rays still active.
-    active: Vec<u32>,
+    /// The rays still active, in SIMD lanes.
+    lanes: LaneRays<LANES>,
     mailbox: Mailbox,
+    /// Split keys with chunk indices, for the median split.
+    keys: Vec<(f32, u32)>,
 }
 
 impl CgtTracer {
@@ -167,6 +194,7 @@ impl CgtTracer {
         let res = grid.res.iter().copied().max().unwrap_or(1) as f32;
         let scale = res.max(world * grid.inv_cell_size.max_element());
         CgtTracer {
+            dda: GridDdaTracer::new(grid.clone()),
             grid,
             config,
             scale,
@@ -178,7 +206,7 @@ impl CgtTracer {
     }
 
     /// The cells the packets of `rays` visit, packet by packet in visiting order (the closest-hit
-    /// query's walk, hits written to `hits`).
+    /// query's walk, hits written to `hits`); lone rays (DDA) add none.
     pub fn visited_cells(&self, rays: Rays<'_>, hits: &mut [Hit]) -> Vec<[u32; 3]> {
         let mut cells = vec![];
         self.trace::<NoStats, _, false>(rays, hits, &mut NoStats, &mut cells);
@@ -222,7 +250,8 @@ impl CgtTracer {
     }
 
     /// Traverses the packet `group` along the dominant axis of its first ray if all its rays
-    /// agree in direction along it; otherwise splits it by that direction (module doc).
+    /// agree in direction along it and are coherent; otherwise splits it (module doc). A lone ray
+    /// takes the 3D-DDA.
     fn split<S: Stats, O: CellObserver, const ANY: bool>(
         &self,
         rays: Rays<'_>,
@@ -232,6 +261,10 @@ impl CgtTracer {
         stats: &mut S,
         observer: &mut O,
     ) {
+        if group.len() == 1 {
+            self.trace_alone::<S, ANY>(rays, group, hits, stats);
+            return;
+        }
         let grid_dir = |i: u32| rays.ray(i as usize).dir * self.grid.inv_cell_size;
         let k = dominant_axis(grid_dir(group[0]));
         // 0: +K, 1: −K, 2: zero along K.
@@ -246,51 +279,95 @@ impl CgtTracer {
             }
         };
         let first = class(&group[0]);
-        if group.iter().all(|i| class(i) == first) {
-            let frame = MarchFrame::new(k, first == 1, self.grid.res);
-            let frustum = self.setup(rays, group, &frame, ws);
-            let (slopes, origins) = frustum.spread();
-            if group.len() > 1 && (slopes > MAX_SLOPE_SPREAD || origins > MAX_ORIGIN_SPREAD) {
-                // §4.7: an incoherent packet would drag a wide frustum through the grid.
-                let (front, back) = group.split_at_mut(group.len() / 2);
-                self.split::<S, O, ANY>(rays, front, ws, hits, stats, observer);
-                self.split::<S, O, ANY>(rays, back, ws, hits, stats, observer);
-                return;
+        if !group.iter().all(|i| class(i) == first) {
+            group.sort_unstable_by_key(class);
+            let mut rest: &mut [u32] = group;
+            while !rest.is_empty() {
+                let c = class(&rest[0]);
+                let n = rest.iter().take_while(|i| class(i) == c).count();
+                let (part, tail) = std::mem::take(&mut rest).split_at_mut(n);
+                self.split::<S, O, ANY>(rays, part, ws, hits, stats, observer);
+                rest = tail;
             }
-            let mut packet = Packet::<S, O, ANY> {
-                grid: &self.grid,
-                frame: &frame,
-                frustum: &frustum,
-                config: &self.config,
-                group,
-                ws,
-                hits,
-                stats,
-                observer,
-            };
-            walk(
-                &self.grid,
-                &frame,
-                &frustum,
-                self.config.macrocells,
-                &mut packet,
-            );
             return;
         }
-        group.sort_unstable_by_key(class);
-        let mut rest: &mut [u32] = group;
-        while !rest.is_empty() {
-            let c = class(&rest[0]);
-            let n = rest.iter().take_while(|i| class(i) == c).count();
-            let (part, tail) = std::mem::take(&mut rest).split_at_mut(n);
-            self.split::<S, O, ANY>(rays, part, ws, hits, stats, observer);
-            rest = tail;
+        let frame = MarchFrame::new(k, first == 1, self.grid.res);
+        let frustum = self.march(rays, group, &frame, ws);
+        if let Some(key) = frustum.split_key(MAX_SLOPE_SPREAD, MAX_ORIGIN_SPREAD) {
+            // Halves that would be single rays before they are coherent: the DDA at once.
+            let halvings = frustum.halvings(MAX_SLOPE_SPREAD, MAX_ORIGIN_SPREAD);
+            if (group.len() as u64) < 2u64 << halvings.min(62) {
+                self.trace_alone::<S, ANY>(rays, group, hits, stats);
+                return;
+            }
+            // §4.7: an incoherent packet would drag a wide frustum through the grid. Halve
+            // it at the median of the key, so each half is narrower along the frustum's
+            // widest extent.
+            ws.keys.clear();
+            let m = &ws.march;
+            ws.keys.extend(group.iter().enumerate().map(|(p, &i)| {
+                let v = match key {
+                    SplitKey::SlopeU => m.a[p],
+                    SplitKey::SlopeV => m.b[p],
+                    SplitKey::OriginU => m.o_u[p] + (frustum.s_ref() - m.o_s[p]) * m.a[p],
+                    SplitKey::OriginV => m.o_v[p] + (frustum.s_ref() - m.o_s[p]) * m.b[p],
+                };
+                (v, i)
+            }));
+            let half = group.len() / 2;
+            ws.keys
+                .select_nth_unstable_by(half, |x, y| x.0.total_cmp(&y.0));
+            for (g, &(_, i)) in group.iter_mut().zip(&ws.keys) {
+                *g = i;
+            }
+            let (front, back) = group.split_at_mut(half);
+            self.split::<S, O, ANY>(rays, front, ws, hits, stats, observer);
+            self.split::<S, O, ANY>(rays, back, ws, hits, stats, observer);
+            return;
+        }
+        if S::ENABLED {
+            stats.event(Event::Packets, 1);
+        }
+        self.load_lanes(rays, group, ws);
+        let mut packet = Packet::<S, O, ANY> {
+            grid: &self.grid,
+            frame: &frame,
+            frustum: &frustum,
+            config: &self.config,
+            group,
+            ws,
+            hits,
+            stats,
+            observer,
+        };
+        walk(
+            &self.grid,
+            &frame,
+            &frustum,
+            self.config.macrocells,
+            &mut packet,
+        );
+    }
+
+    /// Each ray of `group` alone, by the 3D-DDA (a packet of one for the counters).
+    fn trace_alone<S: Stats, const ANY: bool>(
+        &self,
+        rays: Rays<'_>,
+        group: &[u32],
+        hits: &mut [Hit],
+        stats: &mut S,
+    ) {
+        for &i in group {
+            if S::ENABLED {
+                stats.event(Event::Packets, 1);
+            }
+            hits[i as usize] = self.dda.walk::<S, ANY>(&rays.ray(i as usize), stats);
         }
     }
 
-    /// Fills the workspace for the packet `group`, whose rays all travel towards +s in `frame`,
-    /// and returns its frustum.
-    fn setup(
+    /// Fills the workspace's march coordinates for the packet `group`, whose rays all travel
+    /// towards +s in `frame`, and returns its frustum.
+    fn march(
         &self,
         rays: Rays<'_>,
         group: &[u32],
@@ -302,9 +379,6 @@ impl CgtTracer {
         let n_box = Vec3::new(grid.res[0] as f32, grid.res[1] as f32, grid.res[2] as f32);
         ws.march.clear();
         ws.d_s.clear();
-        ws.tests.clear();
-        ws.tmin.clear();
-        ws.tmax.clear();
         let first_origin = rays.ray(group[0] as usize).origin;
         let mut common_origin = true;
         for &i in group {
@@ -328,17 +402,24 @@ impl CgtTracer {
             m.s_start.push(o[0] + t0.max(ray.tmin) * d[0]);
             m.s_end.push(o[0] + t1.max(t0) * d[0]);
             ws.d_s.push(d[0]);
-            ws.tests.push(WatertightRay::new(ray.origin, ray.dir));
-            ws.tmin.push(ray.tmin);
-            ws.tmax.push(ray.tmax);
         }
         let apex = common_origin.then(|| frame.point(to_grid(first_origin)));
-        ws.s_limit.clear();
-        ws.s_limit.extend_from_slice(&ws.march.s_end);
-        ws.active.clear();
-        ws.active.extend(0..group.len() as u32);
-        ws.mailbox.clear();
         Frustum::new(&ws.march, apex, self.scale)
+    }
+
+    /// Loads the rays of the packet `group` (marched by `march`) into the lanes, all active, and
+    /// empties the mailbox.
+    fn load_lanes(&self, rays: Rays<'_>, group: &[u32], ws: &mut Workspace) {
+        ws.tests.clear();
+        ws.lanes.clear();
+        for (p, &i) in group.iter().enumerate() {
+            let ray = rays.ray(i as usize);
+            let test = WatertightRay::new(ray.origin, ray.dir);
+            ws.lanes
+                .push(p as u32, &test, ray.tmin, ray.tmax, ws.march.s_end[p]);
+            ws.tests.push(test);
+        }
+        ws.mailbox.clear();
     }
 }
 
@@ -383,13 +464,18 @@ impl<S: Stats, O: CellObserver, const ANY: bool> SliceVisitor for Packet<'_, S, 
         // A ray is done when the slab about to be entered starts past its hit or its end
         // (§2.3 early termination, per ray); the margin covers rounding of s.
         let start = slice as f32 - self.frustum.eps();
-        let s_limit = &self.ws.s_limit;
-        self.ws.active.retain(|&l| s_limit[l as usize] >= start);
-        !self.ws.active.is_empty()
+        self.ws.lanes.retain(|s_limit| s_limit >= start);
+        !self.ws.lanes.is_empty()
+    }
+
+    fn count(&mut self, event: Event, n: u64) {
+        if S::ENABLED {
+            self.stats.event(event, n);
+        }
     }
 
     fn cell(&mut self, index: usize, cell: [u32; 3]) {
-        if self.ws.active.is_empty() {
+        if self.ws.lanes.is_empty() {
             return; // every ray found its occluder earlier in this slice
         }
         if S::ENABLED {
@@ -399,41 +485,50 @@ impl<S: Stats, O: CellObserver, const ANY: bool> SliceVisitor for Packet<'_, S, 
         let grid = self.grid;
         let ids =
             &grid.cell_tris[grid.cell_start[index] as usize..grid.cell_start[index + 1] as usize];
+        if S::ENABLED && !ids.is_empty() {
+            self.stats.event(Event::LeavesVisited, 1);
+            self.stats
+                .event(Event::LeafActiveRays, self.ws.lanes.len() as u64);
+        }
         for &id in ids {
             if self.config.mailbox && !self.ws.mailbox.insert(id) {
+                if S::ENABLED {
+                    self.stats.event(Event::MailboxHits, 1);
+                }
                 continue;
             }
             // Culling costs about a 4-ray triangle test (§2.3): it pays only for more rays.
             if self.config.cull
-                && self.ws.active.len() > CULL_MIN_RAYS
+                && self.ws.lanes.len() > CULL_MIN_RAYS
                 && self.frustum.culls(&self.march_vertices(id))
             {
+                if S::ENABLED {
+                    self.stats.event(Event::TrianglesCulled, 1);
+                }
                 continue;
             }
             let tri = &grid.triangles[id as usize];
             let ws = &mut *self.ws;
-            let mut any_done = false;
-            for &l in &ws.active {
-                let l = l as usize;
-                if S::ENABLED {
+            if S::ENABLED {
+                for _ in 0..ws.lanes.len() {
                     self.stats.triangle_test(0);
                 }
-                if let Some((t, u, v)) = ws.tests[l].intersect(tri, ws.tmin[l], ws.tmax[l]) {
-                    self.hits[self.group[l] as usize] = Hit { t, prim: id, u, v };
-                    ws.tmax[l] = t;
-                    if ANY {
-                        ws.s_limit[l] = f32::NEG_INFINITY;
-                        any_done = true;
-                    } else {
-                        ws.s_limit[l] = ws.s_limit[l].min(ws.march.o_s[l] + t * ws.d_s[l]);
-                    }
-                }
             }
+            let (hits, group, march, d_s) = (&mut *self.hits, self.group, &ws.march, &ws.d_s);
+            let mut any_done = false;
+            ws.lanes.intersect(tri, &ws.tests, |lanes, slot, t, u, v| {
+                let p = lanes.ray[slot] as usize;
+                hits[group[p] as usize] = Hit { t, prim: id, u, v };
+                if ANY {
+                    lanes.s_limit[slot] = f32::NEG_INFINITY;
+                    any_done = true;
+                } else {
+                    lanes.s_limit[slot] = lanes.s_limit[slot].min(march.o_s[p] + t * d_s[p]);
+                }
+            });
             if any_done {
-                let s_limit = &ws.s_limit;
-                ws.active
-                    .retain(|&l| s_limit[l as usize] != f32::NEG_INFINITY);
-                if ws.active.is_empty() {
+                ws.lanes.retain(|s_limit| s_limit != f32::NEG_INFINITY);
+                if ws.lanes.is_empty() {
                     return;
                 }
             }

@@ -2,8 +2,14 @@
 //! slice along its major axis, and in each slice every cell its overlap box covers is handed to
 //! the packet. Macrocells (§2.4) skip whole layers of M slices whose overlapped macrocells are
 //! all empty, and within a slice skip the M×M blocks of cells of empty macrocells.
+//!
+//! Events told to the visitor: `SlicesStepped` per slice the walk enters and does not skip with
+//! its macrocell layer; `MacrocellsSkipped` per empty macrocell the frustum overlaps in
+//! a skipped layer, plus per empty macrocell block passed over in a visited slice (so a macrocell
+//! can count once for each of its slices the packet visits).
 
 use crate::accel::Grid;
+use crate::stats::Event;
 
 use super::frustum::{cell_range, Frustum, MarchFrame};
 
@@ -13,6 +19,8 @@ pub trait SliceVisitor {
     fn begin_slice(&mut self, slice: u32) -> bool;
     /// Cell `index` of the grid (coordinates `cell`) lies in the frustum.
     fn cell(&mut self, index: usize, cell: [u32; 3]);
+    /// `n` occurrences of a walk event (see the module doc).
+    fn count(&mut self, event: Event, n: u64);
 }
 
 /// Walks `frustum` through `grid` front to back in `frame`; `macrocells` enables §2.4.
@@ -40,15 +48,21 @@ pub fn walk(
             // is empty, the packet skips the whole layer.
             let (_, layer_end) = frame.macro_layer(slice, m);
             checked_to = layer_end + 1;
-            let occupied = frustum
+            let cells = frustum
                 .overlap(slice as f32, (layer_end + 1) as f32)
-                .and_then(|b| cell_range(b, res_u, res_v))
-                .is_some_and(|cells| any_macro_occupied(grid, frame, slice, cells, m));
+                .and_then(|b| cell_range(b, res_u, res_v));
+            let occupied =
+                cells.is_some_and(|cells| any_macro_occupied(grid, frame, slice, cells, m));
             if !occupied {
+                if let Some([i0, i1, j0, j1]) = cells {
+                    let blocks = (i1 / m - i0 / m + 1) * (j1 / m - j0 / m + 1);
+                    visitor.count(Event::MacrocellsSkipped, blocks as u64);
+                }
                 slice = layer_end + 1;
                 continue;
             }
         }
+        visitor.count(Event::SlicesStepped, 1);
         if let Some(cells) = frustum
             .overlap(slice as f32, (slice + 1) as f32)
             .and_then(|b| cell_range(b, res_u, res_v))
@@ -92,6 +106,7 @@ fn visit_by_macro_block(
     for mj in j0 / m..=j1 / m {
         for mi in i0 / m..=i1 / m {
             if macro_empty(grid, frame, slice, mi, mj, m) {
+                visitor.count(Event::MacrocellsSkipped, 1);
                 continue;
             }
             let cells = [
