@@ -11,7 +11,7 @@ use std::sync::Arc;
 
 use crate::error::Result;
 use crate::scene::Mesh;
-use crate::tracers::embree::{Device, EmbreeConfig, EmbreeScene};
+use crate::tracers::embree::{BuildQuality, Device, EmbreeConfig, EmbreeScene};
 use crate::tracers::Params;
 
 pub use self::obvhs::{ObvhsBvh, ObvhsQuality};
@@ -71,6 +71,28 @@ impl AccelKind {
                 GridConfig::from_params(params)?,
             ))),
         })
+    }
+}
+
+impl AccelKind {
+    /// The structure for a new frame's `mesh` (same triangle count and order as the previous
+    /// frame's): an Embree scene built with quality `refit` and handed back unshared as `previous`
+    /// is refitted in place (`EmbreeScene::refit`: the tree keeps its topology, its boxes move);
+    /// every other structure is built from scratch, as the grid is (Wald et al. 2006, §3).
+    pub fn rebuild(self, previous: Option<Accel>, mesh: &Mesh, params: &Params) -> Result<Accel> {
+        if let Some(Accel::Embree(mut scene)) = previous.filter(|_| self.refits(params)) {
+            if let Some(unshared) = Arc::get_mut(&mut scene) {
+                unshared.refit(mesh)?;
+                return Ok(Accel::Embree(scene));
+            }
+        }
+        self.build(mesh, params)
+    }
+
+    /// Whether `rebuild` updates this structure in place rather than building it anew.
+    pub fn refits(self, params: &Params) -> bool {
+        self == AccelKind::Embree
+            && EmbreeConfig::from_params(params).is_ok_and(|c| c.quality == BuildQuality::Refit)
     }
 }
 

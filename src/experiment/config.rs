@@ -16,7 +16,22 @@
 //! repeats = 3
 //! seed = 1
 //! output = "results"                   # relative to the working directory
+//!
+//! [[tables]]                           # optional: paper-vs-ours tables → tables.md
+//! title = "..."                        # schema: src/experiment/tables.rs
+//! rows = "scene"
+//! columns = [{ label = "ours", metric = "mrays_per_s" }, { label = "paper", paper = { room = 1.5 } }]
+//!
+//! [[figures]]                          # optional: line plots → <file>.png
+//! file = "sweep.png"                   # schema: src/experiment/figures.rs
+//! title = "..."
+//! x = "param:lambda"
+//! y = "seconds_min"
 //! ```
+//!
+//! Tables and figures select runs.csv rows by field (a column or `param:<key>`) and reduce them
+//! over the frames of a run (see `selection`): they are computed from the run's own runs.csv, so
+//! the same declarations serve every paper's experiment file.
 
 use std::collections::BTreeMap;
 use std::fmt;
@@ -32,6 +47,9 @@ use crate::accel::AccelKind;
 use crate::error::{Error, Result};
 use crate::geometry::RayKind;
 use crate::tracers::{Params, TracerInfo};
+
+use super::figures::FigureSpec;
+use super::tables::TableSpec;
 
 /// A parsed, checked experiment with its tracer grid expanded.
 #[derive(Clone, Debug)]
@@ -53,6 +71,10 @@ pub struct Experiment {
     pub seed: u64,
     /// Results go to `<output>/<name>/<run-id>/`.
     pub output: PathBuf,
+    /// Paper-vs-ours tables written to tables.md.
+    pub tables: Vec<TableSpec>,
+    /// Line plots drawn from runs.csv.
+    pub figures: Vec<FigureSpec>,
 }
 
 /// A scene by name, with the size for generated scenes (`None`: the generator's default).
@@ -141,6 +163,10 @@ struct ExperimentFile {
     seed: u64,
     #[serde(default = "default_output")]
     output: PathBuf,
+    #[serde(default)]
+    tables: Vec<Spanned<TableSpec>>,
+    #[serde(default)]
+    figures: Vec<Spanned<FigureSpec>>,
 }
 
 fn one() -> Spanned<usize> {
@@ -367,6 +393,18 @@ impl Experiment {
         }
 
         let instances = expand_tracers(&src, &file)?;
+        for table in &file.tables {
+            table
+                .get_ref()
+                .check()
+                .map_err(|e| src.usage_error(&table.span(), e))?;
+        }
+        for figure in &file.figures {
+            figure
+                .get_ref()
+                .check()
+                .map_err(|e| src.usage_error(&figure.span(), e))?;
+        }
         Ok(Experiment {
             path: path.to_path_buf(),
             name: file.name.into_inner(),
@@ -382,6 +420,8 @@ impl Experiment {
             repeats,
             seed: file.seed,
             output: file.output,
+            tables: file.tables.into_iter().map(Spanned::into_inner).collect(),
+            figures: file.figures.into_iter().map(Spanned::into_inner).collect(),
         })
     }
 }

@@ -1,8 +1,10 @@
 //! Experiments: a TOML file of scenes × tracers × parameter grid × ray kinds × frames × threads,
 //! turned into a plan, run, and written to `results/<experiment>/<run-id>/` as runs.csv,
-//! histograms.csv, PNG plots and meta.json — all at once or not at all.
+//! histograms.csv, PNG plots and meta.json — all at once or not at all — plus the experiment's own
+//! paper-vs-ours tables (tables.md, see `tables`) and line figures (see `figures`).
 
 pub mod config;
+pub mod figures;
 pub mod measure;
 pub mod meta;
 pub mod output;
@@ -10,6 +12,8 @@ pub mod plan;
 pub mod plots;
 pub mod results_dir;
 pub mod runner;
+pub mod selection;
+pub mod tables;
 pub mod utc;
 
 use std::path::{Path, PathBuf};
@@ -105,6 +109,16 @@ pub fn run(
     output::write_runs(&dir.join(output::RUNS_CSV), &plan, &cases)?;
     output::write_histograms(&dir.join(output::HISTOGRAMS_CSV), &plan, &cases)?;
     plots::write_plots(dir, &plan, &cases)?;
+    if !exp.tables.is_empty() || !exp.figures.is_empty() {
+        let rows = selection::read_rows(&dir.join(output::RUNS_CSV))?;
+        if !exp.tables.is_empty() {
+            let path = dir.join(tables::TABLES_MD);
+            tables::write_tables(&path, &exp.name, &exp.tables, &rows)?;
+        }
+        for figure in &exp.figures {
+            figure.draw(dir, &rows)?;
+        }
+    }
     let meta = meta::gather(
         &plan,
         &exp.threads,
