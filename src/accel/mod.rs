@@ -115,3 +115,49 @@ impl Accel {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use glam::Vec3;
+
+    use super::*;
+    use crate::geometry::Triangle;
+
+    fn mesh(z: f32) -> Mesh {
+        let mut mesh = Mesh::default();
+        mesh.push(
+            Triangle::new(Vec3::ZERO, Vec3::X, Vec3::new(0.0, 1.0, z)),
+            0,
+        );
+        mesh
+    }
+
+    #[test]
+    fn refit_embree_scenes_are_updated_in_place_others_rebuilt() {
+        let refit = Params::new().with("quality", "refit");
+        let first = AccelKind::Embree.build(&mesh(0.0), &refit).unwrap();
+        let Accel::Embree(scene) = &first else {
+            panic!("an Embree scene")
+        };
+        let before = Arc::as_ptr(scene);
+        let next = AccelKind::Embree
+            .rebuild(Some(first), &mesh(1.0), &refit)
+            .unwrap();
+        let Accel::Embree(scene) = &next else {
+            panic!("an Embree scene")
+        };
+        assert_eq!(Arc::as_ptr(scene), before);
+        assert!(AccelKind::Embree.refits(&refit));
+        assert!(!AccelKind::Embree.refits(&Params::new().with("quality", "low")));
+        assert!(!AccelKind::Grid.refits(&Params::new()));
+        // A scene still shared with a tracer cannot be refitted: it is built anew.
+        let shared = next.clone();
+        let rebuilt = AccelKind::Embree
+            .rebuild(Some(next), &mesh(2.0), &refit)
+            .unwrap();
+        let (Accel::Embree(a), Accel::Embree(b)) = (&shared, &rebuilt) else {
+            panic!("Embree scenes")
+        };
+        assert!(!Arc::ptr_eq(a, b));
+    }
+}

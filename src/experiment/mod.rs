@@ -406,6 +406,135 @@ mod tests {
         assert_eq!(plan.measurements(), 192);
     }
 
+    const TABLES_TEXT: &str = r#"name = "t"
+scenes = ["lit", "moving"]
+tracers = ["reference", { name = "embree16", params = { quality = ["low", "refit"] } }]
+rays = ["primary"]
+resolution = { width = 32, height = 32 }
+frames = 3
+warmup = 0
+repeats = 1
+
+[[tables]]
+title = "Hits per frame"
+caption = "Primary rays, 32×32."
+row_header = "scene"
+where = { ray_kind = "primary", threads = 1, tracer = "reference" }
+metric = "hits"
+decimals = 1
+rows = "scene"
+columns = [
+  { label = "ours" },
+  { label = "paper", paper = { lit = 900, moving = "n/a" } },
+  { label = "best", frames = "max" },
+  { label = "ours/best", ratio = ["ours", "best"], decimals = 3 },
+  { label = "both", sum = ["ours", "best"], decimals = 0 },
+]
+
+[[tables]]
+title = "Embree rebuilt or refitted"
+where = { scene = "moving", tracer = "embree16" }
+rows = [{ label = "low", where = { "param:quality" = "low" } }, { label = "refit", where = { "param:quality" = "refit" } }, { label = "high", where = { "param:quality" = "high" } }]
+columns = [{ label = "hits", metric = "hits", decimals = 1 }, { label = "last frame", metric = "hits", frames = "max", where = { frame = 2 }, decimals = 0 }]
+
+[[figures]]
+file = "hits.png"
+title = "hits per frame"
+where = { tracer = "reference" }
+x = "frame"
+y = "hits"
+series = "scene"
+"#;
+
+    #[test]
+    fn tables_and_figures_come_from_runs_csv_and_refit_embree_per_frame() {
+        let out = scratch("tables");
+        let mut exp = Experiment::parse(Path::new("t.toml"), TABLES_TEXT).unwrap();
+        exp.output = out.clone();
+        let dir = run(
+            &exp,
+            TABLES_TEXT,
+            &RunOverrides::default(),
+            &plan::tests::load_quads,
+        )
+        .unwrap();
+        // The moving quad's primary hits per frame are 900, 576, 400 (see expected_primary_hits):
+        // mean 625.3, best 900, ratio 0.695. Refitted and rebuilt Embree scenes hit the same.
+        let tables = fs::read_to_string(dir.join(tables::TABLES_MD)).unwrap();
+        assert_eq!(
+            tables,
+            "# t: paper vs ours\n\n\
+             ## Hits per frame\n\n\
+             Primary rays, 32×32.\n\n\
+             | scene | ours | paper | best | ours/best | both |\n\
+             |---|---:|---:|---:|---:|---:|\n\
+             | lit | 900.0 | 900 | 900.0 | 1.000 | 1800 |\n\
+             | moving | 625.3 | n/a | 900.0 | 0.695 | 1525 |\n\n\
+             ## Embree rebuilt or refitted\n\n\
+             |  | hits | last frame |\n\
+             |---|---:|---:|\n\
+             | low | 625.3 | 400 |\n\
+             | refit | 625.3 | 400 |\n\
+             | high | – | – |\n\n"
+        );
+        let rows = selection::read_rows(&dir.join(output::RUNS_CSV)).unwrap();
+        let lines = exp.figures[0].lines(&rows);
+        assert_eq!(
+            lines,
+            [
+                (
+                    "lit".to_string(),
+                    vec![(0.0, 900.0), (1.0, 900.0), (2.0, 900.0)]
+                ),
+                (
+                    "moving".to_string(),
+                    vec![(0.0, 900.0), (1.0, 576.0), (2.0, 400.0)]
+                )
+            ]
+        );
+        assert!(dir.join("hits.png").is_file());
+        // Every frame of the moving quad builds (or refits) each structure and reports its
+        // throughput; the static quad reuses frame 0's.
+        for r in &rows {
+            let reused = r["scene"] == "lit" && r["frame"] != "0";
+            assert_eq!(r["build"], if reused { "reused" } else { "built" }, "{r:?}");
+            let build: f64 = r["build_seconds"].parse().unwrap();
+            let trace: f64 = r["seconds_min"].parse().unwrap();
+            let total: f64 = r["build_plus_trace_seconds"].parse().unwrap();
+            assert!((total - (build + trace)).abs() < 1e-12, "{r:?}");
+            match reused {
+                true => assert_eq!(r["build_mtris_per_s"], ""),
+                false => {
+                    let rate: f64 = r["build_mtris_per_s"].parse().unwrap();
+                    assert!((rate - 2.0 / build / 1e6).abs() <= 1e-9 * rate, "{r:?}");
+                }
+            }
+        }
+        fs::remove_dir_all(&out).unwrap();
+    }
+
+    #[test]
+    fn bad_tables_and_figures_are_usage_errors_with_the_line() {
+        let text = format!(
+            "{}\n[[tables]]\ntitle = \"x\"\nrows = \"scnee\"\ncolumns = [{{ label = \"a\", metric = \"hits\" }}]\n",
+            TEXT
+        );
+        let err = Experiment::parse(Path::new("t.toml"), &text).unwrap_err();
+        assert!(
+            matches!(&err, Error::Usage(m) if m.starts_with("t.toml:11: table \"x\" rows: unknown field \"scnee\"")),
+            "{err}"
+        );
+        let text = format!(
+            "{}\n[[figures]]\nfile = \"../x.png\"\ntitle = \"x\"\nx = \"frame\"\ny = \"hits\"\n",
+            TEXT
+        );
+        let err = Experiment::parse(Path::new("t.toml"), &text).unwrap_err();
+        assert!(
+            err.to_string().contains("plain name ending in .png"),
+            "{err}"
+        );
+    }
+
     /// Nothing but the (empty) experiment directory may remain.
     fn assert_no_results(out: &Path) {
         let left: Vec<_> = fs::read_dir(out.join("t"))
