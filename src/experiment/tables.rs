@@ -19,6 +19,8 @@
 //!   { label = "n/n paper", paper = { toys = 14.0, hand = "12.5" } },  # keyed by row label
 //!   { label = "ratio", ratio = ["n/n", "y/y"] },     # quotient of two columns of the row
 //!   { label = "total", sum = ["build", "trace"] },   # sum of columns of the row
+//!   { label = "best", min = ["low", "refit"] },      # smallest of columns of the row
+//!   { label = "fps", inverse = "total", scale = 1000 },  # scale / column (ms → frames/s)
 //! ]
 //! ```
 //!
@@ -86,6 +88,15 @@ pub struct ColumnSpec {
     pub paper: Option<BTreeMap<String, toml::Value>>,
     pub ratio: Option<[String; 2]>,
     pub sum: Option<Vec<String>>,
+    pub min: Option<Vec<String>>,
+    pub inverse: Option<String>,
+}
+
+impl ColumnSpec {
+    /// Computed from other columns of the row rather than measured.
+    fn derived(&self) -> bool {
+        self.ratio.is_some() || self.sum.is_some() || self.min.is_some() || self.inverse.is_some()
+    }
 }
 
 impl TableSpec {
@@ -107,13 +118,25 @@ impl TableSpec {
         for c in &self.columns {
             let what = format!("{what} column {:?}", c.label);
             c.filter.check(&what)?;
-            let kinds = [c.paper.is_some(), c.ratio.is_some(), c.sum.is_some()];
+            let kinds = [
+                c.paper.is_some(),
+                c.ratio.is_some(),
+                c.sum.is_some(),
+                c.min.is_some(),
+                c.inverse.is_some(),
+            ];
             if kinds.iter().filter(|&&k| k).count() > 1 {
                 return Err(Error::usage(format!(
-                    "{what}: give at most one of paper, ratio, sum"
+                    "{what}: give at most one of paper, ratio, sum, min, inverse"
                 )));
             }
-            let refs = c.ratio.iter().flatten().chain(c.sum.iter().flatten());
+            let refs = c
+                .ratio
+                .iter()
+                .flatten()
+                .chain(c.sum.iter().flatten())
+                .chain(c.min.iter().flatten())
+                .chain(&c.inverse);
             for r in refs {
                 if !labels.contains(&r.as_str()) || *r == c.label {
                     return Err(Error::usage(format!(
@@ -121,7 +144,7 @@ impl TableSpec {
                     )));
                 }
             }
-            if kinds == [false; 3] {
+            if kinds == [false; 5] {
                 match c.metric.as_ref().or(self.metric.as_ref()) {
                     Some(m) => check_field(m, &what)?,
                     None => return Err(Error::usage(format!("{what}: no metric"))),
@@ -181,7 +204,7 @@ impl TableSpec {
             .columns
             .iter()
             .map(|c| {
-                if c.paper.is_some() || c.ratio.is_some() || c.sum.is_some() {
+                if c.paper.is_some() || c.derived() {
                     return None;
                 }
                 let measure = Measure {
@@ -198,10 +221,16 @@ impl TableSpec {
         for _ in 0..self.columns.len() {
             for (i, c) in self.columns.iter().enumerate() {
                 let get = |l: &String| index(l).and_then(|j| values[j]);
-                let derived = match (&c.ratio, &c.sum) {
-                    (Some([a, b]), _) => get(a).zip(get(b)).map(|(a, b)| a / b),
-                    (None, Some(parts)) => parts.iter().map(get).sum(),
-                    (None, None) => continue,
+                let derived = if let Some([a, b]) = &c.ratio {
+                    get(a).zip(get(b)).map(|(a, b)| a / b)
+                } else if let Some(parts) = &c.sum {
+                    parts.iter().map(get).sum()
+                } else if let Some(parts) = &c.min {
+                    parts.iter().filter_map(get).reduce(f64::min)
+                } else if let Some(of) = &c.inverse {
+                    get(of).map(|v| c.scale.unwrap_or(1.0) / v)
+                } else {
+                    continue;
                 };
                 values[i] = derived;
             }
