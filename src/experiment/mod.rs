@@ -537,6 +537,44 @@ series = "scene"
         );
     }
 
+    #[test]
+    fn the_wald06_experiments_parse_with_their_tables_and_figures() {
+        let load = |file: &str| {
+            Experiment::load(
+                &Path::new(env!("CARGO_MANIFEST_DIR"))
+                    .join("experiments")
+                    .join(file),
+            )
+            .unwrap()
+        };
+        let exp = load("wald06.toml");
+        // 4 MB/FC combinations + 8 λ values + grid-dda + reference.
+        assert_eq!(exp.instances.len(), 14);
+        assert_eq!((exp.tables.len(), exp.figures.len()), (4, 1));
+        let exp = load("wald06-packets.toml");
+        assert_eq!(exp.instances.len(), 6);
+        assert_eq!(exp.scenes.len(), 10);
+        assert_eq!((exp.tables.len(), exp.figures.len()), (2, 3));
+        let exp = load("wald06-animated.toml");
+        let labels: Vec<String> = exp.instances.iter().map(|i| i.to_string()).collect();
+        assert_eq!(
+            labels,
+            [
+                "cgt[packet=4]",
+                "cgt[packet=8]",
+                "embree16[quality=low]",
+                "embree16[quality=refit]",
+                "obvhs",
+                "reference"
+            ]
+        );
+        assert_eq!(
+            (exp.width, exp.height, exp.threads.as_slice()),
+            (1024, 1024, &[1, 2][..])
+        );
+        assert_eq!(exp.tables.len(), 4);
+    }
+
     /// Nothing but the (empty) experiment directory may remain.
     fn assert_no_results(out: &Path) {
         let left: Vec<_> = fs::read_dir(out.join("t"))
