@@ -40,8 +40,6 @@ const SEED: u64 = 0x7045;
 pub const TOY_TRIANGLES: usize = 960 + 440 + 384 + 216 + 32 + 48;
 /// Floor half-width per √toy: about 3.4 toy heights of floor per toy.
 const SPREAD: f32 = 3.0;
-/// Highest point of a toy standing on the floor (head top), before hopping.
-const TOY_HEIGHT: f32 = 1.45;
 /// How high a toy's hop lifts it.
 const HOP: f32 = 1.2;
 /// Farthest any vertex gets from its toy's vertical axis (the arms' outer corners).
@@ -329,6 +327,9 @@ pub fn build(toys: u32) -> Scene {
 mod tests {
     use super::*;
     use crate::geometry::Aabb;
+
+    /// Highest point of a toy standing on the floor (head top, 1.23 + 0.22), before hopping.
+    const TOY_HEIGHT: f32 = 1.45;
 
     #[test]
     fn count_follows_the_formula_at_every_time() {
