@@ -573,6 +573,14 @@ series = "scene"
             (1024, 1024, &[1, 2][..])
         );
         assert_eq!(exp.tables.len(), 4);
+        let bench = load("wald06-benchmark.toml");
+        assert_eq!(exp.scenes, bench.scenes);
+        assert_eq!(bench.instances.len(), 4);
+        assert_eq!(
+            (bench.width, bench.frames, bench.threads.as_slice()),
+            (1024, 2, &[1, 2][..])
+        );
+        assert_eq!(bench.tables.len(), 4);
     }
 
     /// Nothing but the (empty) experiment directory may remain.
