@@ -204,12 +204,15 @@ impl FigureSpec {
             .x_label_area_size(45)
             .y_label_area_size(75)
             .build_cartesian_2d(xs, ys)?;
+        // Three significant digits, no trailing zeros.
         let tick = |v: &f64, log: bool| {
             let v = if log { 10f64.powf(*v) } else { *v };
-            format!("{v:.3}")
-                .trim_end_matches('0')
-                .trim_end_matches('.')
-                .to_string()
+            let digits = (2 - v.abs().max(1e-12).log10().floor() as i32).max(0) as usize;
+            let text = format!("{v:.digits$}");
+            match text.contains('.') {
+                true => text.trim_end_matches('0').trim_end_matches('.').to_string(),
+                false => text,
+            }
         };
         chart
             .configure_mesh()
