@@ -11,7 +11,7 @@ use std::sync::Arc;
 
 use crate::error::{Error, Result};
 use crate::scene::Mesh;
-use crate::tracers::embree::{Device, EmbreeConfig, EmbreeScene};
+use crate::tracers::embree::{BuildQuality, Device, EmbreeConfig, EmbreeScene};
 use crate::tracers::Params;
 
 pub use self::obvhs::{ObvhsBvh, ObvhsQuality};
@@ -104,6 +104,26 @@ impl AccelKind {
             ))),
         }
     }
+
+    /// The structure for a new frame's `mesh` (same triangle count and order as the previous
+    /// frame's): an Embree scene built with quality `refit` and handed back unshared as `previous`
+    /// is refitted in place (`EmbreeScene::refit`: the tree keeps its topology, its boxes move);
+    /// every other structure is built from scratch, as the grid is (Wald et al. 2006, §3).
+    pub fn rebuild(self, previous: Option<Accel>, mesh: &Mesh, params: &Params) -> Result<Accel> {
+        if let Some(Accel::Embree(mut scene)) = previous.filter(|_| self.refits(params)) {
+            if let Some(unshared) = Arc::get_mut(&mut scene) {
+                unshared.refit(mesh)?;
+                return Ok(Accel::Embree(scene));
+            }
+        }
+        self.build(mesh, params)
+    }
+
+    /// Whether `rebuild` updates this structure in place rather than building it anew.
+    pub fn refits(self, params: &Params) -> bool {
+        self == AccelKind::Embree
+            && EmbreeConfig::from_params(params).is_ok_and(|c| c.quality == BuildQuality::Refit)
+    }
 }
 
 /// A built structure, shared by every tracer that traverses it.
@@ -123,5 +143,51 @@ impl Accel {
             Accel::Obvhs(b) => b.build_seconds,
             Accel::Grid(g) => g.build_seconds,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::Vec3;
+
+    use super::*;
+    use crate::geometry::Triangle;
+
+    fn mesh(z: f32) -> Mesh {
+        let mut mesh = Mesh::default();
+        mesh.push(
+            Triangle::new(Vec3::ZERO, Vec3::X, Vec3::new(0.0, 1.0, z)),
+            0,
+        );
+        mesh
+    }
+
+    #[test]
+    fn refit_embree_scenes_are_updated_in_place_others_rebuilt() {
+        let refit = Params::new().with("quality", "refit");
+        let first = AccelKind::Embree.build(&mesh(0.0), &refit).unwrap();
+        let Accel::Embree(scene) = &first else {
+            panic!("an Embree scene")
+        };
+        let before = Arc::as_ptr(scene);
+        let next = AccelKind::Embree
+            .rebuild(Some(first), &mesh(1.0), &refit)
+            .unwrap();
+        let Accel::Embree(scene) = &next else {
+            panic!("an Embree scene")
+        };
+        assert_eq!(Arc::as_ptr(scene), before);
+        assert!(AccelKind::Embree.refits(&refit));
+        assert!(!AccelKind::Embree.refits(&Params::new().with("quality", "low")));
+        assert!(!AccelKind::Grid.refits(&Params::new()));
+        // A scene still shared with a tracer cannot be refitted: it is built anew.
+        let shared = next.clone();
+        let rebuilt = AccelKind::Embree
+            .rebuild(Some(next), &mesh(2.0), &refit)
+            .unwrap();
+        let (Accel::Embree(a), Accel::Embree(b)) = (&shared, &rebuilt) else {
+            panic!("Embree scenes")
+        };
+        assert!(!Arc::ptr_eq(a, b));
     }
 }

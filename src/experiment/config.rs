@@ -32,6 +32,17 @@
 //! repeats = 3
 //! seed = 1
 //! output = "results"                   # relative to the working directory
+//!
+//! [[tables]]                           # optional: paper-vs-ours tables → tables.md
+//! title = "..."                        # schema: src/experiment/tables.rs
+//! rows = "scene"
+//! columns = [{ label = "ours", metric = "mrays_per_s" }, { label = "paper", paper = { room = 1.5 } }]
+//!
+//! [[figures]]                          # optional: line plots → <file>.png
+//! file = "sweep.png"                   # schema: src/experiment/figures.rs
+//! title = "..."
+//! x = "param:lambda"
+//! y = "seconds_min"
 //! ```
 //!
 //! runs.csv gets one row per (tracer instance, ray kind, thread count) for ray batches, and for
@@ -39,6 +50,10 @@
 //! or blind for blind assembly's mixed batches) and bounce `depth` (camera rays 0) — plus one
 //! `ray_kind = frame` row for the whole frame (all rays; time includes shading and assembly). The
 //! `render` column holds the combination (`assembly=..;materials=..;max_depth=..;...`).
+//!
+//! Tables and figures select runs.csv rows by field (a column or `param:<key>`) and reduce them
+//! over the frames of a run (see `selection`): they are computed from the run's own runs.csv, so
+//! the same declarations serve every paper's experiment file.
 
 use std::collections::BTreeMap;
 use std::fmt;
@@ -57,6 +72,9 @@ use crate::render::assembly::Assembly;
 use crate::render::whitted::{WhittedSettings, DEFAULT_PRUNING_THRESHOLD};
 use crate::scene::scene_file::Preset;
 use crate::tracers::{Params, TracerInfo};
+
+use super::figures::FigureSpec;
+use super::tables::TableSpec;
 
 /// A parsed, checked experiment with its tracer grid expanded.
 #[derive(Clone, Debug)]
@@ -80,6 +98,10 @@ pub struct Experiment {
     pub seed: u64,
     /// Results go to `<output>/<name>/<run-id>/`.
     pub output: PathBuf,
+    /// Paper-vs-ours tables written to tables.md.
+    pub tables: Vec<TableSpec>,
+    /// Line plots drawn from runs.csv.
+    pub figures: Vec<FigureSpec>,
 }
 
 /// A scene by name, with the size for generated scenes (`None`: the generator's default).
@@ -250,6 +272,10 @@ struct ExperimentFile {
     seed: u64,
     #[serde(default = "default_output")]
     output: PathBuf,
+    #[serde(default)]
+    tables: Vec<Spanned<TableSpec>>,
+    #[serde(default)]
+    figures: Vec<Spanned<FigureSpec>>,
 }
 
 fn one() -> Spanned<usize> {
@@ -483,6 +509,18 @@ impl Experiment {
         }
 
         let instances = expand_tracers(&src, &file)?;
+        for table in &file.tables {
+            table
+                .get_ref()
+                .check()
+                .map_err(|e| src.usage_error(&table.span(), e))?;
+        }
+        for figure in &file.figures {
+            figure
+                .get_ref()
+                .check()
+                .map_err(|e| src.usage_error(&figure.span(), e))?;
+        }
         Ok(Experiment {
             path: path.to_path_buf(),
             name: file.name.into_inner(),
@@ -499,6 +537,8 @@ impl Experiment {
             repeats,
             seed: file.seed,
             output: file.output,
+            tables: file.tables.into_iter().map(Spanned::into_inner).collect(),
+            figures: file.figures.into_iter().map(Spanned::into_inner).collect(),
         })
     }
 }

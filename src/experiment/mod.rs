@@ -1,9 +1,11 @@
 //! Experiments: a TOML file of scenes × tracers × parameter grid × ray kinds × frames × threads,
 //! turned into a plan, run, and written to `results/<experiment>/<run-id>/` as runs.csv,
-//! histograms.csv, PNG plots and meta.json — all at once or not at all.
+//! histograms.csv, PNG plots and meta.json — all at once or not at all — plus the experiment's own
+//! paper-vs-ours tables (tables.md, see `tables`) and line figures (see `figures`).
 
 pub mod config;
 pub mod error_plot;
+pub mod figures;
 pub mod measure;
 pub mod meta;
 pub mod output;
@@ -11,6 +13,8 @@ pub mod plan;
 pub mod plots;
 pub mod results_dir;
 pub mod runner;
+pub mod selection;
+pub mod tables;
 pub mod utc;
 
 use std::path::{Path, PathBuf};
@@ -106,6 +110,16 @@ pub fn run(
     output::write_runs(&dir.join(output::RUNS_CSV), &plan, &cases)?;
     output::write_histograms(&dir.join(output::HISTOGRAMS_CSV), &plan, &cases)?;
     plots::write_plots(dir, &plan, &cases)?;
+    if !exp.tables.is_empty() || !exp.figures.is_empty() {
+        let rows = selection::read_rows(&dir.join(output::RUNS_CSV))?;
+        if !exp.tables.is_empty() {
+            let path = dir.join(tables::TABLES_MD);
+            tables::write_tables(&path, &exp.name, &exp.tables, &rows)?;
+        }
+        for figure in &exp.figures {
+            figure.draw(dir, &rows)?;
+        }
+    }
     let meta = meta::gather(
         &plan,
         &exp.threads,
@@ -468,6 +482,183 @@ mod tests {
         assert_eq!(labels, ["reference", "obvhs", "embree1", "embree16"]);
         // Every scene has lights: 4 scenes × 2 frames × 4 tracers × 3 kinds × 2 thread counts.
         assert_eq!(plan.measurements(), 192);
+    }
+
+    const TABLES_TEXT: &str = r#"name = "t"
+scenes = ["lit", "moving"]
+tracers = ["reference", { name = "embree16", params = { quality = ["low", "refit"] } }]
+rays = ["primary"]
+resolution = { width = 32, height = 32 }
+frames = 3
+warmup = 0
+repeats = 1
+
+[[tables]]
+title = "Hits per frame"
+caption = "Primary rays, 32×32."
+row_header = "scene"
+where = { ray_kind = "primary", threads = 1, tracer = "reference" }
+metric = "hits"
+decimals = 1
+rows = "scene"
+columns = [
+  { label = "ours" },
+  { label = "paper", paper = { lit = 900, moving = "n/a" } },
+  { label = "best", frames = "max" },
+  { label = "ours/best", ratio = ["ours", "best"], decimals = 3 },
+  { label = "both", sum = ["ours", "best"], decimals = 0 },
+  { label = "lesser", min = ["ours", "best"] },
+  { label = "per 1000", inverse = "ours", scale = 1000, decimals = 3 },
+]
+
+[[tables]]
+title = "Embree rebuilt or refitted"
+where = { scene = "moving", tracer = "embree16" }
+rows = [{ label = "low", where = { "param:quality" = "low" } }, { label = "refit", where = { "param:quality" = "refit" } }, { label = "high", where = { "param:quality" = "high" } }]
+columns = [{ label = "hits", metric = "hits", decimals = 1 }, { label = "last frame", metric = "hits", frames = "max", where = { frame = 2 }, decimals = 0 }]
+
+[[figures]]
+file = "hits.png"
+title = "hits per frame"
+where = { tracer = "reference" }
+x = "frame"
+y = "hits"
+series = "scene"
+"#;
+
+    #[test]
+    fn tables_and_figures_come_from_runs_csv_and_refit_embree_per_frame() {
+        let out = scratch("tables");
+        let mut exp = Experiment::parse(Path::new("t.toml"), TABLES_TEXT).unwrap();
+        exp.output = out.clone();
+        let dir = run(
+            &exp,
+            TABLES_TEXT,
+            &RunOverrides::default(),
+            &plan::tests::load_quads,
+        )
+        .unwrap();
+        // The moving quad's primary hits per frame are 900, 576, 400 (see expected_primary_hits):
+        // mean 625.3, best 900, ratio 0.695. Refitted and rebuilt Embree scenes hit the same.
+        let tables = fs::read_to_string(dir.join(tables::TABLES_MD)).unwrap();
+        assert_eq!(
+            tables,
+            "# t: paper vs ours\n\n\
+             ## Hits per frame\n\n\
+             Primary rays, 32×32.\n\n\
+             | scene | ours | paper | best | ours/best | both | lesser | per 1000 |\n\
+             |---|---:|---:|---:|---:|---:|---:|---:|\n\
+             | lit | 900.0 | 900 | 900.0 | 1.000 | 1800 | 900.0 | 1.111 |\n\
+             | moving | 625.3 | n/a | 900.0 | 0.695 | 1525 | 625.3 | 1.599 |\n\n\
+             ## Embree rebuilt or refitted\n\n\
+             |  | hits | last frame |\n\
+             |---|---:|---:|\n\
+             | low | 625.3 | 400 |\n\
+             | refit | 625.3 | 400 |\n\
+             | high | – | – |\n\n"
+        );
+        let rows = selection::read_rows(&dir.join(output::RUNS_CSV)).unwrap();
+        let lines = exp.figures[0].lines(&rows);
+        assert_eq!(
+            lines,
+            [
+                (
+                    "lit".to_string(),
+                    vec![(0.0, 900.0), (1.0, 900.0), (2.0, 900.0)]
+                ),
+                (
+                    "moving".to_string(),
+                    vec![(0.0, 900.0), (1.0, 576.0), (2.0, 400.0)]
+                )
+            ]
+        );
+        assert!(dir.join("hits.png").is_file());
+        // Every frame of the moving quad builds (or refits) each structure and reports its
+        // throughput; the static quad reuses frame 0's.
+        for r in &rows {
+            let reused = r["scene"] == "lit" && r["frame"] != "0";
+            assert_eq!(r["build"], if reused { "reused" } else { "built" }, "{r:?}");
+            let build: f64 = r["build_seconds"].parse().unwrap();
+            let trace: f64 = r["seconds_min"].parse().unwrap();
+            let total: f64 = r["build_plus_trace_seconds"].parse().unwrap();
+            assert!((total - (build + trace)).abs() < 1e-12, "{r:?}");
+            match reused {
+                true => assert_eq!(r["build_mtris_per_s"], ""),
+                false => {
+                    let rate: f64 = r["build_mtris_per_s"].parse().unwrap();
+                    assert!((rate - 2.0 / build / 1e6).abs() <= 1e-9 * rate, "{r:?}");
+                }
+            }
+        }
+        fs::remove_dir_all(&out).unwrap();
+    }
+
+    #[test]
+    fn bad_tables_and_figures_are_usage_errors_with_the_line() {
+        let text = format!(
+            "{}\n[[tables]]\ntitle = \"x\"\nrows = \"scnee\"\ncolumns = [{{ label = \"a\", metric = \"hits\" }}]\n",
+            TEXT
+        );
+        let err = Experiment::parse(Path::new("t.toml"), &text).unwrap_err();
+        assert!(
+            matches!(&err, Error::Usage(m) if m.starts_with("t.toml:11: table \"x\" rows: unknown field \"scnee\"")),
+            "{err}"
+        );
+        let text = format!(
+            "{}\n[[figures]]\nfile = \"../x.png\"\ntitle = \"x\"\nx = \"frame\"\ny = \"hits\"\n",
+            TEXT
+        );
+        let err = Experiment::parse(Path::new("t.toml"), &text).unwrap_err();
+        assert!(
+            err.to_string().contains("plain name ending in .png"),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn the_wald06_experiments_parse_with_their_tables_and_figures() {
+        let load = |file: &str| {
+            Experiment::load(
+                &Path::new(env!("CARGO_MANIFEST_DIR"))
+                    .join("experiments")
+                    .join(file),
+            )
+            .unwrap()
+        };
+        let exp = load("wald06.toml");
+        // 4 MB/FC combinations + 8 λ values + grid-dda + reference.
+        assert_eq!(exp.instances.len(), 14);
+        assert_eq!((exp.tables.len(), exp.figures.len()), (4, 1));
+        let exp = load("wald06-packets.toml");
+        assert_eq!(exp.instances.len(), 6);
+        assert_eq!(exp.scenes.len(), 10);
+        assert_eq!((exp.tables.len(), exp.figures.len()), (2, 3));
+        let exp = load("wald06-animated.toml");
+        let labels: Vec<String> = exp.instances.iter().map(|i| i.to_string()).collect();
+        assert_eq!(
+            labels,
+            [
+                "cgt[packet=4]",
+                "cgt[packet=8]",
+                "embree16[quality=low]",
+                "embree16[quality=refit]",
+                "obvhs",
+                "reference"
+            ]
+        );
+        assert_eq!(
+            (exp.width, exp.height, exp.threads.as_slice()),
+            (1024, 1024, &[1, 2][..])
+        );
+        assert_eq!(exp.tables.len(), 4);
+        let bench = load("wald06-benchmark.toml");
+        assert_eq!(exp.scenes, bench.scenes);
+        assert_eq!(bench.instances.len(), 4);
+        assert_eq!(
+            (bench.width, bench.frames, bench.threads.as_slice()),
+            (1024, 2, &[1, 2][..])
+        );
+        assert_eq!(bench.tables.len(), 4);
     }
 
     /// Nothing but the (empty) experiment directory may remain.

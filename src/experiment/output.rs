@@ -3,6 +3,8 @@
 //! bounce depth, threads) plus a `frame` row (see `config.rs`). histograms.csv: one row per
 //! (scene, frame, tracer, parameters, ray kind, BVH depth), for the ray batches.
 //! Counts a tracer cannot measure (Embree's box and triangle tests) are empty cells, not zeros.
+//! `build_plus_trace_seconds` is the frame's build (or refit) time of the row's structure plus
+//! the row's fastest pass: "rebuild + render" for that ray kind (0 build when reused).
 
 use std::path::Path;
 
@@ -34,6 +36,8 @@ pub const RUNS_COLUMNS: &[&str] = &[
     "mrays_per_s",
     "build_seconds",
     "build",
+    "build_mtris_per_s",
+    "build_plus_trace_seconds",
     "counted_rays",
     "nodes_visited",
     "aabb_tests",
@@ -69,6 +73,12 @@ pub const HISTOGRAM_COLUMNS: &[&str] = &[
 /// Millions of rays per second from the fastest pass; `None` for an empty batch.
 pub fn mrays_per_s(rays: usize, seconds: f64) -> Option<f64> {
     (rays > 0 && seconds > 0.0).then(|| rays as f64 / seconds / 1e6)
+}
+
+/// Build (or refit) throughput in millions of triangles per second; `None` when reused.
+fn build_mtris_per_s(case: &Case) -> Option<f64> {
+    (case.built && case.build_seconds > 0.0)
+        .then(|| case.triangles as f64 / case.build_seconds / 1e6)
 }
 
 fn cell<T: ToString>(value: Option<T>) -> String {
@@ -120,6 +130,8 @@ pub fn write_runs(path: &Path, plan: &Plan, cases: &[Case]) -> Result<()> {
                 cell(mrays_per_s(case.rays, timing.seconds_min)),
                 case.build_seconds.to_string(),
                 if case.built { "built" } else { "reused" }.to_string(),
+                cell(build_mtris_per_s(case)),
+                (case.build_seconds + timing.seconds_min).to_string(),
                 c.rays.to_string(),
                 cell(internal(c.nodes_visited)),
                 cell(internal(c.aabb_tests)),

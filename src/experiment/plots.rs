@@ -18,7 +18,7 @@ use super::plan::Plan;
 use super::runner::{Case, Traced};
 
 const FONT_PATH: &str = "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf";
-const FONT: &str = "sans-serif";
+pub const FONT: &str = "sans-serif";
 
 type PlotResult = std::result::Result<(), Box<dyn std::error::Error>>;
 

@@ -168,9 +168,10 @@ pub fn run_plan(
             let frame = scene.frame(f, exp.frames);
             let built_now = scene_plan.builds_at(f);
             if built_now {
-                // Free the previous frame's structures before building the next ones.
-                current.take();
-                current = Some(build_frame(exp, scene_plan, &frame)?);
+                // The previous frame's structures go to the next build: refitted in place where
+                // configured (Embree `quality = "refit"`), freed before building otherwise.
+                let previous = current.take().map(|t| t.structures).unwrap_or_default();
+                current = Some(build_frame(exp, scene_plan, &frame, previous)?);
             }
             let frame_tracers = current.as_ref().expect("built above");
             let batches = generate_batches(exp, scene_plan, &scene, &frame, frame_tracers, widest);
@@ -351,11 +352,21 @@ impl RenderJob<'_> {
 }
 
 /// Builds the plan's structures over `frame`'s geometry, timing each, and the tracers over them.
-fn build_frame(exp: &Experiment, scene_plan: &ScenePlan, frame: &Frame) -> Result<FrameTracers> {
+/// `previous` holds the last frame's structures (their tracers already dropped, so each is
+/// unshared): a refittable one is updated in place and the update timed as this frame's build.
+fn build_frame(
+    exp: &Experiment,
+    scene_plan: &ScenePlan,
+    frame: &Frame,
+    mut previous: BTreeMap<StructureKey, Built>,
+) -> Result<FrameTracers> {
+    // Free what will be built anew before building anything.
+    previous.retain(|key, _| key.kind.refits(&key.params));
     let mut structures = BTreeMap::new();
     for s in &scene_plan.structures {
+        let old = previous.remove(&s.key).map(|b| b.accel);
         let start = Instant::now();
-        let accel = s.key.kind.build(&frame.mesh, &s.key.params)?;
+        let accel = s.key.kind.rebuild(old, &frame.mesh, &s.key.params)?;
         let seconds = start.elapsed().as_secs_f64();
         structures.insert(s.key.clone(), Built { accel, seconds });
     }

@@ -1,6 +1,6 @@
 //! Built-in scene generators: embedded, no files needed. Each takes an integer `size` that sweeps
 //! the triangle count from about a thousand to a million or more, sets materials, point lights and
-//! a camera, and either a camera path (static scenes) or an `Animation` (marbles, deforming).
+//! a camera, and either a camera path (static scenes) or an `Animation` (marbles, deforming, toys).
 //!
 //! | generator | size          | triangles               | ~1K      | default    | ≥ 1M           |
 //! |-----------|---------------|-------------------------|----------|------------|----------------|
@@ -9,6 +9,7 @@
 //! | balls     | L depth       | 18·(9^(L+1) − 1) + 2    | 1: 1,442 | 3: 118,082 | 4: 1,062,866   |
 //! | marbles   | N marbles     | 80·N + 10               | 12: 970  | 110: 8,810 | 12500: 1000010 |
 //! | deforming | n × n flag    | 2·n² + 26               | 22: 994  | 96: 18,458 | 708: 1,002,554 |
+//! | toys      | N toys        | 2080·N + 2              | 1: 2,082 | 5: 10,402  | 481: 1,000,482 |
 //!
 //! Each generator's `triangle_count` gives the exact count without generating.
 
@@ -18,6 +19,7 @@ pub mod marble_physics;
 pub mod marbles;
 pub mod rings;
 pub mod room;
+pub mod toys;
 
 use crate::error::{Error, Result};
 use std::sync::Arc;
@@ -53,6 +55,7 @@ pub const GENERATORS: &[Generator] = &[
     balls::GENERATOR,
     marbles::GENERATOR,
     deforming::GENERATOR,
+    toys::GENERATOR,
 ];
 
 /// `(name, about)` of every generator, in the order of `GENERATORS`.
@@ -184,10 +187,13 @@ mod tests {
     #[test]
     fn registry_lists_every_generator_and_rejects_unknown_names_and_sizes() {
         let names: Vec<&str> = BUILTINS.iter().map(|b| b.0).collect();
-        assert_eq!(names, ["room", "rings", "balls", "marbles", "deforming"]);
+        assert_eq!(
+            names,
+            ["room", "rings", "balls", "marbles", "deforming", "toys"]
+        );
         let err = generate("nope", None).unwrap_err().to_string();
         assert!(
-            err.contains("nope") && err.contains("room, rings, balls, marbles, deforming"),
+            err.contains("nope") && err.contains("room, rings, balls, marbles, deforming, toys"),
             "{err}"
         );
         let err = generate("balls", Some(99)).unwrap_err().to_string();

@@ -1,0 +1,254 @@
+//! Line plots declared in the experiment file (`[[figures]]`), drawn from runs.csv into the
+//! results directory: one line per series value (and per metric, when `y` lists several), points
+//! at each distinct x value, each point a `Measure` (see `selection`).
+//!
+//! ```toml
+//! [[figures]]
+//! file = "fig6_lambda.png"
+//! title = "Fig. 6: frame rate (normalised by the best) vs λ"
+//! where = { tracer = "cgt", ray_kind = "primary", threads = 1 }
+//! x = "param:lambda"                 # a numeric field
+//! y = "seconds_min"                  # or a list of metrics, one line each
+//! series = "scene"                   # optional: one line per distinct value
+//! within_frame = "sum"               # as in tables (default sum, then mean over frames)
+//! frames = "mean"
+//! scale = 1.0
+//! reciprocal = true                  # plot 1/value (frame rate from seconds)
+//! normalise = true                   # divide each line by its largest value
+//! x_label = "λ"                      # axis captions (default: the field names)
+//! y_label = "normalised frame rate"
+//! log_x = false                      # log10 axes
+//! log_y = false
+//! ```
+
+use std::path::Path;
+
+use plotters::prelude::*;
+use serde::Deserialize;
+
+use crate::error::{Error, Result};
+
+use super::plots::{register_font, FONT};
+use super::selection::{check_field, distinct, Filter, Measure, Reduce, Row};
+
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct FigureSpec {
+    pub file: String,
+    pub title: String,
+    #[serde(default, rename = "where")]
+    pub filter: Filter,
+    pub x: String,
+    pub y: Metrics,
+    pub series: Option<String>,
+    #[serde(default = "sum")]
+    pub within_frame: Reduce,
+    #[serde(default)]
+    pub frames: Reduce,
+    #[serde(default = "one")]
+    pub scale: f64,
+    #[serde(default)]
+    pub reciprocal: bool,
+    #[serde(default)]
+    pub normalise: bool,
+    pub x_label: Option<String>,
+    pub y_label: Option<String>,
+    #[serde(default)]
+    pub log_x: bool,
+    #[serde(default)]
+    pub log_y: bool,
+}
+
+fn sum() -> Reduce {
+    Reduce::Sum
+}
+fn one() -> f64 {
+    1.0
+}
+
+/// One metric or several.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(untagged)]
+pub enum Metrics {
+    One(String),
+    Many(Vec<String>),
+}
+
+impl Metrics {
+    fn list(&self) -> Vec<&str> {
+        match self {
+            Metrics::One(m) => vec![m.as_str()],
+            Metrics::Many(ms) => ms.iter().map(String::as_str).collect(),
+        }
+    }
+}
+
+/// One line: its legend label and its points, sorted by x.
+pub type Line = (String, Vec<(f64, f64)>);
+
+impl FigureSpec {
+    pub fn check(&self) -> Result<()> {
+        let what = format!("figure {:?}", self.file);
+        let stem_ok =
+            self.file.ends_with(".png") && !self.file.contains('/') && !self.file.starts_with('.');
+        if !stem_ok {
+            return Err(Error::usage(format!(
+                "{what}: file must be a plain name ending in .png"
+            )));
+        }
+        self.filter.check(&what)?;
+        check_field(&self.x, &what)?;
+        if let Some(s) = &self.series {
+            check_field(s, &what)?;
+        }
+        let metrics = self.y.list();
+        if metrics.is_empty() {
+            return Err(Error::usage(format!("{what}: no y metric")));
+        }
+        metrics.iter().try_for_each(|m| check_field(m, &what))
+    }
+
+    /// The lines to draw over runs.csv `rows`; x values that are not numbers are skipped.
+    pub fn lines(&self, rows: &[Row]) -> Vec<Line> {
+        let series: Vec<Option<String>> = match &self.series {
+            Some(field) => distinct(rows, &self.filter, field)
+                .into_iter()
+                .map(Some)
+                .collect(),
+            None => vec![None],
+        };
+        let metrics = self.y.list();
+        let mut lines = Vec::new();
+        for value in &series {
+            let filter = match (&self.series, value) {
+                (Some(field), Some(v)) => self
+                    .filter
+                    .and(&Filter([(field.clone(), vec![v.clone()])].into())),
+                _ => self.filter.clone(),
+            };
+            for metric in &metrics {
+                let measure = Measure {
+                    metric: metric.to_string(),
+                    within_frame: self.within_frame,
+                    frames: self.frames,
+                    scale: self.scale,
+                };
+                let mut points: Vec<(f64, f64)> = distinct(rows, &filter, &self.x)
+                    .iter()
+                    .filter_map(|x| {
+                        let at_x = filter.and(&Filter([(self.x.clone(), vec![x.clone()])].into()));
+                        let y = measure.of(rows, &at_x)?;
+                        let y = if self.reciprocal { 1.0 / y } else { y };
+                        Some((x.parse::<f64>().ok()?, y))
+                    })
+                    .collect();
+                points.sort_by(|a, b| a.0.total_cmp(&b.0));
+                if self.normalise {
+                    let best = points.iter().map(|p| p.1).fold(0.0, f64::max);
+                    if best > 0.0 {
+                        points.iter_mut().for_each(|p| p.1 /= best);
+                    }
+                }
+                let label = match (value, metrics.len()) {
+                    (Some(v), 1) => series_label(self.series.as_deref(), v),
+                    (Some(v), _) => {
+                        format!("{metric}, {}", series_label(self.series.as_deref(), v))
+                    }
+                    (None, _) => metric.to_string(),
+                };
+                if !points.is_empty() {
+                    lines.push((label, points));
+                }
+            }
+        }
+        lines
+    }
+
+    /// Draws the figure into `dir`.
+    pub fn draw(&self, dir: &Path, rows: &[Row]) -> Result<()> {
+        register_font()?;
+        let path = dir.join(&self.file);
+        self.draw_lines(&path, &self.lines(rows))
+            .map_err(|e| Error::runtime(format!("cannot draw {}: {e}", path.display())))
+    }
+
+    fn draw_lines(
+        &self,
+        path: &Path,
+        lines: &[Line],
+    ) -> std::result::Result<(), Box<dyn std::error::Error>> {
+        let axis = |v: f64, log: bool| if log { v.max(1e-12).log10() } else { v };
+        let points = || lines.iter().flat_map(|l| l.1.iter());
+        let range = |values: Vec<f64>, log: bool| {
+            let lo = values.iter().copied().fold(f64::INFINITY, f64::min);
+            let hi = values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            match (lo.is_finite(), log) {
+                (false, _) => 0.0..1.0,
+                (true, true) => lo - 0.1..hi + 0.1,
+                (true, false) => lo.min(0.0)..(hi * 1.1).max(lo + 1e-9),
+            }
+        };
+        let xs = range(
+            points().map(|p| axis(p.0, self.log_x)).collect(),
+            self.log_x,
+        );
+        let ys = range(
+            points().map(|p| axis(p.1, self.log_y)).collect(),
+            self.log_y,
+        );
+        let root = BitMapBackend::new(path, (1000, 650)).into_drawing_area();
+        root.fill(&WHITE)?;
+        let mut chart = ChartBuilder::on(&root)
+            .caption(&self.title, (FONT, 20))
+            .margin(12)
+            .x_label_area_size(45)
+            .y_label_area_size(75)
+            .build_cartesian_2d(xs, ys)?;
+        // Three significant digits, no trailing zeros.
+        let tick = |v: &f64, log: bool| {
+            let v = if log { 10f64.powf(*v) } else { *v };
+            let digits = (2 - v.abs().max(1e-12).log10().floor() as i32).max(0) as usize;
+            let text = format!("{v:.digits$}");
+            match text.contains('.') {
+                true => text.trim_end_matches('0').trim_end_matches('.').to_string(),
+                false => text,
+            }
+        };
+        chart
+            .configure_mesh()
+            .x_desc(self.x_label.clone().unwrap_or(self.x.clone()))
+            .y_desc(self.y_label.clone().unwrap_or(self.y.list().join(", ")))
+            .x_label_formatter(&|v| tick(v, self.log_x))
+            .y_label_formatter(&|v| tick(v, self.log_y))
+            .label_style((FONT, 14))
+            .axis_desc_style((FONT, 15))
+            .draw()?;
+        for (i, (label, line)) in lines.iter().enumerate() {
+            let colour = Palette99::pick(i).to_rgba();
+            let at = |p: &(f64, f64)| (axis(p.0, self.log_x), axis(p.1, self.log_y));
+            chart
+                .draw_series(LineSeries::new(line.iter().map(at), colour.stroke_width(2)))?
+                .label(label.clone())
+                .legend(move |(x, y)| {
+                    PathElement::new([(x, y), (x + 16, y)], colour.stroke_width(2))
+                });
+            chart.draw_series(line.iter().map(|p| Circle::new(at(p), 4, colour.filled())))?;
+        }
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperRight)
+            .label_font((FONT, 14))
+            .background_style(WHITE.mix(0.9))
+            .border_style(BLACK)
+            .draw()?;
+        root.present()?;
+        Ok(())
+    }
+}
+
+fn series_label(field: Option<&str>, value: &str) -> String {
+    match field.and_then(|f| f.strip_prefix("param:")) {
+        Some(key) => format!("{key}={value}"),
+        None => value.to_string(),
+    }
+}
