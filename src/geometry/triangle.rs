@@ -77,6 +77,14 @@ impl WatertightRay {
         }
     }
 
+    /// The permutation `[kx, ky, kz]` (`kz` the axis of largest |dir|) and the shear
+    /// `[dx/dz, dy/dz, 1/dz]` in that frame: what SIMD packet tracers load per lane to run this
+    /// very test on many rays at once.
+    #[inline(always)]
+    pub fn frame(&self) -> ([usize; 3], [f32; 3]) {
+        (self.k, self.shear)
+    }
+
     /// `(t, u, v)` if the ray hits `tri` with `tmin <= t <= tmax`; both faces count.
     #[inline(always)]
     pub fn intersect(&self, tri: &Triangle, tmin: f32, tmax: f32) -> Option<(f32, f32, f32)> {
