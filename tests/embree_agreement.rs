@@ -1,4 +1,4 @@
-//! The foundation's correctness bar: the reference, obvhs and cgt tracers agree with Embree (robust
+//! The foundation's correctness bar: the reference, obvhs, cgt and packet tracers agree with Embree (robust
 //! mode) on well over a million rays — primary, shadow and diffuse bounces — over three built-in
 //! scenes and two real ones (conference, bunny), with zero unexplained disagreements. Ties are
 //! classified and printed, not hidden.
@@ -23,6 +23,10 @@ fn scenes() -> Vec<(&'static str, Option<u32>)> {
 }
 
 fn agrees_with_embree(tracer: &str) {
+    agrees_with_embree_with(tracer, &Params::new());
+}
+
+fn agrees_with_embree_with(tracer: &str, params: &Params) {
     let tol = Tolerance::default();
     let mut total_rays = 0;
     let mut failures = vec![];
@@ -33,14 +37,14 @@ fn agrees_with_embree(tracer: &str) {
             &scene,
             &frame,
             tracer,
-            &Params::new(),
+            params,
             RESOLUTION,
             RESOLUTION,
             SEED,
         )
         .unwrap();
         println!(
-            "{tracer} on {name} ({} triangles):\n{}",
+            "{tracer} {params} on {name} ({} triangles):\n{}",
             scene.triangle_count(),
             format_table(&reports, &tol)
         );
@@ -58,7 +62,7 @@ fn agrees_with_embree(tracer: &str) {
     }
     assert!(
         failures.is_empty(),
-        "{tracer} disagrees with Embree: {failures:?}"
+        "{tracer} {params} disagrees with Embree: {failures:?}"
     );
     if std::env::var_os("RAYLAB_SCENES").is_some() {
         assert!(total_rays >= 1_000_000, "only {total_rays} rays compared");
@@ -78,4 +82,23 @@ fn obvhs_agrees_with_embree() {
 #[test]
 fn cgt_agrees_with_embree() {
     agrees_with_embree("cgt");
+}
+
+/// One configuration per traversal, covering every SIMD width and both frustum settings; the
+/// exhaustive grid of configurations is checked against the reference tracer in tests/packet.rs.
+#[test]
+fn packet_agrees_with_embree() {
+    for (traversal, packet, lanes, frustum) in [
+        ("ranged", 16, 16, true),
+        ("partition", 8, 8, true),
+        ("ia", 32, 16, true),
+        ("masked", 4, 4, false),
+    ] {
+        let params = Params::new()
+            .with("traversal", traversal)
+            .with("packet", packet)
+            .with("lanes", lanes)
+            .with("frustum", frustum);
+        agrees_with_embree_with("packet", &params);
+    }
 }

@@ -100,12 +100,16 @@ impl Frustum {
         if n == 0 || scene.is_empty() {
             return None;
         }
-        let first = rays.ray(0);
-        let dir_sum = (0..n).fold(Vec3::ZERO, |s, i| s + rays.ray(i).dir);
+        let dir_sum = Vec3::new(
+            rays.dx.iter().sum(),
+            rays.dy.iter().sum(),
+            rays.dz.iter().sum(),
+        );
         let k = dir_sum.abs().max_position();
         let j = [(k + 1) % 3, (k + 2) % 3];
         let scale = max_abs(scene.min).max(max_abs(scene.max));
-        if (0..n).all(|i| rays.ray(i).origin == first.origin) {
+        let same = |v: &[f32]| v.iter().all(|&x| x == v[0]);
+        if same(rays.ox) && same(rays.oy) && same(rays.oz) {
             return Self::shared_origin(rays, k, j, dir_sum[k].signum(), scale);
         }
         if let Some(apex) = shared_end(rays) {
@@ -118,18 +122,21 @@ impl Frustum {
 
     fn shared_origin(rays: Rays<'_>, k: usize, j: [usize; 2], sigma: f32, scale: f32) -> Option<Self> {
         let o = rays.ray(0).origin;
+        let d = [rays.dx, rays.dy, rays.dz];
+        let (dk, du, dv) = (d[k], d[j[0]], d[j[1]]);
         let mut slope = [Range::EMPTY; 2];
         let mut tau_near = f32::INFINITY;
+        let mut ok = true;
         for i in 0..rays.len() {
-            let r = rays.ray(i);
-            let along = sigma * r.dir[k];
-            if !(along > 0.0) || !r.dir.is_finite() {
-                return None;
-            }
-            for s in 0..2 {
-                slope[s].add(r.dir[j[s]] / along);
-            }
-            tau_near = tau_near.min(r.tmin * along);
+            let along = sigma * dk[i];
+            ok &= along > 0.0 && along.is_finite() && du[i].is_finite() && dv[i].is_finite();
+            let inv = 1.0 / along;
+            slope[0].add(du[i] * inv);
+            slope[1].add(dv[i] * inv);
+            tau_near = tau_near.min(rays.tmin[i] * along);
+        }
+        if !ok {
+            return None;
         }
         let apex = [o[j[0]], o[j[1]]];
         Self::finish(FrustumKind::SharedOrigin, k, j, sigma, o[k], apex, apex, slope, tau_near, scale.max(max_abs(o)))

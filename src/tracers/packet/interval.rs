@@ -100,7 +100,6 @@ mod tests {
     use super::*;
     use crate::geometry::{Aabb, Ray, RayBatch, RayBoxTest, RayKind};
     use crate::random::SplitMix64;
-    use glam::Vec3;
 
     #[test]
     fn interval_culling_never_culls_a_box_a_ray_hits() {

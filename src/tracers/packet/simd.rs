@@ -19,7 +19,7 @@
 //! mode, lanes already occluded have `tmax = −∞`, so no box and no triangle can hit them.
 
 use crate::geometry::aabb::FAR_SCALE;
-use crate::geometry::{Hit, Ray, Triangle, WatertightRay};
+use crate::geometry::{Hit, Rays, Triangle};
 
 /// `L` rays, their current closest hits, and what the box and triangle tests precompute.
 #[derive(Clone, Copy, Debug)]
@@ -69,28 +69,59 @@ impl<const L: usize> Default for SimdRay<L> {
 type Permuted<const L: usize> = [[f32; L]; 3];
 
 impl<const L: usize> SimdRay<L> {
-    /// Loads `rays` (at most `L`) into the lanes; the rest become padding.
-    pub fn load(&mut self, rays: impl ExactSizeIterator<Item = Ray>) {
-        *self = SimdRay::default();
-        self.used = rays.len() as u32;
-        let mut first_axes = None;
-        let mut common = true;
-        for (l, ray) in rays.enumerate() {
-            let d = ray.dir.to_array();
-            let o = ray.origin.to_array();
-            let (axes, shear) = WatertightRay::new(ray.origin, ray.dir).frame();
-            for a in 0..3 {
-                self.origin[a][l] = o[a];
-                self.inv_dir[a][l] = 1.0 / d[a];
-                self.negative[a][l] = d[a].is_sign_negative() as u32;
-                self.axes[a][l] = axes[a] as u32;
-                self.shear[a][l] = shear[a];
+    /// Loads rays `first .. first + used` of `rays` (`used ≤ L`) into the lanes; the rest become
+    /// padding. Lane loops over the batch's arrays, computing exactly what `RayBoxTest::new` and
+    /// `WatertightRay::new` compute per ray.
+    pub fn load(&mut self, rays: &Rays<'_>, first: usize, used: usize) {
+        debug_assert!(used <= L);
+        self.used = used as u32;
+        let at = |src: &[f32], fill: f32| -> [f32; L] {
+            let mut lanes = [fill; L];
+            lanes[..used].copy_from_slice(&src[first..first + used]);
+            lanes
+        };
+        let d = [at(rays.dx, 1.0), at(rays.dy, 1.0), at(rays.dz, 1.0)];
+        self.origin = [at(rays.ox, 0.0), at(rays.oy, 0.0), at(rays.oz, 0.0)];
+        self.tmin = at(rays.tmin, f32::INFINITY);
+        self.tmax = at(rays.tmax, f32::NEG_INFINITY);
+        self.prim = [Hit::NO_PRIM; L];
+        for a in 0..3 {
+            for l in 0..L {
+                self.inv_dir[a][l] = 1.0 / d[a][l];
+                self.negative[a][l] = d[a][l].is_sign_negative() as u32;
             }
-            self.tmin[l] = ray.tmin;
-            self.tmax[l] = ray.tmax;
-            common &= *first_axes.get_or_insert(axes) == axes;
         }
-        self.common_axes = first_axes.filter(|_| common);
+        for l in 0..L {
+            let (x, y, z) = (d[0][l], d[1][l], d[2][l]);
+            let (ax, ay, az) = (x.abs(), y.abs(), z.abs());
+            let kz = if ax >= ay && ax >= az {
+                0
+            } else if ay >= az {
+                1
+            } else {
+                2
+            };
+            let dz = if kz == 0 { x } else if kz == 1 { y } else { z };
+            let (mut kx, mut ky) = (if kz == 2 { 0 } else { kz + 1 }, if kz == 0 { 2 } else { kz - 1 });
+            if dz < 0.0 {
+                std::mem::swap(&mut kx, &mut ky);
+            }
+            let pick = |k: u32| if k == 0 { x } else if k == 1 { y } else { z };
+            self.axes[0][l] = kx;
+            self.axes[1][l] = ky;
+            self.axes[2][l] = kz;
+            self.shear[0][l] = pick(kx) / dz;
+            self.shear[1][l] = pick(ky) / dz;
+            self.shear[2][l] = 1.0 / dz;
+        }
+        let k0 = [self.axes[0][0], self.axes[1][0], self.axes[2][0]];
+        let mut differ = 0u32;
+        for a in 0..3 {
+            for l in 0..used {
+                differ |= (self.axes[a][l] != k0[a]) as u32;
+            }
+        }
+        self.common_axes = (differ == 0).then(|| k0.map(|k| k as usize));
     }
 
     /// Whether any lane's segment `[tmin, tmax]` meets the box `[lo, hi]` (`RayBoxTest::hit` per
@@ -270,9 +301,15 @@ impl<const L: usize> SimdRay<L> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::geometry::{Aabb, RayBoxTest};
+    use crate::geometry::{Aabb, Ray, RayBatch, RayBoxTest, RayKind, WatertightRay};
     use crate::random::SplitMix64;
     use glam::Vec3;
+
+    fn batch(rays: &[Ray]) -> RayBatch {
+        let mut b = RayBatch::new(RayKind::Diffuse);
+        rays.iter().for_each(|r| b.push(*r, 0));
+        b
+    }
 
     fn random_rays(rng: &mut SplitMix64, n: usize) -> Vec<Ray> {
         let mut v = |s: f32| (rng.unit() * 2.0 - 1.0) * s;
@@ -298,7 +335,7 @@ mod tests {
         for (chunk_i, chunk) in rays.chunks(16).enumerate() {
             // Some groups partial, to exercise padding.
             let used = if chunk_i % 5 == 0 { 11 } else { 16 };
-            simd.load(chunk[..used].iter().copied());
+            simd.load(&batch(&chunk[..used]).view(), 0, used);
             let mut v = |s: f32| (rng.unit() * 2.0 - 1.0) * s;
             let p = Vec3::new(v(1.0), v(1.0), v(1.0));
             let tri = Triangle::new(p, p + Vec3::new(v(1.0), v(1.0), v(1.0)), p + Vec3::Z);
@@ -337,7 +374,7 @@ mod tests {
             .map(|&p| Ray::new(p + Vec3::Z, -Vec3::Z, 0.0, 10.0))
             .collect();
         let mut simd = SimdRay::<4>::default();
-        simd.load(rays.iter().copied());
+        simd.load(&batch(&rays).view(), 0, rays.len());
         assert_eq!(simd.intersect::<false>(&tri, 3), 3);
         for (l, r) in rays.iter().enumerate() {
             let (t, u, v) = WatertightRay::new(r.origin, r.dir)

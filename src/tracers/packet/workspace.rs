@@ -89,13 +89,11 @@ impl<const L: usize> Packet<L> {
         self.groups.truncate(count);
         let mut sum = [0.0f32; 3];
         for (g, group) in self.groups.iter_mut().enumerate() {
-            let lanes = g * L..((g + 1) * L).min(rays.len());
-            for i in lanes.clone() {
-                sum[0] += rays.dx[i];
-                sum[1] += rays.dy[i];
-                sum[2] += rays.dz[i];
-            }
-            group.load(lanes.map(|i| rays.ray(i)));
+            let first = g * L;
+            group.load(&rays, first, L.min(rays.len() - first));
+        }
+        for (s, d) in sum.iter_mut().zip([rays.dx, rays.dy, rays.dz]) {
+            *s = d.iter().sum();
         }
         self.negative = sum.map(|s| s.is_sign_negative());
         self.index.clear();
