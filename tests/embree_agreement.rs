@@ -33,16 +33,8 @@ fn agrees_with_embree_with(tracer: &str, params: &Params) {
     for (name, size) in scenes() {
         let scene = load_scene(name, size).unwrap();
         let frame = scene.frame(0, 1);
-        let reports = verify_frame(
-            &scene,
-            &frame,
-            tracer,
-            params,
-            RESOLUTION,
-            RESOLUTION,
-            SEED,
-        )
-        .unwrap();
+        let reports =
+            verify_frame(&scene, &frame, tracer, params, RESOLUTION, RESOLUTION, SEED).unwrap();
         println!(
             "{tracer} {params} on {name} ({} triangles):\n{}",
             scene.triangle_count(),

@@ -118,7 +118,13 @@ fn count(traversal: Traversal) -> (Counts, Vec<Hit>) {
 
 fn assert_counts(t: Traversal, want: [u64; 5]) {
     let (c, hits) = count(t);
-    let got = [c.nodes, c.box_lanes, c.triangle_lanes, c.leaves, c.leaf_rays];
+    let got = [
+        c.nodes,
+        c.box_lanes,
+        c.triangle_lanes,
+        c.leaves,
+        c.leaf_rays,
+    ];
     assert_eq!(
         got, want,
         "{t:?}: [nodes, box lane tests, triangle lane tests, leaves, leaf rays]"

@@ -27,6 +27,11 @@
 //!   planes lies within the convex hull of those crossings, and no geometry lies past the far
 //!   plane.
 //!
+//! **Far plane** (our addition): once every lane has a closest hit, no ray point that matters lies
+//! beyond `τ_far`, the largest `τ` a ray reaches at the packet's largest current hit distance
+//! (`clip_far`, after each leaf); boxes and triangles wholly beyond it are culled. Shared-origin
+//! and general frusta only (along a shared-end packet `τ` decreases).
+//!
 //! A packet gets no frustum (no culling) when some ray does not travel strictly towards `σ` along
 //! `k` (e.g. a diffuse packet whose bounces go both ways along every axis) or a value is not
 //! finite.
@@ -67,6 +72,12 @@ pub struct Frustum {
     slope_lo: [f32; 2],
     slope_hi: [f32; 2],
     tau_near: f32,
+    /// Far plane: no ray point lies beyond `τ = far_base + far_rate·t` for `t` at most the
+    /// packet's largest current closest hit (`clip_far`); ∞ until then, and always for shared end
+    /// points (their τ decreases along the rays).
+    tau_far: f32,
+    far_base: f32,
+    far_rate: f32,
     eps: f32,
 }
 
@@ -120,7 +131,13 @@ impl Frustum {
         Self::general(rays, scene, k, j, dir_sum[k].signum(), scale)
     }
 
-    fn shared_origin(rays: Rays<'_>, k: usize, j: [usize; 2], sigma: f32, scale: f32) -> Option<Self> {
+    fn shared_origin(
+        rays: Rays<'_>,
+        k: usize,
+        j: [usize; 2],
+        sigma: f32,
+        scale: f32,
+    ) -> Option<Self> {
         let o = rays.ray(0).origin;
         let d = [rays.dx, rays.dy, rays.dz];
         let (dk, du, dv) = (d[k], d[j[0]], d[j[1]]);
@@ -139,10 +156,31 @@ impl Frustum {
             return None;
         }
         let apex = [o[j[0]], o[j[1]]];
-        Self::finish(FrustumKind::SharedOrigin, k, j, sigma, o[k], apex, apex, slope, tau_near, scale.max(max_abs(o)))
+        let along = dk.iter().fold(0.0f32, |m, &x| m.max(sigma * x));
+        let far = [0.0, along];
+        Self::finish(
+            FrustumKind::SharedOrigin,
+            k,
+            j,
+            sigma,
+            o[k],
+            apex,
+            apex,
+            slope,
+            tau_near,
+            far,
+            scale.max(max_abs(o)),
+        )
     }
 
-    fn shared_end(rays: Rays<'_>, apex: Vec3, k: usize, j: [usize; 2], sigma: f32, scale: f32) -> Option<Self> {
+    fn shared_end(
+        rays: Rays<'_>,
+        apex: Vec3,
+        k: usize,
+        j: [usize; 2],
+        sigma: f32,
+        scale: f32,
+    ) -> Option<Self> {
         let mut slope = [Range::EMPTY; 2];
         let mut tau_near = f32::INFINITY;
         let mut magnitude = scale.max(max_abs(apex));
@@ -161,18 +199,46 @@ impl Frustum {
             }
         }
         let a = [apex[j[0]], apex[j[1]]];
-        Self::finish(FrustumKind::SharedEnd, k, j, sigma, apex[k], a, a, slope, tau_near, magnitude)
+        let far = [f32::INFINITY, f32::INFINITY];
+        Self::finish(
+            FrustumKind::SharedEnd,
+            k,
+            j,
+            sigma,
+            apex[k],
+            a,
+            a,
+            slope,
+            tau_near,
+            far,
+            magnitude,
+        )
     }
 
-    fn general(rays: Rays<'_>, scene: &Aabb, k: usize, j: [usize; 2], sigma: f32, scale: f32) -> Option<Self> {
-        let mut k0 = if sigma > 0.0 { f32::INFINITY } else { f32::NEG_INFINITY };
+    fn general(
+        rays: Rays<'_>,
+        scene: &Aabb,
+        k: usize,
+        j: [usize; 2],
+        sigma: f32,
+        scale: f32,
+    ) -> Option<Self> {
+        let mut k0 = if sigma > 0.0 {
+            f32::INFINITY
+        } else {
+            f32::NEG_INFINITY
+        };
         let mut magnitude = scale;
         for i in 0..rays.len() {
             let r = rays.ray(i);
             if !(sigma * r.dir[k] > 0.0) || !r.dir.is_finite() || !r.origin.is_finite() {
                 return None;
             }
-            k0 = if sigma > 0.0 { k0.min(r.origin[k]) } else { k0.max(r.origin[k]) };
+            k0 = if sigma > 0.0 {
+                k0.min(r.origin[k])
+            } else {
+                k0.max(r.origin[k])
+            };
             magnitude = magnitude.max(max_abs(r.origin));
         }
         let tau_of = |x: f32| sigma * (x - k0);
@@ -183,6 +249,7 @@ impl Frustum {
             .max(f32::MIN_POSITIVE);
         let (mut near, mut far) = ([Range::EMPTY; 2], [Range::EMPTY; 2]);
         let mut tau_near = f32::INFINITY;
+        let (mut far_base, mut far_rate) = (0.0f32, 0.0f32);
         for i in 0..rays.len() {
             let r = rays.ray(i);
             let along = sigma * r.dir[k];
@@ -193,6 +260,8 @@ impl Frustum {
                 far[s].add(r.origin[j[s]] + (tau_far - tau_o) * ratio);
             }
             tau_near = tau_near.min(tau_o + r.tmin.min(0.0) * along);
+            far_base = far_base.max(tau_o);
+            far_rate = far_rate.max(along);
         }
         for s in 0..2 {
             magnitude = magnitude.max(near[s].lo.abs()).max(near[s].hi.abs());
@@ -212,6 +281,7 @@ impl Frustum {
             [near[0].hi, near[1].hi],
             slope,
             tau_near,
+            [far_base, far_rate],
             magnitude,
         )
     }
@@ -227,6 +297,7 @@ impl Frustum {
         hi: [f32; 2],
         slope: [Range; 2],
         tau_near: f32,
+        [far_base, far_rate]: [f32; 2],
         magnitude: f32,
     ) -> Option<Frustum> {
         let steepest = slope
@@ -234,7 +305,19 @@ impl Frustum {
             .map(|s| s.lo.abs().max(s.hi.abs()))
             .fold(0.0f32, f32::max);
         let eps = MARGIN * magnitude * (1.0 + steepest);
-        let values = [lo[0], lo[1], hi[0], hi[1], slope[0].lo, slope[0].hi, slope[1].lo, slope[1].hi, k0, tau_near, eps];
+        let values = [
+            lo[0],
+            lo[1],
+            hi[0],
+            hi[1],
+            slope[0].lo,
+            slope[0].hi,
+            slope[1].lo,
+            slope[1].hi,
+            k0,
+            tau_near,
+            eps,
+        ];
         values.iter().all(|v| v.is_finite()).then_some(Frustum {
             kind,
             k,
@@ -246,8 +329,22 @@ impl Frustum {
             slope_lo: [slope[0].lo, slope[1].lo],
             slope_hi: [slope[0].hi, slope[1].hi],
             tau_near,
+            tau_far: f32::INFINITY,
+            far_base,
+            far_rate,
             eps,
         })
+    }
+
+    /// Moves the far plane to where the rays are when they reach distance `max_t`, the packet's
+    /// largest current closest hit (our addition to §4: boxes behind every ray's hit are culled
+    /// for the whole packet). Never moves it outwards past ∞ for shared end points.
+    #[inline(always)]
+    pub fn clip_far(&mut self, max_t: f32) {
+        let far = self.far_base + max_t * self.far_rate;
+        if far.is_finite() {
+            self.tau_far = far;
+        }
     }
 
     #[inline(always)]
@@ -261,7 +358,7 @@ impl Frustum {
     pub fn culls_box(&self, lo: [f32; 3], hi: [f32; 3]) -> bool {
         let (ta, tb) = (self.tau(lo[self.k]), self.tau(hi[self.k]));
         let (t_near, t_far) = if ta < tb { (ta, tb) } else { (tb, ta) };
-        if t_far < self.tau_near - self.eps {
+        if t_far < self.tau_near - self.eps || t_near > self.tau_far + self.eps {
             return true;
         }
         for s in 0..2 {
@@ -281,13 +378,17 @@ impl Frustum {
     #[inline(always)]
     pub fn culls_triangle(&self, tri: &Triangle) -> bool {
         let tau = tri.v.map(|p| self.tau(p[self.k]));
-        if tau.iter().all(|&t| t < self.tau_near - self.eps) {
+        if tau.iter().all(|&t| t < self.tau_near - self.eps)
+            || tau.iter().all(|&t| t > self.tau_far + self.eps)
+        {
             return true;
         }
         for s in 0..2 {
             let axis = self.j[s];
-            let below = (0..3).all(|i| tri.v[i][axis] - self.slope_lo[s] * tau[i] < self.lo[s] - self.eps);
-            let above = (0..3).all(|i| tri.v[i][axis] - self.slope_hi[s] * tau[i] > self.hi[s] + self.eps);
+            let below =
+                (0..3).all(|i| tri.v[i][axis] - self.slope_lo[s] * tau[i] < self.lo[s] - self.eps);
+            let above =
+                (0..3).all(|i| tri.v[i][axis] - self.slope_hi[s] * tau[i] > self.hi[s] + self.eps);
             if below || above {
                 return true;
             }
@@ -305,13 +406,11 @@ fn shared_end(rays: Rays<'_>) -> Option<Vec3> {
     }
     let r0 = rays.ray(0);
     // The line most different in direction from the first pins the point down best.
-    let other = (1..n)
-        .map(|i| rays.ray(i))
-        .max_by(|a, b| {
-            let ca = r0.dir.cross(a.dir).length_squared();
-            let cb = r0.dir.cross(b.dir).length_squared();
-            ca.total_cmp(&cb)
-        })?;
+    let other = (1..n).map(|i| rays.ray(i)).max_by(|a, b| {
+        let ca = r0.dir.cross(a.dir).length_squared();
+        let cb = r0.dir.cross(b.dir).length_squared();
+        ca.total_cmp(&cb)
+    })?;
     let (d0, d1) = (r0.dir, other.dir);
     let w = r0.origin - other.origin;
     let (a, b, c) = (d0.dot(d0), d0.dot(d1), d1.dot(d1));
@@ -341,7 +440,9 @@ mod tests {
 
     fn batch(rays: &[Ray]) -> RayBatch {
         let mut b = RayBatch::new(RayKind::Primary);
-        rays.iter().enumerate().for_each(|(i, r)| b.push(*r, i as u32));
+        rays.iter()
+            .enumerate()
+            .for_each(|(i, r)| b.push(*r, i as u32));
         b
     }
 
@@ -354,7 +455,7 @@ mod tests {
             .map(|i| {
                 let (x, y) = ((i % 8) as f32, (i / 8) as f32);
                 let d = Vec3::new(x0 + x * 0.03, y0 + y * 0.03, -1.0).normalize();
-                Ray::new(eye, d, 0.0, f32::INFINITY)
+                Ray::new(eye, d, 0.0, 4.0 + (i % 5) as f32)
             })
             .collect();
         let light = rng.vec3(-3.0, 3.0);
@@ -371,7 +472,7 @@ mod tests {
         let general = (0..64)
             .map(|_| {
                 let d = (base + rng.vec3(-0.3, 0.3)).normalize();
-                Ray::new(centre + rng.vec3(-0.5, 0.5), d, 0.0, f32::INFINITY)
+                Ray::new(centre + rng.vec3(-0.5, 0.5), d, 0.0, rng.range(2.0, 6.0))
             })
             .collect();
         vec![
@@ -390,23 +491,34 @@ mod tests {
         for _ in 0..60 {
             for (kind, rays) in packets(&mut rng) {
                 let b = batch(&rays);
-                let Some(f) = Frustum::build(b.view(), &scene) else {
+                let Some(mut f) = Frustum::build(b.view(), &scene) else {
                     panic!("{kind:?} packet got no frustum");
                 };
+                f.clip_far(rays.iter().fold(0.0f32, |m, r| m.max(r.tmax)));
                 assert_eq!(f.kind, kind);
                 for _ in 0..200 {
                     let c = rng.vec3(-5.0, 5.0);
                     let bx = Aabb::new(c, c + rng.vec3(0.0, 1.5));
                     let tri = Triangle::new(c, c + rng.vec3(-2.0, 2.0), c + rng.vec3(-2.0, 2.0));
                     let box_hit = rays.iter().any(|r| {
-                        RayBoxTest::new(r.origin, r.dir).hit(&bx, r.tmin, r.tmax).is_some()
+                        RayBoxTest::new(r.origin, r.dir)
+                            .hit(&bx, r.tmin, r.tmax)
+                            .is_some()
                     });
                     let tri_hit = rays.iter().any(|r| {
-                        WatertightRay::new(r.origin, r.dir).intersect(&tri, r.tmin, r.tmax).is_some()
+                        WatertightRay::new(r.origin, r.dir)
+                            .intersect(&tri, r.tmin, r.tmax)
+                            .is_some()
                     });
-                    let (cb, ct) = (f.culls_box(bx.min.to_array(), bx.max.to_array()), f.culls_triangle(&tri));
+                    let (cb, ct) = (
+                        f.culls_box(bx.min.to_array(), bx.max.to_array()),
+                        f.culls_triangle(&tri),
+                    );
                     assert!(!(box_hit && cb), "{kind:?} frustum culled a box a ray hits");
-                    assert!(!(tri_hit && ct), "{kind:?} frustum culled a triangle a ray hits");
+                    assert!(
+                        !(tri_hit && ct),
+                        "{kind:?} frustum culled a triangle a ray hits"
+                    );
                     let i = kind as usize;
                     checked[i] += 2;
                     culled[i] += cb as usize + ct as usize;
@@ -415,7 +527,12 @@ mod tests {
         }
         // The test must be able to fail: each class culls a good share of the random geometry.
         for i in 0..3 {
-            assert!(culled[i] * 4 > checked[i], "class {i}: {} of {} culled", culled[i], checked[i]);
+            assert!(
+                culled[i] * 4 > checked[i],
+                "class {i}: {} of {} culled",
+                culled[i],
+                checked[i]
+            );
         }
     }
 

@@ -38,7 +38,9 @@ pub fn traverse<const L: usize, S: Stats, const ANY: bool>(
         }
         if !packet.alive.is_empty() {
             if !cell.is_leaf() {
-                let (near, far) = tree.order.near_far(node as usize, cell.first, packet.negative);
+                let (near, far) = tree
+                    .order
+                    .near_far(node as usize, cell.first, packet.negative);
                 stack[top] = Pending { node: far, ia: 0 };
                 top += 1;
                 node = near;

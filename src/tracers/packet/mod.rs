@@ -13,7 +13,8 @@
 //! - **Frustum culling** (`frustum` = true, §4): a frustum bounding every ray of the packet, of
 //!   the class the data shows (shared origin §4.1, shared end point §4.2, general §4.3; see
 //!   `frustum`), culls boxes (Masked: before the ray tests; Ranged/IA: when the first active ray
-//!   misses; Partition: before partitioning) and triangles at the leaves.
+//!   misses; Partition: before partitioning) and triangles at the leaves. Its far plane follows
+//!   the packet's farthest current closest hit.
 //! - **Exact closest hits**: every lane runs the reference tracer's slab and watertight tests
 //!   bit for bit (`simd`), and culling is conservative, so each ray gets the reference's closest
 //!   hit (up to the order in which triangles at exactly equal distance are met).
@@ -186,16 +187,19 @@ impl PacketTracer {
             match traversal {
                 Traversal::Masked => masked::traverse::<L, S, ANY>(&mut packet, &tree, stats),
                 Traversal::Ranged => ranged::traverse::<L, S, ANY>(&mut packet, &tree, stats),
-                Traversal::Partition => {
-                    partition::traverse::<L, S, ANY>(&mut packet, &tree, stats)
-                }
+                Traversal::Partition => partition::traverse::<L, S, ANY>(&mut packet, &tree, stats),
                 Traversal::Ia => first_hit::traverse::<L, S, ANY>(&mut packet, &tree, stats),
             }
             out(first, &packet);
         }
     }
 
-    fn intersect_lanes<const L: usize, S: Stats>(&self, rays: Rays<'_>, hits: &mut [Hit], stats: &mut S) {
+    fn intersect_lanes<const L: usize, S: Stats>(
+        &self,
+        rays: Rays<'_>,
+        hits: &mut [Hit],
+        stats: &mut S,
+    ) {
         hits.fill(Hit::MISS);
         self.run::<L, S, false>(rays, stats, |first, packet| {
             for (slot, hit) in hits[first..].iter_mut().zip(packet.hits()) {
@@ -204,7 +208,12 @@ impl PacketTracer {
         });
     }
 
-    fn occluded_lanes<const L: usize, S: Stats>(&self, rays: Rays<'_>, occluded: &mut [bool], stats: &mut S) {
+    fn occluded_lanes<const L: usize, S: Stats>(
+        &self,
+        rays: Rays<'_>,
+        occluded: &mut [bool],
+        stats: &mut S,
+    ) {
         occluded.fill(false);
         self.run::<L, S, true>(rays, stats, |first, packet| {
             for (slot, hit) in occluded[first..].iter_mut().zip(packet.hits()) {

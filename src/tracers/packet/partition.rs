@@ -54,7 +54,9 @@ pub fn traverse<const L: usize, S: Stats, const ANY: bool>(
         if ia > 0 {
             let cell = tree.node(node);
             if !cell.is_leaf() {
-                let (near, far) = tree.order.near_far(node as usize, cell.first, packet.negative);
+                let (near, far) = tree
+                    .order
+                    .near_far(node as usize, cell.first, packet.negative);
                 stack[top] = Pending { node: far, ia };
                 top += 1;
                 node = near;

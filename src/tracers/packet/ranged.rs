@@ -20,7 +20,11 @@ pub fn first_hit<const L: usize, S: Stats>(
     ia: u32,
     stats: &mut S,
 ) -> u32 {
-    let (n, depth, cell) = (packet.groups.len() as u32, tree.depth::<S>(node), tree.node(node));
+    let (n, depth, cell) = (
+        packet.groups.len() as u32,
+        tree.depth::<S>(node),
+        tree.node(node),
+    );
     if packet.hits_box(ia, cell, depth, stats) {
         return ia;
     }
@@ -67,7 +71,9 @@ pub fn traverse<const L: usize, S: Stats, const ANY: bool>(
         if ia < n {
             let cell = tree.node(node);
             if !cell.is_leaf() {
-                let (near, far) = tree.order.near_far(node as usize, cell.first, packet.negative);
+                let (near, far) = tree
+                    .order
+                    .near_far(node as usize, cell.first, packet.negative);
                 stack[top] = Pending { node: far, ia };
                 top += 1;
                 node = near;

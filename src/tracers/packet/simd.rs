@@ -101,12 +101,29 @@ impl<const L: usize> SimdRay<L> {
             } else {
                 2
             };
-            let dz = if kz == 0 { x } else if kz == 1 { y } else { z };
-            let (mut kx, mut ky) = (if kz == 2 { 0 } else { kz + 1 }, if kz == 0 { 2 } else { kz - 1 });
+            let dz = if kz == 0 {
+                x
+            } else if kz == 1 {
+                y
+            } else {
+                z
+            };
+            let (mut kx, mut ky) = (
+                if kz == 2 { 0 } else { kz + 1 },
+                if kz == 0 { 2 } else { kz - 1 },
+            );
             if dz < 0.0 {
                 std::mem::swap(&mut kx, &mut ky);
             }
-            let pick = |k: u32| if k == 0 { x } else if k == 1 { y } else { z };
+            let pick = |k: u32| {
+                if k == 0 {
+                    x
+                } else if k == 1 {
+                    y
+                } else {
+                    z
+                }
+            };
             self.axes[0][l] = kx;
             self.axes[1][l] = ky;
             self.axes[2][l] = kz;
@@ -322,7 +339,12 @@ mod tests {
                     1 => d.y = -0.0,
                     _ => {}
                 }
-                Ray::new(Vec3::new(v(2.0), v(2.0), v(2.0)), d, 0.0, 1.0 + v(3.0).abs())
+                Ray::new(
+                    Vec3::new(v(2.0), v(2.0), v(2.0)),
+                    d,
+                    0.0,
+                    1.0 + v(3.0).abs(),
+                )
             })
             .collect()
     }
@@ -369,10 +391,14 @@ mod tests {
     fn zero_edge_functions_take_the_f64_path_like_the_scalar_test() {
         // Rays through the shared vertex and along the edge of a triangle: exact zeros.
         let tri = Triangle::new(Vec3::ZERO, Vec3::X, Vec3::Y);
-        let rays: Vec<Ray> = [Vec3::ZERO, Vec3::new(0.5, 0.0, 0.0), Vec3::new(0.0, 0.25, 0.0)]
-            .iter()
-            .map(|&p| Ray::new(p + Vec3::Z, -Vec3::Z, 0.0, 10.0))
-            .collect();
+        let rays: Vec<Ray> = [
+            Vec3::ZERO,
+            Vec3::new(0.5, 0.0, 0.0),
+            Vec3::new(0.0, 0.25, 0.0),
+        ]
+        .iter()
+        .map(|&p| Ray::new(p + Vec3::Z, -Vec3::Z, 0.0, 10.0))
+        .collect();
         let mut simd = SimdRay::<4>::default();
         simd.load(&batch(&rays).view(), 0, rays.len());
         assert_eq!(simd.intersect::<false>(&tri, 3), 3);

@@ -59,7 +59,8 @@ pub struct Packet<const L: usize> {
     pub negative: [bool; 3],
     /// Lanes still without a hit (occlusion) or in use (closest hit).
     pub live: u32,
-    /// The largest closest-hit distance over the packet's lanes (for interval culling).
+    /// The largest closest-hit distance over the packet's lanes (interval culling and the
+    /// frustum's far plane).
     pub max_t: f32,
 }
 
@@ -129,9 +130,10 @@ impl<const L: usize> Packet<L> {
     /// Whether the frustum culls the box of `node` for the whole packet (counted as a culled box).
     #[inline(always)]
     pub fn frustum_culls<S: Stats>(&self, node: &BvhNode, stats: &mut S) -> bool {
-        let culled = self.frustum.as_ref().is_some_and(|f| {
-            f.culls_box(node.bounds.min.to_array(), node.bounds.max.to_array())
-        });
+        let culled = self
+            .frustum
+            .as_ref()
+            .is_some_and(|f| f.culls_box(node.bounds.min.to_array(), node.bounds.max.to_array()));
         if S::ENABLED && culled {
             stats.event(Event::BoxesCulled, 1);
         }
@@ -189,11 +191,14 @@ impl<const L: usize> Packet<L> {
                 }
             }
         }
-        if !ANY && self.interval.is_some() {
+        if !ANY && (self.interval.is_some() || self.frustum.is_some()) {
             self.max_t = self
                 .groups
                 .iter()
                 .fold(f32::NEG_INFINITY, |m, g| m.max(g.max_tmax()));
+            if let Some(f) = &mut self.frustum {
+                f.clip_far(self.max_t);
+            }
         }
         false
     }
