@@ -188,7 +188,8 @@ impl Frustum {
             let r = rays.ray(i);
             for p in [r.at(r.tmin), r.at(r.tmax)] {
                 let tau = sigma * (p[k] - apex[k]);
-                if !(tau > 0.0) || !p.is_finite() {
+                let ahead = tau > 0.0;
+                if !ahead || !p.is_finite() {
                     return None;
                 }
                 for s in 0..2 {
@@ -231,7 +232,8 @@ impl Frustum {
         let mut magnitude = scale;
         for i in 0..rays.len() {
             let r = rays.ray(i);
-            if !(sigma * r.dir[k] > 0.0) || !r.dir.is_finite() || !r.origin.is_finite() {
+            let forward = sigma * r.dir[k] > 0.0;
+            if !forward || !r.dir.is_finite() || !r.origin.is_finite() {
                 return None;
             }
             k0 = if sigma > 0.0 {
@@ -416,7 +418,8 @@ fn shared_end(rays: Rays<'_>) -> Option<Vec3> {
     let (a, b, c) = (d0.dot(d0), d0.dot(d1), d1.dot(d1));
     let (d, e) = (d0.dot(w), d1.dot(w));
     let denom = a * c - b * b;
-    if !(denom > 1e-12 * a * c) {
+    let independent = denom > 1e-12 * a * c;
+    if !independent {
         return None;
     }
     let p0 = r0.origin + d0 * ((b * e - c * d) / denom);

@@ -18,6 +18,9 @@
 //! Unused lanes (padding of a packet whose size is not a multiple of `L`) and, in occlusion
 //! mode, lanes already occluded have `tmax = −∞`, so no box and no triangle can hit them.
 
+// Lane loops index several lane arrays in lock step: the indexed form is what LLVM vectorizes.
+#![allow(clippy::needless_range_loop)]
+
 use crate::geometry::aabb::FAR_SCALE;
 use crate::geometry::{Hit, Rays, Triangle};
 
@@ -229,8 +232,8 @@ impl<const L: usize> SimdRay<L> {
             let det = u + v + w;
             let ts = u * sz[l] * a[2][l] + v * sz[l] * b[2][l] + w * sz[l] * c[2][l];
             let (ts, ad) = if det < 0.0 { (-ts, -det) } else { (ts, det) };
-            let in_range = !(ts < self.tmin[l] * ad) && !(ts > self.tmax[l] * ad);
-            hit[l] = !outside && det != 0.0 && in_range;
+            let out_of_range = ts < self.tmin[l] * ad || ts > self.tmax[l] * ad;
+            hit[l] = !outside && det != 0.0 && !out_of_range;
             t_scaled[l] = ts;
             abs_det[l] = ad;
             any |= hit[l] as u32;
@@ -383,7 +386,7 @@ mod tests {
                 }
             }
             assert_eq!(n, expected);
-            assert!((used as usize..16).all(|l| !simd.hit(l).is_hit()));
+            assert!((used..16).all(|l| !simd.hit(l).is_hit()));
         }
     }
 
