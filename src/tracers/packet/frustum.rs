@@ -141,23 +141,42 @@ impl Frustum {
         let o = rays.ray(0).origin;
         let d = [rays.dx, rays.dy, rays.dz];
         let (dk, du, dv) = (d[k], d[j[0]], d[j[1]]);
-        let mut slope = [Range::EMPTY; 2];
-        let mut tau_near = f32::INFINITY;
-        let mut ok = true;
+        // Extremes kept per lane of a 16-wide accumulator so the loop vectorizes; NaN or
+        // infinite slopes are caught by `finish`, non-positive or infinite `along` by `ok`; a NaN
+        // slope is skipped (a ray with a NaN direction hits nothing).
+        const W: usize = 16;
+        let (mut lo, mut hi) = ([[f32::INFINITY; W]; 2], [[f32::NEG_INFINITY; W]; 2]);
+        let (mut near, mut along_max, mut ok) = ([f32::INFINITY; W], [0.0f32; W], [true; W]);
         for i in 0..rays.len() {
+            let l = i % W;
             let along = sigma * dk[i];
-            ok &= along > 0.0 && along.is_finite() && du[i].is_finite() && dv[i].is_finite();
+            ok[l] &= along > 0.0 && along < f32::INFINITY;
             let inv = 1.0 / along;
-            slope[0].add(du[i] * inv);
-            slope[1].add(dv[i] * inv);
-            tau_near = tau_near.min(rays.tmin[i] * along);
+            for (s, d) in [du, dv].into_iter().enumerate() {
+                let x = d[i] * inv;
+                lo[s][l] = if x < lo[s][l] { x } else { lo[s][l] };
+                hi[s][l] = if x > hi[s][l] { x } else { hi[s][l] };
+            }
+            let t = rays.tmin[i] * along;
+            near[l] = if t < near[l] { t } else { near[l] };
+            along_max[l] = if along > along_max[l] {
+                along
+            } else {
+                along_max[l]
+            };
         }
-        if !ok {
+        if ok.contains(&false) {
             return None;
         }
+        let fold =
+            |v: &[f32; W], f: fn(f32, f32) -> f32, init: f32| v.iter().copied().fold(init, f);
+        let slope = [0, 1].map(|s| Range {
+            lo: fold(&lo[s], f32::min, f32::INFINITY),
+            hi: fold(&hi[s], f32::max, f32::NEG_INFINITY),
+        });
+        let tau_near = fold(&near, f32::min, f32::INFINITY);
         let apex = [o[j[0]], o[j[1]]];
-        let along = dk.iter().fold(0.0f32, |m, &x| m.max(sigma * x));
-        let far = [0.0, along];
+        let far = [0.0, fold(&along_max, f32::max, 0.0)];
         Self::finish(
             FrustumKind::SharedOrigin,
             k,

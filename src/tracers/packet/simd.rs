@@ -80,7 +80,12 @@ impl<const L: usize> SimdRay<L> {
         self.used = used as u32;
         let at = |src: &[f32], fill: f32| -> [f32; L] {
             let mut lanes = [fill; L];
-            lanes[..used].copy_from_slice(&src[first..first + used]);
+            if used == L {
+                // A constant-length copy: vector moves, not a call to memmove.
+                lanes.copy_from_slice(&src[first..first + L]);
+            } else {
+                lanes[..used].copy_from_slice(&src[first..first + used]);
+            }
             lanes
         };
         let d = [at(rays.dx, 1.0), at(rays.dy, 1.0), at(rays.dz, 1.0)];
