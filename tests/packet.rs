@@ -314,3 +314,32 @@ fn bad_parameters_are_rejected() {
         }
     );
 }
+
+/// Explicit packets (packet assembly) are kept: a 16-ray batch cut into packets of 5, 5, 5 and 1
+/// rays is traced as four packets even though a packet could hold 16, with the same hits.
+#[test]
+fn explicit_packets_are_respected() {
+    let uniform = column_packet([0.5, 10.0, 0.5, 3.5]);
+    let mut explicit = RayBatch::new(RayKind::Shadow);
+    for i in 0..uniform.len() {
+        if i % 5 == 0 {
+            explicit.push_packet_start(uniform.ray(i), i as u32);
+        } else {
+            explicit.push(uniform.ray(i), i as u32);
+        }
+    }
+    for traversal in Traversal::ALL {
+        let config = PacketConfig {
+            packet: 4,
+            lanes: 4,
+            traversal,
+            frustum: true,
+        };
+        let tracer = PacketTracer::new(Arc::new(four_leaf_tree()), config);
+        let mut hits = vec![Hit::MISS; 16];
+        let mut c = Counters::default();
+        tracer.intersect_counted(explicit.view(), &mut hits, &mut c);
+        assert_eq!(c.get(Event::Packets), 4, "{traversal:?}");
+        assert_eq!(hits, trace_hits(&tracer, &uniform), "{traversal:?}");
+    }
+}
