@@ -1,4 +1,4 @@
-//! The foundation's correctness bar: the reference, obvhs and cgt tracers agree with Embree (robust
+//! The foundation's correctness bar: the reference, obvhs, cgt and packet tracers agree with Embree (robust
 //! mode) on well over a million rays — primary, shadow and diffuse bounces — over three built-in
 //! scenes and two real ones (conference, bunny), with zero unexplained disagreements; and the
 //! reference tracer agrees on Whitted's reflection and refraction rays. Ties are classified and
@@ -26,24 +26,20 @@ fn scenes() -> Vec<(&'static str, Option<u32>)> {
 }
 
 fn agrees_with_embree(tracer: &str) {
+    agrees_with_embree_with(tracer, &Params::new());
+}
+
+fn agrees_with_embree_with(tracer: &str, params: &Params) {
     let tol = Tolerance::default();
     let mut total_rays = 0;
     let mut failures = vec![];
     for (name, size) in scenes() {
         let scene = load_scene(name, size).unwrap();
         let frame = scene.frame(0, 1);
-        let reports = verify_frame(
-            &scene,
-            &frame,
-            tracer,
-            &Params::new(),
-            RESOLUTION,
-            RESOLUTION,
-            SEED,
-        )
-        .unwrap();
+        let reports =
+            verify_frame(&scene, &frame, tracer, params, RESOLUTION, RESOLUTION, SEED).unwrap();
         println!(
-            "{tracer} on {name} ({} triangles):\n{}",
+            "{tracer} {params} on {name} ({} triangles):\n{}",
             scene.triangle_count(),
             format_table(&reports, &tol)
         );
@@ -61,7 +57,7 @@ fn agrees_with_embree(tracer: &str) {
     }
     assert!(
         failures.is_empty(),
-        "{tracer} disagrees with Embree: {failures:?}"
+        "{tracer} {params} disagrees with Embree: {failures:?}"
     );
     if std::env::var_os("RAYLAB_SCENES").is_some() {
         assert!(total_rays >= 1_000_000, "only {total_rays} rays compared");
@@ -127,5 +123,24 @@ fn reference_agrees_with_embree_on_reflection_and_refraction() {
         if scene.name == "room-reflective" {
             assert!(reports.iter().all(|r| r.kind != RayKind::Refraction));
         }
+    }
+}
+
+/// One configuration per traversal, covering every SIMD width and both frustum settings; the
+/// exhaustive grid of configurations is checked against the reference tracer in tests/packet.rs.
+#[test]
+fn packet_agrees_with_embree() {
+    for (traversal, packet, lanes, frustum) in [
+        ("ranged", 16, 16, true),
+        ("partition", 8, 8, true),
+        ("ia", 32, 16, true),
+        ("masked", 4, 4, false),
+    ] {
+        let params = Params::new()
+            .with("traversal", traversal)
+            .with("packet", packet)
+            .with("lanes", lanes)
+            .with("frustum", frustum);
+        agrees_with_embree_with("packet", &params);
     }
 }

@@ -6,6 +6,7 @@ pub mod cgt;
 pub mod dda;
 pub mod embree;
 pub mod obvhs;
+pub mod packet;
 pub mod params;
 pub mod reference;
 pub mod registry;

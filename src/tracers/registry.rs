@@ -7,6 +7,7 @@ use crate::tracers::cgt::{CgtConfig, CgtTracer};
 use crate::tracers::embree::{
     Coherence, EmbreeTracer, Packets16, Packets4, Packets8, Single, Stream,
 };
+use crate::tracers::packet::{PacketConfig, PacketTracer};
 use crate::tracers::{
     dda::GridDdaTracer, obvhs::ObvhsTracer, reference::ReferenceTracer, Params, Tracer,
 };
@@ -75,6 +76,12 @@ pub const TRACERS: &[TracerInfo] = &[
         params: CgtConfig::PARAMS,
         about: "coherent grid traversal (Wald et al. 2006): n×n packets walk the uniform grid slice by slice in their frustum; per-packet mailboxing, SIMD frustum culling, macrocells",
     },
+    TracerInfo {
+        name: "packet",
+        accel: AccelKind::Bvh,
+        params: PacketConfig::PARAMS,
+        about: "large ray packets (Overbeck et al. 2008): n×n packets (packet ∈ 2,4,8,16,32) of L-lane SIMD rays (lanes ∈ 4,8,16) through the SAH BVH by masked, ranged, partition or ia (Wald et al. 2007 first hit + interval arithmetic) traversal, front to back by direction signs; frustum culling of boxes and triangles (shared-origin, shared-end-point or general frustum, from the data); exact closest hits (watertight, robust slabs per lane)",
+    },
 ];
 
 impl TracerInfo {
@@ -119,6 +126,9 @@ pub fn build_tracer(info: &TracerInfo, params: &Params, accel: &Accel) -> Result
             Ok(Box::new(EmbreeTracer::<Stream>::from_params(s, params)?))
         }
         ("obvhs", Accel::Obvhs(bvh)) => Ok(Box::new(ObvhsTracer::new(bvh.clone()))),
+        ("packet", Accel::Bvh(bvh)) => {
+            Ok(Box::new(PacketTracer::from_params(bvh.clone(), params)?))
+        }
         ("grid-dda", Accel::Grid(grid)) => Ok(Box::new(GridDdaTracer::new(grid.clone()))),
         ("cgt", Accel::Grid(grid)) => Ok(Box::new(CgtTracer::from_params(grid.clone(), params)?)),
         (name, _) => Err(Error::runtime(format!(

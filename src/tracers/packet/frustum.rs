@@ -1,0 +1,570 @@
+//! The bounding frustum of a packet (Overbeck et al. 2008 §4) and its culling tests (Eq. 1): a box
+//! or triangle is culled when all its vertices lie outside the same side plane.
+//!
+//! Every frustum here has the same shape: along the packet's dominant axis `k` (the largest
+//! component of the summed directions, §4.2) with `τ = σ·(p_k − k0)` the distance along it (`σ` the
+//! side the rays travel to), the frustum is
+//! `lo_j + τ·slope_lo_j ≤ p_j ≤ hi_j + τ·slope_hi_j` for the two other axes `j`, and `τ ≥ τ_near`.
+//! Its four side planes are Eq. 2–3's planes through neighbouring corner rays, written in this
+//! "simplified" form (§4.2–4.3: the corner rays' k-coordinate is ±1 and neighbours share a u or a
+//! v). The class is decided from the data, never from the ray kind:
+//!
+//! - **Shared origin** (§4.1; camera rays of a pinhole): every origin is bitwise the same point
+//!   `O`. Apex `O`, slopes the extremes of `d_j / (σ d_k)`. For an n×n block of pinhole rays those
+//!   extremes are the corner rays' (a ratio of linear functions of screen position is extremal at
+//!   the rectangle's corners), so this is §4.1's corner-ray frustum; taking them over all rays
+//!   also bounds partial packets and packets not laid out as screen blocks.
+//! - **Shared end point** (§4.2; point-light shadow rays): every ray's line passes within a small
+//!   fraction of its length of one point `A`, which lies beyond every segment's end. The batch's
+//!   shadow rays stop just short of the light (`render::rays::shadow_ray`), so `o + d·tmax` are not
+//!   one point; we find `A` as the closest point of two of the lines and check the others. Apex `A`,
+//!   dominant axis from the directions seen from the light (`−d`); the slopes are the extremes over
+//!   both end points of every segment — the cone over `A` spanned by a segment's ends contains the
+//!   segment, so the frustum is conservative whatever `A`'s rounding.
+//! - **General** (§4.3; diffuse, reflection and mixed packets): a near plane at the origins'
+//!   nearest `k` and a far plane at the scene box's farthest; the extremes of the rays' crossings
+//!   of both planes give the corner rays' origins and directions. Every ray's part between the
+//!   planes lies within the convex hull of those crossings, and no geometry lies past the far
+//!   plane.
+//!
+//! **Far plane** (our addition): once every lane has a closest hit, no ray point that matters lies
+//! beyond `τ_far`, the largest `τ` a ray reaches at the packet's largest current hit distance
+//! (`clip_far`, after each leaf); boxes and triangles wholly beyond it are culled. Shared-origin
+//! and general frusta only (along a shared-end packet `τ` decreases).
+//!
+//! A packet gets no frustum (no culling) when some ray does not travel strictly towards `σ` along
+//! `k` (e.g. a diffuse packet whose bounces go both ways along every axis) or a value is not
+//! finite.
+//!
+//! Rounding: every test compares against the bound widened by `eps = MARGIN·M·(1 + max|slope|)`,
+//! `M` the largest coordinate magnitude involved (scene box, origins, apex). Computing a bound,
+//! a slope times a distance, or a ray's point is off by a few ulps of `M·(1 + |slope|)`; the margin
+//! is ~500 times that, so culling never drops something a ray's watertight test hits.
+
+use glam::Vec3;
+
+use crate::geometry::{Aabb, Rays, Triangle};
+
+/// Relative width of the safety margin: 2⁻¹⁵ (module doc).
+const MARGIN: f32 = 1.0 / 32768.0;
+/// A packet's lines meet in one point when each passes that close to it, relative to the
+/// distance from its origin (well above the shadow rays' rounding, far below any real spread).
+const MEET_TOLERANCE: f32 = 1e-4;
+
+/// How the frustum was built (module doc).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FrustumKind {
+    SharedOrigin,
+    SharedEnd,
+    General,
+}
+
+#[derive(Clone, Copy, Debug)]
+pub struct Frustum {
+    pub kind: FrustumKind,
+    k: usize,
+    /// The two other axes.
+    j: [usize; 2],
+    sigma: f32,
+    k0: f32,
+    lo: [f32; 2],
+    hi: [f32; 2],
+    slope_lo: [f32; 2],
+    slope_hi: [f32; 2],
+    tau_near: f32,
+    /// Far plane: no ray point lies beyond `τ = far_base + far_rate·t` for `t` at most the
+    /// packet's largest current closest hit (`clip_far`); ∞ until then, and always for shared end
+    /// points (their τ decreases along the rays).
+    tau_far: f32,
+    far_base: f32,
+    far_rate: f32,
+    eps: f32,
+}
+
+/// Extremes of a set of values.
+#[derive(Clone, Copy)]
+struct Range {
+    lo: f32,
+    hi: f32,
+}
+
+impl Range {
+    const EMPTY: Range = Range {
+        lo: f32::INFINITY,
+        hi: f32::NEG_INFINITY,
+    };
+    fn add(&mut self, x: f32) {
+        self.lo = self.lo.min(x);
+        self.hi = self.hi.max(x);
+    }
+}
+
+fn max_abs(v: Vec3) -> f32 {
+    v.abs().max_element()
+}
+
+impl Frustum {
+    /// The frustum of `rays` (one packet) in a scene bounded by `scene`, or `None` when the
+    /// packet cannot be bounded (module doc).
+    pub fn build(rays: Rays<'_>, scene: &Aabb) -> Option<Frustum> {
+        let n = rays.len();
+        if n == 0 || scene.is_empty() {
+            return None;
+        }
+        let dir_sum = Vec3::new(
+            rays.dx.iter().sum(),
+            rays.dy.iter().sum(),
+            rays.dz.iter().sum(),
+        );
+        let k = dir_sum.abs().max_position();
+        let j = [(k + 1) % 3, (k + 2) % 3];
+        let scale = max_abs(scene.min).max(max_abs(scene.max));
+        let same = |v: &[f32]| v.iter().all(|&x| x == v[0]);
+        if same(rays.ox) && same(rays.oy) && same(rays.oz) {
+            return Self::shared_origin(rays, k, j, dir_sum[k].signum(), scale);
+        }
+        if let Some(apex) = shared_end(rays) {
+            if let Some(f) = Self::shared_end(rays, apex, k, j, -dir_sum[k].signum(), scale) {
+                return Some(f);
+            }
+        }
+        Self::general(rays, scene, k, j, dir_sum[k].signum(), scale)
+    }
+
+    fn shared_origin(
+        rays: Rays<'_>,
+        k: usize,
+        j: [usize; 2],
+        sigma: f32,
+        scale: f32,
+    ) -> Option<Self> {
+        let o = rays.ray(0).origin;
+        let d = [rays.dx, rays.dy, rays.dz];
+        let (dk, du, dv) = (d[k], d[j[0]], d[j[1]]);
+        // Extremes kept per lane of a 16-wide accumulator so the loop vectorizes; NaN or
+        // infinite slopes are caught by `finish`, non-positive or infinite `along` by `ok`; a NaN
+        // slope is skipped (a ray with a NaN direction hits nothing).
+        const W: usize = 16;
+        let (mut lo, mut hi) = ([[f32::INFINITY; W]; 2], [[f32::NEG_INFINITY; W]; 2]);
+        let (mut near, mut along_max, mut ok) = ([f32::INFINITY; W], [0.0f32; W], [true; W]);
+        for i in 0..rays.len() {
+            let l = i % W;
+            let along = sigma * dk[i];
+            ok[l] &= along > 0.0 && along < f32::INFINITY;
+            let inv = 1.0 / along;
+            for (s, d) in [du, dv].into_iter().enumerate() {
+                let x = d[i] * inv;
+                lo[s][l] = if x < lo[s][l] { x } else { lo[s][l] };
+                hi[s][l] = if x > hi[s][l] { x } else { hi[s][l] };
+            }
+            let t = rays.tmin[i] * along;
+            near[l] = if t < near[l] { t } else { near[l] };
+            along_max[l] = if along > along_max[l] {
+                along
+            } else {
+                along_max[l]
+            };
+        }
+        if ok.contains(&false) {
+            return None;
+        }
+        let fold =
+            |v: &[f32; W], f: fn(f32, f32) -> f32, init: f32| v.iter().copied().fold(init, f);
+        let slope = [0, 1].map(|s| Range {
+            lo: fold(&lo[s], f32::min, f32::INFINITY),
+            hi: fold(&hi[s], f32::max, f32::NEG_INFINITY),
+        });
+        let tau_near = fold(&near, f32::min, f32::INFINITY);
+        let apex = [o[j[0]], o[j[1]]];
+        let far = [0.0, fold(&along_max, f32::max, 0.0)];
+        Self::finish(
+            FrustumKind::SharedOrigin,
+            k,
+            j,
+            sigma,
+            o[k],
+            apex,
+            apex,
+            slope,
+            tau_near,
+            far,
+            scale.max(max_abs(o)),
+        )
+    }
+
+    fn shared_end(
+        rays: Rays<'_>,
+        apex: Vec3,
+        k: usize,
+        j: [usize; 2],
+        sigma: f32,
+        scale: f32,
+    ) -> Option<Self> {
+        let mut slope = [Range::EMPTY; 2];
+        let mut tau_near = f32::INFINITY;
+        let mut magnitude = scale.max(max_abs(apex));
+        for i in 0..rays.len() {
+            let r = rays.ray(i);
+            for p in [r.at(r.tmin), r.at(r.tmax)] {
+                let tau = sigma * (p[k] - apex[k]);
+                let ahead = tau > 0.0;
+                if !ahead || !p.is_finite() {
+                    return None;
+                }
+                for s in 0..2 {
+                    slope[s].add((p[j[s]] - apex[j[s]]) / tau);
+                }
+                tau_near = tau_near.min(tau);
+                magnitude = magnitude.max(max_abs(p));
+            }
+        }
+        let a = [apex[j[0]], apex[j[1]]];
+        let far = [f32::INFINITY, f32::INFINITY];
+        Self::finish(
+            FrustumKind::SharedEnd,
+            k,
+            j,
+            sigma,
+            apex[k],
+            a,
+            a,
+            slope,
+            tau_near,
+            far,
+            magnitude,
+        )
+    }
+
+    fn general(
+        rays: Rays<'_>,
+        scene: &Aabb,
+        k: usize,
+        j: [usize; 2],
+        sigma: f32,
+        scale: f32,
+    ) -> Option<Self> {
+        let mut k0 = if sigma > 0.0 {
+            f32::INFINITY
+        } else {
+            f32::NEG_INFINITY
+        };
+        let mut magnitude = scale;
+        for i in 0..rays.len() {
+            let r = rays.ray(i);
+            let forward = sigma * r.dir[k] > 0.0;
+            if !forward || !r.dir.is_finite() || !r.origin.is_finite() {
+                return None;
+            }
+            k0 = if sigma > 0.0 {
+                k0.min(r.origin[k])
+            } else {
+                k0.max(r.origin[k])
+            };
+            magnitude = magnitude.max(max_abs(r.origin));
+        }
+        let tau_of = |x: f32| sigma * (x - k0);
+        // The far plane: no geometry lies beyond the scene box.
+        let tau_far = tau_of(scene.min[k])
+            .max(tau_of(scene.max[k]))
+            .max(magnitude * MARGIN)
+            .max(f32::MIN_POSITIVE);
+        let (mut near, mut far) = ([Range::EMPTY; 2], [Range::EMPTY; 2]);
+        let mut tau_near = f32::INFINITY;
+        let (mut far_base, mut far_rate) = (0.0f32, 0.0f32);
+        for i in 0..rays.len() {
+            let r = rays.ray(i);
+            let along = sigma * r.dir[k];
+            let tau_o = tau_of(r.origin[k]);
+            for s in 0..2 {
+                let ratio = r.dir[j[s]] / along;
+                near[s].add(r.origin[j[s]] - tau_o * ratio);
+                far[s].add(r.origin[j[s]] + (tau_far - tau_o) * ratio);
+            }
+            tau_near = tau_near.min(tau_o + r.tmin.min(0.0) * along);
+            far_base = far_base.max(tau_o);
+            far_rate = far_rate.max(along);
+        }
+        for s in 0..2 {
+            magnitude = magnitude.max(near[s].lo.abs()).max(near[s].hi.abs());
+            magnitude = magnitude.max(far[s].lo.abs()).max(far[s].hi.abs());
+        }
+        let slope = [0, 1].map(|s| Range {
+            lo: (far[s].lo - near[s].lo) / tau_far,
+            hi: (far[s].hi - near[s].hi) / tau_far,
+        });
+        Self::finish(
+            FrustumKind::General,
+            k,
+            j,
+            sigma,
+            k0,
+            [near[0].lo, near[1].lo],
+            [near[0].hi, near[1].hi],
+            slope,
+            tau_near,
+            [far_base, far_rate],
+            magnitude,
+        )
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn finish(
+        kind: FrustumKind,
+        k: usize,
+        j: [usize; 2],
+        sigma: f32,
+        k0: f32,
+        lo: [f32; 2],
+        hi: [f32; 2],
+        slope: [Range; 2],
+        tau_near: f32,
+        [far_base, far_rate]: [f32; 2],
+        magnitude: f32,
+    ) -> Option<Frustum> {
+        let steepest = slope
+            .iter()
+            .map(|s| s.lo.abs().max(s.hi.abs()))
+            .fold(0.0f32, f32::max);
+        let eps = MARGIN * magnitude * (1.0 + steepest);
+        let values = [
+            lo[0],
+            lo[1],
+            hi[0],
+            hi[1],
+            slope[0].lo,
+            slope[0].hi,
+            slope[1].lo,
+            slope[1].hi,
+            k0,
+            tau_near,
+            eps,
+        ];
+        values.iter().all(|v| v.is_finite()).then_some(Frustum {
+            kind,
+            k,
+            j,
+            sigma,
+            k0,
+            lo,
+            hi,
+            slope_lo: [slope[0].lo, slope[1].lo],
+            slope_hi: [slope[0].hi, slope[1].hi],
+            tau_near,
+            tau_far: f32::INFINITY,
+            far_base,
+            far_rate,
+            eps,
+        })
+    }
+
+    /// Moves the far plane to where the rays are when they reach distance `max_t`, the packet's
+    /// largest current closest hit (our addition to §4: boxes behind every ray's hit are culled
+    /// for the whole packet). Never moves it outwards past ∞ for shared end points.
+    #[inline(always)]
+    pub fn clip_far(&mut self, max_t: f32) {
+        let far = self.far_base + max_t * self.far_rate;
+        if far.is_finite() {
+            self.tau_far = far;
+        }
+    }
+
+    #[inline(always)]
+    fn tau(&self, x: f32) -> f32 {
+        self.sigma * (x - self.k0)
+    }
+
+    /// Whether no ray of the packet can meet the box `[lo, hi]` (Eq. 1 with the box's vertex
+    /// nearest to each plane).
+    #[inline(always)]
+    pub fn culls_box(&self, lo: [f32; 3], hi: [f32; 3]) -> bool {
+        let (ta, tb) = (self.tau(lo[self.k]), self.tau(hi[self.k]));
+        let (t_near, t_far) = if ta < tb { (ta, tb) } else { (tb, ta) };
+        if t_far < self.tau_near - self.eps || t_near > self.tau_far + self.eps {
+            return true;
+        }
+        for s in 0..2 {
+            let axis = self.j[s];
+            let (sl, sh) = (self.slope_lo[s], self.slope_hi[s]);
+            if hi[axis] - (sl * t_near).min(sl * t_far) < self.lo[s] - self.eps {
+                return true;
+            }
+            if lo[axis] - (sh * t_near).max(sh * t_far) > self.hi[s] + self.eps {
+                return true;
+            }
+        }
+        false
+    }
+
+    /// Whether no ray of the packet can meet `tri` (Eq. 1 on its three vertices).
+    #[inline(always)]
+    pub fn culls_triangle(&self, tri: &Triangle) -> bool {
+        let tau = tri.v.map(|p| self.tau(p[self.k]));
+        if tau.iter().all(|&t| t < self.tau_near - self.eps)
+            || tau.iter().all(|&t| t > self.tau_far + self.eps)
+        {
+            return true;
+        }
+        for s in 0..2 {
+            let axis = self.j[s];
+            let below =
+                (0..3).all(|i| tri.v[i][axis] - self.slope_lo[s] * tau[i] < self.lo[s] - self.eps);
+            let above =
+                (0..3).all(|i| tri.v[i][axis] - self.slope_hi[s] * tau[i] > self.hi[s] + self.eps);
+            if below || above {
+                return true;
+            }
+        }
+        false
+    }
+}
+
+/// The point all lines of `rays` pass through, beyond every segment's end, if there is one
+/// (module doc, "shared end point").
+fn shared_end(rays: Rays<'_>) -> Option<Vec3> {
+    let n = rays.len();
+    if n < 2 || (0..n).any(|i| !rays.tmax[i].is_finite()) {
+        return None;
+    }
+    let r0 = rays.ray(0);
+    // The line most different in direction from the first pins the point down best.
+    let other = (1..n).map(|i| rays.ray(i)).max_by(|a, b| {
+        let ca = r0.dir.cross(a.dir).length_squared();
+        let cb = r0.dir.cross(b.dir).length_squared();
+        ca.total_cmp(&cb)
+    })?;
+    let (d0, d1) = (r0.dir, other.dir);
+    let w = r0.origin - other.origin;
+    let (a, b, c) = (d0.dot(d0), d0.dot(d1), d1.dot(d1));
+    let (d, e) = (d0.dot(w), d1.dot(w));
+    let denom = a * c - b * b;
+    let independent = denom > 1e-12 * a * c;
+    if !independent {
+        return None;
+    }
+    let p0 = r0.origin + d0 * ((b * e - c * d) / denom);
+    let p1 = other.origin + d1 * ((a * e - b * d) / denom);
+    let apex = (p0 + p1) * 0.5;
+    let meets = (0..n).all(|i| {
+        let r = rays.ray(i);
+        let to_apex = apex - r.origin;
+        let along = to_apex.dot(r.dir) / r.dir.length_squared();
+        let off = to_apex.cross(r.dir).length() / r.dir.length();
+        along >= r.tmax && off <= MEET_TOLERANCE * to_apex.length()
+    });
+    meets.then_some(apex)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::{Ray, RayBatch, RayBoxTest, RayKind, WatertightRay};
+    use crate::random::SplitMix64;
+
+    fn batch(rays: &[Ray]) -> RayBatch {
+        let mut b = RayBatch::new(RayKind::Primary);
+        rays.iter()
+            .enumerate()
+            .for_each(|(i, r)| b.push(*r, i as u32));
+        b
+    }
+
+    /// An 8×8 pinhole block, shadow rays from scattered points to one light, and a general packet
+    /// of rays with scattered origins and spread directions.
+    fn packets(rng: &mut SplitMix64) -> Vec<(FrustumKind, Vec<Ray>)> {
+        let eye = rng.vec3(-3.0, 3.0);
+        let (x0, y0) = (rng.range(-1.0, 0.8), rng.range(-1.0, 0.8));
+        let primary = (0..64)
+            .map(|i| {
+                let (x, y) = ((i % 8) as f32, (i / 8) as f32);
+                let d = Vec3::new(x0 + x * 0.03, y0 + y * 0.03, -1.0).normalize();
+                Ray::new(eye, d, 0.0, 4.0 + (i % 5) as f32)
+            })
+            .collect();
+        let light = rng.vec3(-3.0, 3.0);
+        let centre = rng.vec3(-3.0, 3.0);
+        let shadow = (0..64)
+            .map(|_| {
+                let o = centre + rng.vec3(-0.4, 0.4);
+                let to = light - o;
+                let dist = to.length();
+                Ray::new(o, to / dist, 0.0, dist * (1.0 - 1e-4))
+            })
+            .collect();
+        let base = rng.direction();
+        let general = (0..64)
+            .map(|_| {
+                let d = (base + rng.vec3(-0.3, 0.3)).normalize();
+                Ray::new(centre + rng.vec3(-0.5, 0.5), d, 0.0, rng.range(2.0, 6.0))
+            })
+            .collect();
+        vec![
+            (FrustumKind::SharedOrigin, primary),
+            (FrustumKind::SharedEnd, shadow),
+            (FrustumKind::General, general),
+        ]
+    }
+
+    #[test]
+    fn frustum_never_culls_what_a_ray_hits() {
+        let mut rng = SplitMix64::new(2026);
+        let scene = Aabb::new(Vec3::splat(-6.0), Vec3::splat(6.0));
+        let mut checked = [0usize; 3];
+        let mut culled = [0usize; 3];
+        for _ in 0..60 {
+            for (kind, rays) in packets(&mut rng) {
+                let b = batch(&rays);
+                let Some(mut f) = Frustum::build(b.view(), &scene) else {
+                    panic!("{kind:?} packet got no frustum");
+                };
+                f.clip_far(rays.iter().fold(0.0f32, |m, r| m.max(r.tmax)));
+                assert_eq!(f.kind, kind);
+                for _ in 0..200 {
+                    let c = rng.vec3(-5.0, 5.0);
+                    let bx = Aabb::new(c, c + rng.vec3(0.0, 1.5));
+                    let tri = Triangle::new(c, c + rng.vec3(-2.0, 2.0), c + rng.vec3(-2.0, 2.0));
+                    let box_hit = rays.iter().any(|r| {
+                        RayBoxTest::new(r.origin, r.dir)
+                            .hit(&bx, r.tmin, r.tmax)
+                            .is_some()
+                    });
+                    let tri_hit = rays.iter().any(|r| {
+                        WatertightRay::new(r.origin, r.dir)
+                            .intersect(&tri, r.tmin, r.tmax)
+                            .is_some()
+                    });
+                    let (cb, ct) = (
+                        f.culls_box(bx.min.to_array(), bx.max.to_array()),
+                        f.culls_triangle(&tri),
+                    );
+                    assert!(!(box_hit && cb), "{kind:?} frustum culled a box a ray hits");
+                    assert!(
+                        !(tri_hit && ct),
+                        "{kind:?} frustum culled a triangle a ray hits"
+                    );
+                    let i = kind as usize;
+                    checked[i] += 2;
+                    culled[i] += cb as usize + ct as usize;
+                }
+            }
+        }
+        // The test must be able to fail: each class culls a good share of the random geometry.
+        for i in 0..3 {
+            assert!(
+                culled[i] * 4 > checked[i],
+                "class {i}: {} of {} culled",
+                culled[i],
+                checked[i]
+            );
+        }
+    }
+
+    #[test]
+    fn packets_going_both_ways_get_no_frustum() {
+        let rays = [
+            Ray::new(Vec3::ZERO, Vec3::X, 0.0, 1.0),
+            Ray::new(Vec3::Y, -Vec3::X, 0.0, 1.0),
+        ];
+        let b = batch(&rays);
+        assert!(Frustum::build(b.view(), &Aabb::new(Vec3::splat(-1.0), Vec3::ONE)).is_none());
+    }
+}

@@ -1,0 +1,242 @@
+//! Large ray packets through the binary BVH (Overbeck, Ramamoorthi and Mark 2008, "Large Ray
+//! Packets for Real-time Whitted Ray Tracing"), with the first-hit and interval-arithmetic
+//! traversal of Wald et al. 2007 as used by Boulos et al. 2007 §3.3.
+//!
+//! - **Packets** (`packet` = n): `Rays::packets(n²)`, so explicit packets of the batch are kept;
+//!   camera rays come in Morton-ordered 32×32 tiles, so n² consecutive camera rays are an n×n
+//!   screen block. A packet is `⌈n²/L⌉` SIMD rays of `lanes` = L rays each (`simd`); the last
+//!   one's unused lanes are padding that no box or triangle can hit.
+//! - **Traversals** (`traversal`): `masked` (§3.1, Fig. 2), `ranged` (§3.2, App. A.1),
+//!   `partition` (§3.3, App. A.2), `ia` (first hit + interval arithmetic, `first_hit`). Each file
+//!   says which choices it makes where the paper leaves one. All visit children front to back by
+//!   the signs of the packet's summed direction (`order`).
+//! - **Frustum culling** (`frustum` = true, §4): a frustum bounding every ray of the packet, of
+//!   the class the data shows (shared origin §4.1, shared end point §4.2, general §4.3; see
+//!   `frustum`), culls boxes (Masked: before the ray tests; Ranged/IA: when the first active ray
+//!   misses; Partition: before partitioning) and triangles at the leaves. Its far plane follows
+//!   the packet's farthest current closest hit.
+//! - **Exact closest hits**: every lane runs the reference tracer's slab and watertight tests
+//!   bit for bit (`simd`), and culling is conservative, so each ray gets the reference's closest
+//!   hit (up to the order in which triangles at exactly equal distance are met).
+//! - **Occlusion**: a lane ends at its first hit (its `tmax` becomes −∞, so it hits nothing
+//!   more) and the packet stops as soon as every lane has.
+//!
+//! Counters: `ray` per ray; `node(depth)` per node a packet visits (tests in any way);
+//! `aabb_test(depth)` and `triangle_test(depth)` once per lane in use of every SIMD ray tested
+//! against a box or a triangle — so per-ray averages compare with single-ray tracers, and count
+//! the work a SIMD test really does, including lanes already dead (Overbeck's "active but not
+//! alive" rays). Events: `Packets` per packet, `BoxesCulled` per box rejected for the whole packet
+//! by the frustum or the interval test, `TrianglesCulled` per frustum–triangle cull,
+//! `LeavesVisited` per leaf reached by a packet, `LeafActiveRays` the live lanes (in use, not yet
+//! occluded) of the SIMD rays tested at those leaves.
+
+mod first_hit;
+mod frustum;
+mod interval;
+mod masked;
+mod order;
+mod partition;
+mod ranged;
+mod simd;
+mod workspace;
+
+use std::str::FromStr;
+use std::sync::Arc;
+
+use crate::accel::Bvh;
+use crate::error::{Error, Result};
+use crate::geometry::{Hit, Rays};
+use crate::stats::{Event, Stats};
+use crate::tracers::{Kernel, Params};
+
+pub use frustum::{Frustum, FrustumKind};
+pub use simd::SimdRay;
+
+use order::ChildOrder;
+use workspace::{Packet, Tree};
+
+/// The packet traversal algorithm.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Traversal {
+    Masked,
+    Ranged,
+    Partition,
+    /// First-hit test, then interval-arithmetic culling (Wald et al. 2007).
+    Ia,
+}
+
+impl Traversal {
+    pub const ALL: [Traversal; 4] = [
+        Traversal::Masked,
+        Traversal::Ranged,
+        Traversal::Partition,
+        Traversal::Ia,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Traversal::Masked => "masked",
+            Traversal::Ranged => "ranged",
+            Traversal::Partition => "partition",
+            Traversal::Ia => "ia",
+        }
+    }
+}
+
+impl FromStr for Traversal {
+    type Err = ();
+    fn from_str(s: &str) -> std::result::Result<Self, ()> {
+        Traversal::ALL.into_iter().find(|t| t.name() == s).ok_or(())
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PacketConfig {
+    /// Packet side n: packets of n×n rays.
+    pub packet: usize,
+    /// SIMD width L: rays per SIMD ray.
+    pub lanes: usize,
+    pub traversal: Traversal,
+    pub frustum: bool,
+}
+
+impl Default for PacketConfig {
+    fn default() -> Self {
+        PacketConfig {
+            packet: 16,
+            lanes: 16,
+            traversal: Traversal::Ranged,
+            frustum: true,
+        }
+    }
+}
+
+impl PacketConfig {
+    pub const PARAMS: &'static [&'static str] = &["packet", "lanes", "traversal", "frustum"];
+    pub const PACKET_SIDES: [usize; 5] = [2, 4, 8, 16, 32];
+    pub const LANES: [usize; 3] = [4, 8, 16];
+
+    pub fn from_params(p: &Params) -> Result<Self> {
+        let d = PacketConfig::default();
+        let c = PacketConfig {
+            packet: p.get_or("packet", d.packet)?,
+            lanes: p.get_or("lanes", d.lanes)?,
+            traversal: p.get_or("traversal", d.traversal)?,
+            frustum: p.get_or("frustum", d.frustum)?,
+        };
+        if !Self::PACKET_SIDES.contains(&c.packet) || !Self::LANES.contains(&c.lanes) {
+            return Err(Error::usage(format!(
+                "packet tracer: packet must be one of {:?} (n×n rays) and lanes one of {:?} (got packet = {}, lanes = {})",
+                Self::PACKET_SIDES,
+                Self::LANES,
+                c.packet,
+                c.lanes
+            )));
+        }
+        Ok(c)
+    }
+}
+
+pub struct PacketTracer {
+    bvh: Arc<Bvh>,
+    order: ChildOrder,
+    config: PacketConfig,
+}
+
+impl PacketTracer {
+    pub fn new(bvh: Arc<Bvh>, config: PacketConfig) -> Self {
+        let order = ChildOrder::new(&bvh);
+        PacketTracer { bvh, order, config }
+    }
+
+    pub fn from_params(bvh: Arc<Bvh>, params: &Params) -> Result<Self> {
+        Ok(Self::new(bvh, PacketConfig::from_params(params)?))
+    }
+
+    pub fn config(&self) -> PacketConfig {
+        self.config
+    }
+
+    /// Traces `rays` packet by packet, handing each packet's results to `out(first ray, hits)`.
+    fn run<const L: usize, S: Stats, const ANY: bool>(
+        &self,
+        rays: Rays<'_>,
+        stats: &mut S,
+        mut out: impl FnMut(usize, &Packet<L>),
+    ) {
+        let size = self.config.packet * self.config.packet;
+        if S::ENABLED {
+            (0..rays.len()).for_each(|_| stats.ray());
+        }
+        if self.bvh.is_empty() {
+            return;
+        }
+        let tree = Tree {
+            bvh: &self.bvh,
+            order: &self.order,
+        };
+        let traversal = self.config.traversal;
+        let mut packet = Packet::<L>::with_capacity(size);
+        for range in rays.packets(size) {
+            if S::ENABLED {
+                stats.event(Event::Packets, 1);
+            }
+            let first = range.start;
+            let interval = traversal == Traversal::Ia;
+            packet.load(rays.slice(range), &tree, self.config.frustum, interval);
+            match traversal {
+                Traversal::Masked => masked::traverse::<L, S, ANY>(&mut packet, &tree, stats),
+                Traversal::Ranged => ranged::traverse::<L, S, ANY>(&mut packet, &tree, stats),
+                Traversal::Partition => partition::traverse::<L, S, ANY>(&mut packet, &tree, stats),
+                Traversal::Ia => first_hit::traverse::<L, S, ANY>(&mut packet, &tree, stats),
+            }
+            out(first, &packet);
+        }
+    }
+
+    fn intersect_lanes<const L: usize, S: Stats>(
+        &self,
+        rays: Rays<'_>,
+        hits: &mut [Hit],
+        stats: &mut S,
+    ) {
+        hits.fill(Hit::MISS);
+        self.run::<L, S, false>(rays, stats, |first, packet| {
+            for (slot, hit) in hits[first..].iter_mut().zip(packet.hits()) {
+                *slot = hit;
+            }
+        });
+    }
+
+    fn occluded_lanes<const L: usize, S: Stats>(
+        &self,
+        rays: Rays<'_>,
+        occluded: &mut [bool],
+        stats: &mut S,
+    ) {
+        occluded.fill(false);
+        self.run::<L, S, true>(rays, stats, |first, packet| {
+            for (slot, hit) in occluded[first..].iter_mut().zip(packet.hits()) {
+                *slot = hit.is_hit();
+            }
+        });
+    }
+}
+
+impl Kernel for PacketTracer {
+    fn intersect_with<S: Stats>(&self, rays: Rays<'_>, hits: &mut [Hit], stats: &mut S) {
+        match self.config.lanes {
+            4 => self.intersect_lanes::<4, S>(rays, hits, stats),
+            8 => self.intersect_lanes::<8, S>(rays, hits, stats),
+            _ => self.intersect_lanes::<16, S>(rays, hits, stats),
+        }
+    }
+
+    fn occluded_with<S: Stats>(&self, rays: Rays<'_>, occluded: &mut [bool], stats: &mut S) {
+        match self.config.lanes {
+            4 => self.occluded_lanes::<4, S>(rays, occluded, stats),
+            8 => self.occluded_lanes::<8, S>(rays, occluded, stats),
+            _ => self.occluded_lanes::<16, S>(rays, occluded, stats),
+        }
+    }
+}

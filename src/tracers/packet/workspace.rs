@@ -1,0 +1,215 @@
+//! One packet in flight: its SIMD rays, its frustum and interval bounds, and the index lists the
+//! traversals keep. Allocated once per chunk of rays and reused for every packet of the chunk, so
+//! the hot loop never allocates. Also the leaf step all four traversals share (Fig. 2, lines
+//! 21–27): every triangle not culled by the frustum against every active SIMD ray.
+
+use crate::accel::{Bvh, BvhConfig, BvhNode};
+use crate::geometry::{Hit, Rays};
+use crate::stats::{Event, Stats};
+
+use super::frustum::Frustum;
+use super::interval::IntervalPacket;
+use super::order::ChildOrder;
+use super::simd::SimdRay;
+
+/// What every traversal reads: the tree and its child order.
+pub struct Tree<'a> {
+    pub bvh: &'a Bvh,
+    pub order: &'a ChildOrder,
+}
+
+impl Tree<'_> {
+    #[inline(always)]
+    pub fn node(&self, i: u32) -> &BvhNode {
+        &self.bvh.nodes[i as usize]
+    }
+
+    #[inline(always)]
+    pub fn depth<S: Stats>(&self, i: u32) -> usize {
+        if S::ENABLED {
+            self.bvh.depth[i as usize] as usize
+        } else {
+            0
+        }
+    }
+}
+
+/// A node waiting on a traversal stack with the packet's index (first active SIMD ray for
+/// Ranged and IA, number of alive ones for Partition; unused by Masked).
+#[derive(Clone, Copy, Default)]
+pub struct Pending {
+    pub node: u32,
+    pub ia: u32,
+}
+
+/// Deep enough for any tree `Bvh::build` makes.
+pub type Stack = [Pending; BvhConfig::DEPTH_LIMIT + 2];
+
+pub struct Packet<const L: usize> {
+    pub groups: Vec<SimdRay<L>>,
+    /// `0, 1, …, groups − 1`: Ranged and IA hand leaves a sub-slice of it.
+    pub identity: Vec<u32>,
+    /// Partition's index list `I` (§3.3).
+    pub index: Vec<u32>,
+    /// Masked's alive SIMD rays at the current node (its `rayMasks`, kept as a list).
+    pub alive: Vec<u32>,
+    pub frustum: Option<Frustum>,
+    pub interval: Option<IntervalPacket>,
+    /// Sign bits of the packet's summed direction: the front-to-back order.
+    pub negative: [bool; 3],
+    /// Lanes still without a hit (occlusion) or in use (closest hit).
+    pub live: u32,
+    /// The largest closest-hit distance over the packet's lanes (interval culling and the
+    /// frustum's far plane).
+    pub max_t: f32,
+}
+
+impl<const L: usize> Packet<L> {
+    pub fn with_capacity(rays: usize) -> Self {
+        let groups = rays.div_ceil(L);
+        Packet {
+            groups: vec![SimdRay::default(); groups],
+            identity: (0..groups as u32).collect(),
+            index: Vec::with_capacity(groups),
+            alive: Vec::with_capacity(groups),
+            frustum: None,
+            interval: None,
+            negative: [false; 3],
+            live: 0,
+            max_t: f32::INFINITY,
+        }
+    }
+
+    /// Loads one packet; `frustum` and `interval` say which bounds the traversal uses.
+    pub fn load(&mut self, rays: Rays<'_>, tree: &Tree, frustum: bool, interval: bool) {
+        let count = rays.len().div_ceil(L);
+        if self.groups.len() < count {
+            self.groups.resize(count, SimdRay::default());
+            self.identity = (0..count as u32).collect();
+        }
+        self.groups.truncate(count);
+        let mut sum = [0.0f32; 3];
+        for (g, group) in self.groups.iter_mut().enumerate() {
+            let first = g * L;
+            group.load(&rays, first, L.min(rays.len() - first));
+        }
+        for (s, d) in sum.iter_mut().zip([rays.dx, rays.dy, rays.dz]) {
+            *s = d.iter().sum();
+        }
+        self.negative = sum.map(|s| s.is_sign_negative());
+        self.index.clear();
+        self.index.extend(0..count as u32);
+        self.live = rays.len() as u32;
+        self.max_t = (0..rays.len()).fold(f32::NEG_INFINITY, |m, i| m.max(rays.tmax[i]));
+        let scene = &tree.bvh.nodes[Bvh::ROOT].bounds;
+        self.frustum = if frustum {
+            Frustum::build(rays, scene)
+        } else {
+            None
+        };
+        self.interval = interval.then(|| IntervalPacket::new(rays));
+    }
+
+    /// The packet's results, lane by lane.
+    pub fn hits(&self) -> impl Iterator<Item = Hit> + '_ {
+        self.groups
+            .iter()
+            .flat_map(|g| (0..g.used as usize).map(move |l| g.hit(l)))
+    }
+
+    /// Whether SIMD ray `g` meets the box of `node`, counting one box test per lane in use.
+    #[inline(always)]
+    pub fn hits_box<S: Stats>(&self, g: u32, node: &BvhNode, depth: usize, stats: &mut S) -> bool {
+        let group = &self.groups[g as usize];
+        if S::ENABLED {
+            (0..group.used).for_each(|_| stats.aabb_test(depth));
+        }
+        group.hits_box(node.bounds.min.to_array(), node.bounds.max.to_array())
+    }
+
+    /// Whether the frustum culls the box of `node` for the whole packet (counted as a culled box).
+    #[inline(always)]
+    pub fn frustum_culls<S: Stats>(&self, node: &BvhNode, stats: &mut S) -> bool {
+        let culled = self
+            .frustum
+            .as_ref()
+            .is_some_and(|f| f.culls_box(node.bounds.min.to_array(), node.bounds.max.to_array()));
+        if S::ENABLED && culled {
+            stats.event(Event::BoxesCulled, 1);
+        }
+        culled
+    }
+
+    /// Fig. 2 lines 21–27: every triangle of `leaf` the frustum does not cull, against the SIMD
+    /// rays `active`. With `ANY` (occlusion) lanes end at their first hit. Returns whether the
+    /// packet is done (occlusion: every lane occluded).
+    #[inline(always)]
+    pub fn leaf<S: Stats, const ANY: bool>(
+        &mut self,
+        tree: &Tree,
+        leaf: &BvhNode,
+        depth: usize,
+        active: ActiveRays,
+        stats: &mut S,
+    ) -> bool {
+        let ids = match active {
+            ActiveRays::Identity(range) => &self.identity[range],
+            ActiveRays::Index(n) => &self.index[..n],
+            ActiveRays::Alive => &self.alive[..],
+        };
+        if S::ENABLED {
+            stats.event(Event::LeavesVisited, 1);
+            let lanes: u32 = ids
+                .iter()
+                .map(|&g| self.groups[g as usize].live_lanes())
+                .sum();
+            stats.event(Event::LeafActiveRays, lanes as u64);
+        }
+        let bvh = tree.bvh;
+        for i in leaf.first as usize..(leaf.first + leaf.count) as usize {
+            let tri = &bvh.triangles[i];
+            if let Some(f) = &self.frustum {
+                if f.culls_triangle(tri) {
+                    if S::ENABLED {
+                        stats.event(Event::TrianglesCulled, 1);
+                    }
+                    continue;
+                }
+            }
+            let prim = bvh.prim_ids[i];
+            for &g in ids {
+                let group = &mut self.groups[g as usize];
+                if S::ENABLED {
+                    (0..group.used).for_each(|_| stats.triangle_test(depth));
+                }
+                let hits = group.intersect::<ANY>(tri, prim);
+                if ANY {
+                    self.live -= hits;
+                    if self.live == 0 {
+                        return true;
+                    }
+                }
+            }
+        }
+        if !ANY && (self.interval.is_some() || self.frustum.is_some()) {
+            self.max_t = self
+                .groups
+                .iter()
+                .fold(f32::NEG_INFINITY, |m, g| m.max(g.max_tmax()));
+            if let Some(f) = &mut self.frustum {
+                f.clip_far(self.max_t);
+            }
+        }
+        false
+    }
+}
+
+/// Which SIMD rays a leaf tests.
+pub enum ActiveRays {
+    /// SIMD rays `range` (Ranged: `[ia, ie)`; IA: `[ia, n)`).
+    Identity(std::ops::Range<usize>),
+    /// The first `n` entries of the index list (Partition).
+    Index(usize),
+    /// Masked's alive list.
+    Alive,
+}
