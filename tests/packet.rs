@@ -64,6 +64,7 @@ fn four_leaf_tree() -> Bvh {
         prim_ids: vec![0, 1, 2, 3],
         config: BvhConfig::default(),
         build_seconds: 0.0,
+        motion_end: None,
     }
 }
 
