@@ -10,82 +10,60 @@
 
 use crate::stats::{Event, Stats};
 
-use super::workspace::{ActiveRays, Packet, Pending, Stack, Tree};
+use super::walk::RaySelection;
+use super::workspace::{ActiveRays, Packet, Tree};
 
-/// The first SIMD ray from `ia` on that meets the box of `node`, or `n`.
-#[inline(always)]
-fn first_hit<const L: usize, S: Stats>(
-    packet: &Packet<L>,
-    tree: &Tree,
-    node: u32,
-    ia: u32,
-    stats: &mut S,
-) -> u32 {
-    let (n, depth, cell) = (
-        packet.groups.len() as u32,
-        tree.depth::<S>(node),
-        tree.node(node),
-    );
-    if packet.hits_box(ia, cell, depth, stats) {
-        return ia;
-    }
-    let interval = packet
-        .interval
-        .as_ref()
-        .expect("IA traversal loads interval bounds");
-    if interval.culls(
-        cell.bounds.min.to_array(),
-        cell.bounds.max.to_array(),
-        packet.max_t,
-    ) {
-        if S::ENABLED {
-            stats.event(Event::BoxesCulled, 1);
-        }
-        return n;
-    }
-    if packet.frustum_culls(cell, stats) {
-        return n;
-    }
-    (ia + 1..n)
-        .find(|&g| packet.hits_box(g, cell, depth, stats))
-        .unwrap_or(n)
-}
+pub struct FirstHit;
 
-pub fn traverse<const L: usize, S: Stats, const ANY: bool>(
-    packet: &mut Packet<L>,
-    tree: &Tree,
-    stats: &mut S,
-) {
-    let n = packet.groups.len() as u32;
-    let mut stack: Stack = [Pending::default(); _];
-    let mut top = 0;
-    let (mut node, mut ia) = (0u32, 0u32);
-    loop {
-        if S::ENABLED {
-            stats.node(tree.depth::<S>(node));
+impl RaySelection for FirstHit {
+    fn root<const L: usize>(_: &Packet<L>) -> u32 {
+        0
+    }
+
+    /// The first SIMD ray from `ia` on that meets the box of `node`.
+    #[inline(always)]
+    fn enter<const L: usize, S: Stats>(
+        packet: &mut Packet<L>,
+        tree: &Tree,
+        node: u32,
+        ia: u32,
+        stats: &mut S,
+    ) -> Option<u32> {
+        let (n, depth, cell) = (
+            packet.groups.len() as u32,
+            tree.depth::<S>(node),
+            tree.node(node),
+        );
+        if packet.hits_box(ia, cell, depth, stats) {
+            return Some(ia);
         }
-        ia = first_hit(packet, tree, node, ia, stats);
-        if ia < n {
-            let cell = tree.node(node);
-            if !cell.is_leaf() {
-                let (near, far) = tree
-                    .order
-                    .near_far(node as usize, cell.first, packet.negative);
-                stack[top] = Pending { node: far, ia };
-                top += 1;
-                node = near;
-                continue;
+        let interval = packet
+            .interval
+            .as_ref()
+            .expect("IA traversal loads interval bounds");
+        if interval.culls(
+            cell.bounds.min.to_array(),
+            cell.bounds.max.to_array(),
+            packet.max_t,
+        ) {
+            if S::ENABLED {
+                stats.event(Event::BoxesCulled, 1);
             }
-            let depth = tree.depth::<S>(node);
-            let active = ActiveRays::Identity(ia as usize..n as usize);
-            if packet.leaf::<S, ANY>(tree, cell, depth, active, stats) {
-                return;
-            }
+            return None;
         }
-        if top == 0 {
-            return;
+        if packet.frustum_culls(cell, stats) {
+            return None;
         }
-        top -= 1;
-        (node, ia) = (stack[top].node, stack[top].ia);
+        (ia + 1..n).find(|&g| packet.hits_box(g, cell, depth, stats))
+    }
+
+    fn at_leaf<const L: usize, S: Stats>(
+        packet: &Packet<L>,
+        _: &Tree,
+        _: u32,
+        ia: u32,
+        _: &mut S,
+    ) -> ActiveRays {
+        ActiveRays::Identity(ia as usize..packet.groups.len())
     }
 }

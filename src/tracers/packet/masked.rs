@@ -8,52 +8,48 @@
 
 use crate::stats::Stats;
 
-use super::workspace::{ActiveRays, Packet, Pending, Stack, Tree};
+use super::walk::RaySelection;
+use super::workspace::{ActiveRays, Packet, Tree};
 
 /// Fig. 2 `traverseBVH`.
-pub fn traverse<const L: usize, S: Stats, const ANY: bool>(
-    packet: &mut Packet<L>,
-    tree: &Tree,
-    stats: &mut S,
-) {
-    let n = packet.groups.len() as u32;
-    let mut stack: Stack = [Pending::default(); _];
-    let mut top = 0;
-    let mut node = 0u32;
-    loop {
+pub struct Masked;
+
+impl RaySelection for Masked {
+    fn root<const L: usize>(_: &Packet<L>) -> u32 {
+        0
+    }
+
+    #[inline(always)]
+    fn enter<const L: usize, S: Stats>(
+        packet: &mut Packet<L>,
+        tree: &Tree,
+        node: u32,
+        _: u32,
+        stats: &mut S,
+    ) -> Option<u32> {
         let (depth, cell) = (tree.depth::<S>(node), tree.node(node));
-        if S::ENABLED {
-            stats.node(depth);
-        }
         packet.alive.clear();
-        if !packet.frustum_culls(cell, stats) {
-            for g in 0..n {
-                if packet.hits_box(g, cell, depth, stats) {
-                    packet.alive.push(g);
-                    if !cell.is_leaf() {
-                        break;
-                    }
+        if packet.frustum_culls(cell, stats) {
+            return None;
+        }
+        for g in 0..packet.groups.len() as u32 {
+            if packet.hits_box(g, cell, depth, stats) {
+                packet.alive.push(g);
+                if !cell.is_leaf() {
+                    break;
                 }
             }
         }
-        if !packet.alive.is_empty() {
-            if !cell.is_leaf() {
-                let (near, far) = tree
-                    .order
-                    .near_far(node as usize, cell.first, packet.negative);
-                stack[top] = Pending { node: far, ia: 0 };
-                top += 1;
-                node = near;
-                continue;
-            }
-            if packet.leaf::<S, ANY>(tree, cell, depth, ActiveRays::Alive, stats) {
-                return;
-            }
-        }
-        if top == 0 {
-            return;
-        }
-        top -= 1;
-        node = stack[top].node;
+        (!packet.alive.is_empty()).then_some(0)
+    }
+
+    fn at_leaf<const L: usize, S: Stats>(
+        _: &Packet<L>,
+        _: &Tree,
+        _: u32,
+        _: u32,
+        _: &mut S,
+    ) -> ActiveRays {
+        ActiveRays::Alive
     }
 }

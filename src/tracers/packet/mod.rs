@@ -38,6 +38,7 @@ mod order;
 mod partition;
 mod ranged;
 mod simd;
+mod walk;
 mod workspace;
 
 use std::str::FromStr;
@@ -52,7 +53,12 @@ use crate::tracers::{Kernel, Params};
 pub use frustum::{Frustum, FrustumKind};
 pub use simd::SimdRay;
 
+use first_hit::FirstHit;
+use masked::Masked;
 use order::ChildOrder;
+use partition::Partition;
+use ranged::Ranged;
+use walk::traverse;
 use workspace::{Packet, Tree};
 
 /// The packet traversal algorithm.
@@ -185,10 +191,10 @@ impl PacketTracer {
             let interval = traversal == Traversal::Ia;
             packet.load(rays.slice(range), &tree, self.config.frustum, interval);
             match traversal {
-                Traversal::Masked => masked::traverse::<L, S, ANY>(&mut packet, &tree, stats),
-                Traversal::Ranged => ranged::traverse::<L, S, ANY>(&mut packet, &tree, stats),
-                Traversal::Partition => partition::traverse::<L, S, ANY>(&mut packet, &tree, stats),
-                Traversal::Ia => first_hit::traverse::<L, S, ANY>(&mut packet, &tree, stats),
+                Traversal::Masked => traverse::<Masked, L, S, ANY>(&mut packet, &tree, stats),
+                Traversal::Ranged => traverse::<Ranged, L, S, ANY>(&mut packet, &tree, stats),
+                Traversal::Partition => traverse::<Partition, L, S, ANY>(&mut packet, &tree, stats),
+                Traversal::Ia => traverse::<FirstHit, L, S, ANY>(&mut packet, &tree, stats),
             }
             out(first, &packet);
         }

@@ -10,68 +10,49 @@
 
 use crate::stats::Stats;
 
-use super::workspace::{ActiveRays, Packet, Pending, Stack, Tree};
-
-/// `partRays`: moves the SIMD rays among `I[0..ia)` that meet the box of `node` to the front and
-/// returns their count.
-#[inline(always)]
-fn part_rays<const L: usize, S: Stats>(
-    packet: &mut Packet<L>,
-    tree: &Tree,
-    node: u32,
-    ia: u32,
-    stats: &mut S,
-) -> u32 {
-    let (depth, cell) = (tree.depth::<S>(node), tree.node(node));
-    if packet.frustum_culls(cell, stats) {
-        return 0;
-    }
-    let mut ie = 0;
-    for i in 0..ia as usize {
-        let g = packet.index[i];
-        if packet.hits_box(g, cell, depth, stats) {
-            packet.index.swap(ie, i);
-            ie += 1;
-        }
-    }
-    ie as u32
-}
+use super::walk::RaySelection;
+use super::workspace::{ActiveRays, Packet, Tree};
 
 /// App. A.2 `partitionTraverseBVH`.
-pub fn traverse<const L: usize, S: Stats, const ANY: bool>(
-    packet: &mut Packet<L>,
-    tree: &Tree,
-    stats: &mut S,
-) {
-    let mut stack: Stack = [Pending::default(); _];
-    let mut top = 0;
-    let (mut node, mut ia) = (0u32, packet.groups.len() as u32);
-    loop {
-        if S::ENABLED {
-            stats.node(tree.depth::<S>(node));
+pub struct Partition;
+
+impl RaySelection for Partition {
+    fn root<const L: usize>(packet: &Packet<L>) -> u32 {
+        packet.groups.len() as u32
+    }
+
+    /// `partRays`: moves the SIMD rays among `I[0..ia)` that meet the box of `node` to the front
+    /// and keeps their count.
+    #[inline(always)]
+    fn enter<const L: usize, S: Stats>(
+        packet: &mut Packet<L>,
+        tree: &Tree,
+        node: u32,
+        ia: u32,
+        stats: &mut S,
+    ) -> Option<u32> {
+        let (depth, cell) = (tree.depth::<S>(node), tree.node(node));
+        if packet.frustum_culls(cell, stats) {
+            return None;
         }
-        ia = part_rays(packet, tree, node, ia, stats);
-        if ia > 0 {
-            let cell = tree.node(node);
-            if !cell.is_leaf() {
-                let (near, far) = tree
-                    .order
-                    .near_far(node as usize, cell.first, packet.negative);
-                stack[top] = Pending { node: far, ia };
-                top += 1;
-                node = near;
-                continue;
+        let mut ie = 0;
+        for i in 0..ia as usize {
+            let g = packet.index[i];
+            if packet.hits_box(g, cell, depth, stats) {
+                packet.index.swap(ie, i);
+                ie += 1;
             }
-            let depth = tree.depth::<S>(node);
-            let active = ActiveRays::Index(ia as usize);
-            if packet.leaf::<S, ANY>(tree, cell, depth, active, stats) {
-                return;
-            }
         }
-        if top == 0 {
-            return;
-        }
-        top -= 1;
-        (node, ia) = (stack[top].node, stack[top].ia);
+        (ie > 0).then_some(ie as u32)
+    }
+
+    fn at_leaf<const L: usize, S: Stats>(
+        _: &Packet<L>,
+        _: &Tree,
+        _: u32,
+        ia: u32,
+        _: &mut S,
+    ) -> ActiveRays {
+        ActiveRays::Index(ia as usize)
     }
 }
