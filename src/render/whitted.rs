@@ -538,7 +538,8 @@ mod tests {
                 .collect()
         };
         // One limit for both (max_depth 2): depth-0 hits (pane 1) spawn 64 reflection rays (all
-        // miss) and 64 refraction rays (hit pane 2), which spawn 64 of each again at depth 2.
+        // miss) and 64 refraction rays (hit pane 2), which spawn 64 of each again at depth 2:
+        // refraction rays on to pane 3, reflection rays back to pane 1 (hits).
         let both = WhittedSettings {
             max_depth: 2,
             pruning: None,
@@ -550,7 +551,7 @@ mod tests {
                 (0, "primary", 64, 64),
                 (1, "reflection", 64, 0),
                 (1, "refraction", 64, 64),
-                (2, "reflection", 64, 0),
+                (2, "reflection", 64, 64),
                 (2, "refraction", 64, 64),
             ]
         );
