@@ -142,6 +142,12 @@ struct WhittedArgs {
     /// Whitted: no shadow rays (lights reach every surface they face).
     #[arg(long)]
     no_shadows: bool,
+    /// Whitted: deepest reflection generation (default --max-depth).
+    #[arg(long)]
+    max_reflection_depth: Option<u32>,
+    /// Whitted: deepest refraction generation (default --max-depth).
+    #[arg(long)]
+    max_refraction_depth: Option<u32>,
     /// Whitted: trace every specular ray up to --max-depth (no ray-tree attenuation).
     #[arg(long, conflicts_with = "pruning_threshold")]
     no_pruning: bool,
@@ -366,6 +372,8 @@ fn render_whitted_cli(
     }
     let settings = WhittedSettings {
         max_depth,
+        max_reflection_depth: args.max_reflection_depth,
+        max_refraction_depth: args.max_refraction_depth,
         shadows: !args.no_shadows,
         pruning: match args.no_pruning {
             true => None,

@@ -16,6 +16,8 @@
 //! # Or `[[render]]` tables, each its own grid (e.g. one per workload of Overbeck 2008, Fig. 5).
 //! render = { renderer = "whitted",     # the only renderer with per-batch records so far
 //!            max_depth = [1, 2],       # deepest reflection/refraction generation (default 5)
+//!            max_reflection_depth = 1, # deepest reflection generation (default max_depth)
+//!            max_refraction_depth = 4, # deepest refraction generation (default max_depth)
 //!            shadows = true,           # shadow rays (default true)
 //!            pruning = [true, false],  # ray-tree attenuation: true (threshold 1/256), false, or a
 //!                                      # threshold such as 0.01 (default true)
@@ -120,15 +122,20 @@ pub struct RenderWorkload {
 }
 
 impl fmt::Display for RenderWorkload {
-    /// Every setting, defaults included: the `render` column of runs.csv.
+    /// Every setting, defaults included, except the per-kind depth limits, which appear only when
+    /// set (unset they are `max_depth`): the `render` column of runs.csv.
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let s = &self.settings;
+        let limit =
+            |key: &str, depth: Option<u32>| depth.map_or(String::new(), |d| format!(";{key}={d}"));
         write!(
             f,
-            "renderer=whitted;assembly={};materials={};max_depth={};packet={};pruning={};shadows={}",
+            "renderer=whitted;assembly={};materials={};max_depth={}{}{};packet={};pruning={};shadows={}",
             s.assembly,
             s.materials.map_or("scene", |p| p.name()),
             s.max_depth,
+            limit("max_reflection_depth", s.max_reflection_depth),
+            limit("max_refraction_depth", s.max_refraction_depth),
             s.packet,
             s.pruning.map_or("false".to_string(), |t| t.to_string()),
             s.shadows
@@ -137,8 +144,10 @@ impl fmt::Display for RenderWorkload {
 }
 
 /// The keys of the `render` table besides `renderer`.
-const RENDER_KEYS: [&str; 6] = [
+const RENDER_KEYS: [&str; 8] = [
     "max_depth",
+    "max_reflection_depth",
+    "max_refraction_depth",
     "shadows",
     "pruning",
     "assembly",
@@ -153,6 +162,12 @@ fn whitted_settings(params: &Params) -> std::result::Result<WhittedSettings, Str
         let bad = || format!("render {key} = {value:?} is not valid");
         match key.as_str() {
             "max_depth" => s.max_depth = value.parse().map_err(|_| bad())?,
+            "max_reflection_depth" => {
+                s.max_reflection_depth = Some(value.parse().map_err(|_| bad())?)
+            }
+            "max_refraction_depth" => {
+                s.max_refraction_depth = Some(value.parse().map_err(|_| bad())?)
+            }
             "shadows" => s.shadows = value.parse().map_err(|_| bad())?,
             "pruning" => {
                 s.pruning = match value.as_str() {
@@ -922,6 +937,21 @@ mod tests {
         );
         let msg = usage_message(parse(&twice).unwrap_err());
         assert!(msg.contains("listed twice"), "{msg}");
+
+        // Separate reflection / refraction limits (Overbeck 2008 §6's kitchen): parsed, and named
+        // in the render column only when set.
+        let split = format!(
+            "{BASE}tracers = [\"reference\"]\nrender = {{ renderer = \"whitted\", max_depth = 4, \
+             max_reflection_depth = 1 }}\n"
+        );
+        let exp = parse(&split).unwrap();
+        let s = &exp.renders[0].settings;
+        assert_eq!((s.reflection_depth(), s.refraction_depth()), (1, 4));
+        assert_eq!(
+            exp.renders[0].to_string(),
+            "renderer=whitted;assembly=ray_types;materials=scene;max_depth=4;max_reflection_depth=1;\
+             packet=8;pruning=0.00390625;shadows=true"
+        );
 
         let none = "name = \"t\"\nscenes = [\"room\"]\nresolution = { width = 8, height = 4 }\ntracers = [\"reference\"]\n";
         let (_, msg) = line_of_error(parse(none).unwrap_err());

@@ -4,6 +4,9 @@
 //!
 //! ```toml
 //! [[figures]]
+//! data = "runs"                      # runs.csv (default) or "histograms": histograms.csv, one
+//!                                    # row per BVH depth (x = "depth", y = "aabb_tests" or
+//!                                    # "triangle_tests"; ray batches only)
 //! file = "fig6_lambda.png"
 //! title = "Fig. 6: frame rate (normalised by the best) vs λ"
 //! where = { tracer = "cgt", ray_kind = "primary", threads = 1 }
@@ -28,12 +31,15 @@ use serde::Deserialize;
 
 use crate::error::{Error, Result};
 
+use super::output::{runs_columns, HISTOGRAMS_CSV, HISTOGRAM_COLUMNS, RUNS_CSV};
 use super::plots::{register_font, FONT};
-use super::selection::{check_field, distinct, Filter, Measure, Reduce, Row};
+use super::selection::{check_field_of, distinct, Filter, Measure, Reduce, Row};
 
 #[derive(Clone, Debug, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct FigureSpec {
+    #[serde(default)]
+    pub data: DataFile,
     pub file: String,
     pub title: String,
     #[serde(default, rename = "where")]
@@ -66,6 +72,31 @@ fn one() -> f64 {
     1.0
 }
 
+/// The CSV file of the run a figure reads.
+#[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum DataFile {
+    #[default]
+    Runs,
+    Histograms,
+}
+
+impl DataFile {
+    pub fn file_name(self) -> &'static str {
+        match self {
+            DataFile::Runs => RUNS_CSV,
+            DataFile::Histograms => HISTOGRAMS_CSV,
+        }
+    }
+
+    fn columns(self) -> Vec<&'static str> {
+        match self {
+            DataFile::Runs => runs_columns(),
+            DataFile::Histograms => HISTOGRAM_COLUMNS.to_vec(),
+        }
+    }
+}
+
 /// One metric or several.
 #[derive(Clone, Debug, Deserialize, PartialEq)]
 #[serde(untagged)]
@@ -96,19 +127,21 @@ impl FigureSpec {
                 "{what}: file must be a plain name ending in .png"
             )));
         }
-        self.filter.check(&what)?;
-        check_field(&self.x, &what)?;
+        let (file, known) = (self.data.file_name(), self.data.columns());
+        let check = |field: &str| check_field_of(field, &what, file, &known);
+        self.filter.0.keys().try_for_each(|f| check(f))?;
+        check(&self.x)?;
         if let Some(s) = &self.series {
-            check_field(s, &what)?;
+            check(s)?;
         }
         let metrics = self.y.list();
         if metrics.is_empty() {
             return Err(Error::usage(format!("{what}: no y metric")));
         }
-        metrics.iter().try_for_each(|m| check_field(m, &what))
+        metrics.iter().try_for_each(|m| check(m))
     }
 
-    /// The lines to draw over runs.csv `rows`; x values that are not numbers are skipped.
+    /// The lines to draw over the rows of its data file; x values that are not numbers are skipped.
     pub fn lines(&self, rows: &[Row]) -> Vec<Line> {
         let series: Vec<Option<String>> = match &self.series {
             Some(field) => distinct(rows, &self.filter, field)
@@ -250,5 +283,68 @@ fn series_label(field: Option<&str>, value: &str) -> String {
     match field.and_then(|f| f.strip_prefix("param:")) {
         Some(key) => format!("{key}={value}"),
         None => value.to_string(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn figure(text: &str) -> FigureSpec {
+        toml::from_str(text).unwrap()
+    }
+
+    #[test]
+    fn histogram_figures_read_histograms_csv_columns() {
+        let spec = figure(
+            "data = \"histograms\"\nfile = \"f.png\"\ntitle = \"t\"\nx = \"depth\"\n\
+             y = \"aabb_tests\"\nseries = \"param:traversal\"\nwhere = { ray_kind = \"primary\" }\n",
+        );
+        assert_eq!(spec.data.file_name(), "histograms.csv");
+        spec.check().unwrap();
+        // Rows as histograms.csv writes them: two traversals, depths 0 and 1, and a reflection
+        // row the filter drops.
+        let rows: Vec<Row> = [
+            ("ranged", "primary", "0", "10"),
+            ("ranged", "primary", "1", "30"),
+            ("partition", "primary", "0", "20"),
+            ("partition", "primary", "1", "5"),
+            ("partition", "reflection", "0", "99"),
+        ]
+        .iter()
+        .map(|(traversal, kind, depth, aabb)| {
+            [
+                ("scene", "s"),
+                ("frame", "0"),
+                ("parameters", &format!("packet=16;traversal={traversal}")),
+                ("ray_kind", kind),
+                ("depth", depth),
+                ("aabb_tests", aabb),
+            ]
+            .iter()
+            .map(|(k, v)| (k.to_string(), v.to_string()))
+            .collect()
+        })
+        .collect();
+        assert_eq!(
+            spec.lines(&rows),
+            vec![
+                (
+                    "traversal=ranged".to_string(),
+                    vec![(0.0, 10.0), (1.0, 30.0)]
+                ),
+                (
+                    "traversal=partition".to_string(),
+                    vec![(0.0, 20.0), (1.0, 5.0)]
+                ),
+            ]
+        );
+        // A runs.csv column is not a histograms.csv column, and the other way round.
+        let mut bad = spec.clone();
+        bad.y = Metrics::One("seconds_min".into());
+        assert!(bad.check().is_err());
+        let mut runs = spec;
+        runs.data = DataFile::Runs;
+        assert!(runs.check().is_err());
     }
 }

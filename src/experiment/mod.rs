@@ -116,8 +116,18 @@ pub fn run(
             let path = dir.join(tables::TABLES_MD);
             tables::write_tables(&path, &exp.name, &exp.tables, &rows)?;
         }
+        let mut histograms = None;
         for figure in &exp.figures {
-            figure.draw(dir, &rows)?;
+            match figure.data {
+                figures::DataFile::Runs => figure.draw(dir, &rows)?,
+                figures::DataFile::Histograms => {
+                    if histograms.is_none() {
+                        let path = dir.join(output::HISTOGRAMS_CSV);
+                        histograms = Some(selection::read_rows(&path)?);
+                    }
+                    figure.draw(dir, histograms.as_deref().unwrap_or_default())?
+                }
+            }
         }
     }
     let meta = meta::gather(

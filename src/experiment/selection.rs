@@ -1,4 +1,4 @@
-//! Picking runs.csv rows and boiling them down to one number: the shared core of the data-driven
+//! Picking runs.csv (or histograms.csv) rows and boiling them down to one number: the shared core of the data-driven
 //! `[[tables]]` (tables.md) and `[[figures]]` (line plots) of an experiment file.
 //!
 //! - A **field** is a runs.csv column (`scene`, `triangles`, `seconds_min`, ...) or `param:<key>`,
@@ -18,7 +18,7 @@ use serde::Deserialize;
 
 use crate::error::{Error, Result};
 
-use super::output::runs_columns;
+use super::output::{runs_columns, RUNS_CSV};
 
 /// One runs.csv row: column → cell.
 pub type Row = BTreeMap<String, String>;
@@ -137,12 +137,16 @@ pub fn field_value(row: &Row, field: &str) -> String {
 
 /// A usage error unless `field` is a runs.csv column or `param:<key>`.
 pub fn check_field(field: &str, what: &str) -> Result<()> {
-    let known = runs_columns();
+    check_field_of(field, what, RUNS_CSV, &runs_columns())
+}
+
+/// A usage error unless `field` is one of the `known` columns of `file` or `param:<key>`.
+pub fn check_field_of(field: &str, what: &str, file: &str, known: &[&str]) -> Result<()> {
     match field.strip_prefix("param:") {
         Some(key) if !key.is_empty() => Ok(()),
         _ if known.contains(&field) => Ok(()),
         _ => Err(Error::usage(format!(
-            "{what}: unknown field {field:?} (a runs.csv column — {} — or param:<key>)",
+            "{what}: unknown field {field:?} (a {file} column — {} — or param:<key>)",
             known.join(", ")
         ))),
     }

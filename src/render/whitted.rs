@@ -6,8 +6,10 @@
 //! `tracers::batch`, so packet tracers see the assembled packets.
 //!
 //! Depth: camera rays have depth 0; every ray spawned at a hit of a depth-d ray has depth d + 1.
-//! Reflection and refraction rays go up to `max_depth` (0 = ray casting); shadow rays may reach
-//! `max_depth + 1` (the lights seen by the deepest specular rays).
+//! Reflection and refraction rays go up to `max_depth` (0 = ray casting), or each up to its own
+//! limit when one is set (Overbeck et al. 2008 §6: the kitchen with "1-bounce reflections, 4-deep
+//! refractions"); shadow rays may reach the deepest limit + 1 (the lights seen by the deepest
+//! specular rays).
 //!
 //! Ray-tree attenuation (Boulos §5.1): a reflection or refraction ray is spawned only when the
 //! product of the reflectances along its path (its weight) is at least the threshold. Shadow rays
@@ -44,6 +46,11 @@ pub const DEFAULT_PRUNING_THRESHOLD: f32 = 1.0 / 256.0;
 pub struct WhittedSettings {
     /// Deepest reflection/refraction generation (0: camera rays and shadows only).
     pub max_depth: u32,
+    /// Deepest generation of reflection rays (`None`: `max_depth`): a hit at depth d spawns a
+    /// reflection ray only when d < this.
+    pub max_reflection_depth: Option<u32>,
+    /// Deepest generation of refraction rays (`None`: `max_depth`).
+    pub max_refraction_depth: Option<u32>,
     /// Trace shadow rays; without them point lights light every surface they face, unoccluded.
     pub shadows: bool,
     /// Ray-tree attenuation threshold; `None` traces every specular ray up to `max_depth`.
@@ -57,10 +64,24 @@ pub struct WhittedSettings {
     pub materials: Option<Preset>,
 }
 
+impl WhittedSettings {
+    /// Deepest reflection generation in effect.
+    pub fn reflection_depth(&self) -> u32 {
+        self.max_reflection_depth.unwrap_or(self.max_depth)
+    }
+
+    /// Deepest refraction generation in effect.
+    pub fn refraction_depth(&self) -> u32 {
+        self.max_refraction_depth.unwrap_or(self.max_depth)
+    }
+}
+
 impl Default for WhittedSettings {
     fn default() -> Self {
         WhittedSettings {
             max_depth: 5,
+            max_reflection_depth: None,
+            max_refraction_depth: None,
             shadows: true,
             pruning: Some(DEFAULT_PRUNING_THRESHOLD),
             assembly: Assembly::RayTypes,
@@ -207,18 +228,18 @@ impl Shader<'_> {
                 }
             }
             out.radiance.push((pixel, local * weight));
-            if depth < s.max_depth {
+            if depth < s.reflection_depth() {
                 let w = weight * response.reflection;
                 if keep(w) {
                     let child = reflection_ray(&surface, reflect(ray.dir, surface.n));
                     spawn(RayKind::Reflection, child, Role::Path { weight: w });
                 }
-                if let Some((dir, t)) = response.refraction {
-                    let w = weight * t;
-                    if keep(w) {
-                        let child = refraction_ray(&surface, dir);
-                        spawn(RayKind::Refraction, child, Role::Path { weight: w });
-                    }
+            }
+            if let Some((dir, t)) = response.refraction.filter(|_| depth < s.refraction_depth()) {
+                let w = weight * t;
+                if keep(w) {
+                    let child = refraction_ray(&surface, dir);
+                    spawn(RayKind::Refraction, child, Role::Path { weight: w });
                 }
             }
         }
@@ -468,6 +489,98 @@ mod tests {
         assert_eq!(
             rays_by_depth(&render(&scene, "reference", &cast, 8, 8)),
             vec![(0, "primary", 64)]
+        );
+    }
+
+    /// Five parallel glass panes (one quad each) at z = −1 … −5 facing the camera at the origin,
+    /// which looks down −z with a narrow field of view, no lights: every camera ray crosses the
+    /// panes nearly head-on, each hit splitting it into a reflection ray (back out towards +z,
+    /// where nothing is: a miss) and a refraction ray (on to the next pane: a hit).
+    fn glass_panes() -> Scene {
+        let mut mesh = Mesh::default();
+        for k in 1..=5 {
+            let (z, s) = (-(k as f32), 100.0);
+            let (a, b, c, d) = (
+                Vec3::new(-s, -s, z),
+                Vec3::new(s, -s, z),
+                Vec3::new(s, s, z),
+                Vec3::new(-s, s, z),
+            );
+            mesh.push(Triangle { v: [a, b, c] }, 0);
+            mesh.push(Triangle { v: [a, c, d] }, 0);
+        }
+        let mut materials = vec![Material::diffuse("pane", Vec3::ONE)];
+        Preset::Glass.apply_to_all(&mut materials);
+        Scene {
+            name: "panes".into(),
+            source: "test".into(),
+            mesh,
+            materials,
+            lights: vec![],
+            camera: Camera {
+                position: Vec3::ZERO,
+                target: -Vec3::Z,
+                fov_y_deg: 10.0,
+                ..Camera::default()
+            },
+            camera_path: None,
+            animation: None,
+        }
+    }
+
+    #[test]
+    fn reflection_and_refraction_depths_are_limited_separately() {
+        let scene = glass_panes();
+        let hits_by_depth = |f: &WhittedFrame| -> Vec<(u32, &'static str, usize, usize)> {
+            f.batches
+                .iter()
+                .map(|b| (b.depth, b.kind.name(), b.rays, b.hits))
+                .collect()
+        };
+        // One limit for both (max_depth 2): depth-0 hits (pane 1) spawn 64 reflection rays (all
+        // miss) and 64 refraction rays (hit pane 2), which spawn 64 of each again at depth 2:
+        // refraction rays on to pane 3, reflection rays back to pane 1 (hits).
+        let both = WhittedSettings {
+            max_depth: 2,
+            pruning: None,
+            ..WhittedSettings::default()
+        };
+        assert_eq!(
+            hits_by_depth(&render(&scene, "reference", &both, 8, 8)),
+            vec![
+                (0, "primary", 64, 64),
+                (1, "reflection", 64, 0),
+                (1, "refraction", 64, 64),
+                (2, "reflection", 64, 64),
+                (2, "refraction", 64, 64),
+            ]
+        );
+        // "1-bounce reflections, 4-deep refractions" (Overbeck §6) with max_depth 2 as the
+        // default of neither: only camera-ray hits reflect; refraction rays go to depth 4 (pane 5).
+        let split = WhittedSettings {
+            max_reflection_depth: Some(1),
+            max_refraction_depth: Some(4),
+            ..both
+        };
+        assert_eq!(
+            hits_by_depth(&render(&scene, "reference", &split, 8, 8)),
+            vec![
+                (0, "primary", 64, 64),
+                (1, "reflection", 64, 0),
+                (1, "refraction", 64, 64),
+                (2, "refraction", 64, 64),
+                (3, "refraction", 64, 64),
+                (4, "refraction", 64, 64),
+            ]
+        );
+        // No refraction at all: the reflection rays of the camera-ray hits only.
+        let mirror_only = WhittedSettings {
+            max_refraction_depth: Some(0),
+            ..split
+        };
+        assert_eq!(
+            hits_by_depth(&render(&scene, "reference", &mirror_only, 8, 8)),
+            vec![(0, "primary", 64, 64), (1, "reflection", 64, 0)]
         );
     }
 
