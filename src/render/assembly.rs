@@ -83,12 +83,14 @@ impl BatchKind {
 }
 
 /// A secondary ray waiting for a packet: the index of its parent in the incoming packet, the
-/// material the parent hit, and its kind. Candidates come in parent order.
+/// material the parent hit, its kind and, for a shadow ray, the light it goes to (0 otherwise).
+/// Candidates come in parent order.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Candidate {
     pub parent: usize,
     pub material: u32,
     pub kind: RayKind,
+    pub light: u32,
 }
 
 /// One outgoing packet: the candidates (indices into the candidate list) it holds, in order.
@@ -126,14 +128,21 @@ pub fn assemble(method: Assembly, candidates: &[Candidate]) -> Vec<OutPacket> {
             }
         }
         Assembly::RayTypes => {
+            // Shadow rays toward each light are a type of their own: Boulos's Fig. 3 has one
+            // light; with several, one packet mixing them has no common end point (no §4.2
+            // frustum) and spreads over every light's direction.
             for kind in SECONDARY_KINDS {
-                let members: Vec<usize> = of_kind(kind).map(|(i, _)| i).collect();
-                if !members.is_empty() {
-                    packets.push(OutPacket {
-                        batch: BatchKind::Rays(kind),
-                        members,
-                    });
+                let mut types: Vec<(u32, Vec<usize>)> = Vec::new();
+                for (i, c) in of_kind(kind) {
+                    match types.iter_mut().find(|(light, _)| *light == c.light) {
+                        Some((_, members)) => members.push(i),
+                        None => types.push((c.light, vec![i])),
+                    }
                 }
+                packets.extend(types.into_iter().map(|(_, members)| OutPacket {
+                    batch: BatchKind::Rays(kind),
+                    members,
+                }));
             }
         }
         Assembly::Runs => {
@@ -212,6 +221,7 @@ mod tests {
                 parent: ray - 1,
                 material: m,
                 kind,
+                light: 0,
             }));
         }
         candidates
@@ -288,15 +298,23 @@ mod tests {
     #[test]
     fn runs_keep_the_shadow_rays_of_one_parent_together() {
         // Two lights: parent 0 spawns two shadow rays, parent 1 two more, parent 3 (not adjacent) two.
-        let c = |parent| Candidate {
+        let c = |parent, light| Candidate {
             parent,
             material: 0,
             kind: RayKind::Shadow,
+            light,
         };
-        let candidates = [c(0), c(0), c(1), c(1), c(3), c(3)];
-        let out = assemble(Assembly::Runs, &candidates);
-        let members: Vec<Vec<usize>> = out.into_iter().map(|p| p.members).collect();
-        assert_eq!(members, vec![vec![0, 1, 2, 3], vec![4, 5]]);
+        let candidates = [c(0, 0), c(0, 1), c(1, 0), c(1, 1), c(3, 0), c(3, 1)];
+        let members = |method| -> Vec<Vec<usize>> {
+            let out = assemble(method, &candidates);
+            out.into_iter().map(|p| p.members).collect()
+        };
+        assert_eq!(members(Assembly::Runs), vec![vec![0, 1, 2, 3], vec![4, 5]]);
+        // Ray types: one shadow packet per light.
+        assert_eq!(
+            members(Assembly::RayTypes),
+            vec![vec![0, 2, 4], vec![1, 3, 5]]
+        );
         assert_eq!(Assembly::parse("ray_types"), Some(Assembly::RayTypes));
         assert_eq!(Assembly::parse("rays"), None);
     }

@@ -207,23 +207,24 @@ impl Shader<'_> {
             let m = &self.materials[material_id as usize];
             let (surface, response) = specular_at(mesh, &self.materials, &ray, hit);
             let mut local = m.emission + m.diffuse * AMBIENT;
-            let mut spawn = |kind: RayKind, child: Ray, role: Role| {
+            let mut spawn = |kind: RayKind, light: u32, child: Ray, role: Role| {
                 candidates.push(Candidate {
                     parent: i - range.start,
                     material: material_id,
                     kind,
+                    light,
                 });
                 children.push((child, pixel, role));
             };
             if m.diffuse != Vec3::ZERO {
-                for &(position, intensity) in &self.lights {
+                for (light, &(position, intensity)) in (0u32..).zip(&self.lights) {
                     let lit =
                         m.diffuse * point_irradiance(surface.p, surface.n, position, intensity);
                     if !s.shadows {
                         local += lit;
                     } else if let Some(shadow) = shadow_ray(&surface, position) {
                         let radiance = lit * weight;
-                        spawn(RayKind::Shadow, shadow, Role::Shadow { radiance });
+                        spawn(RayKind::Shadow, light, shadow, Role::Shadow { radiance });
                     }
                 }
             }
@@ -232,14 +233,14 @@ impl Shader<'_> {
                 let w = weight * response.reflection;
                 if keep(w) {
                     let child = reflection_ray(&surface, reflect(ray.dir, surface.n));
-                    spawn(RayKind::Reflection, child, Role::Path { weight: w });
+                    spawn(RayKind::Reflection, 0, child, Role::Path { weight: w });
                 }
             }
             if let Some((dir, t)) = response.refraction.filter(|_| depth < s.refraction_depth()) {
                 let w = weight * t;
                 if keep(w) {
                     let child = refraction_ray(&surface, dir);
-                    spawn(RayKind::Refraction, child, Role::Path { weight: w });
+                    spawn(RayKind::Refraction, 0, child, Role::Path { weight: w });
                 }
             }
         }
