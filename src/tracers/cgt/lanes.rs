@@ -96,8 +96,11 @@ impl<const L: usize> LaneRays<L> {
                 kept += 1;
             }
         }
-        self.len = kept;
-        self.pad();
+        // Called at every slice, where usually no ray leaves: only a change needs the re-pad.
+        if kept != self.len {
+            self.len = kept;
+            self.pad();
+        }
     }
 
     /// Tests `tri` against every active ray; for each hit in the ray's `[tmin, tmax]`, sets its
