@@ -12,30 +12,29 @@
 //! one pixel's samples together in one packet per kind.
 //!
 //! Shading, per sample path: emission + ambient + Lambert under each light sample, and one
-//! reflection ray chosen between the material's mirror and glossy parts in proportion to their
-//! reflectances (multisampling instead of branching, Boulos §4). Dielectric transmission is not
-//! rendered here (a dielectric surface shows its diffuse and reflective parts only).
+//! reflection ray carrying the material's reflectance (`shading::specular_response`: mirror plus
+//! glossy, Fresnel for dielectrics), its direction chosen between the mirror and glossy parts in
+//! proportion to their reflectances (multisampling instead of branching, Boulos §4). Dielectric
+//! transmission is not rendered here (a dielectric shows its diffuse and reflected light only).
 
 use std::time::Instant;
 
 use glam::Vec3;
 
 use crate::error::{Error, Result};
-use crate::geometry::{Hit, Ray, RayBatch, RayKind};
+use crate::geometry::{Ray, RayBatch, RayKind, Triangle};
 use crate::render::area_light::sample_light;
-use crate::render::glossy::{mirror, sample_phong_lobe};
+use crate::render::glossy::sample_phong_lobe;
 use crate::render::image::Image;
 use crate::render::interleaved::{SampleTable, DIMENSION_PAIRS};
 use crate::render::motion::MovingMesh;
 use crate::render::rays::{morton_decode, shadow_ray, CameraProjection, SurfacePoint, TILE};
+use crate::render::shading::{specular_response, AMBIENT, BACKGROUND};
+use crate::render::specular::{reflect, reflection_ray};
 use crate::scene::{Camera, Frame, Scene};
 use crate::tracers::batch::{trace_hits, trace_occlusion};
 use crate::tracers::Tracer;
 
-/// Light reaching surfaces from everywhere, so shadows are dark but not black (as renderer v0).
-const AMBIENT: f32 = 0.08;
-/// Colour of rays that leave the scene (as renderer v0).
-const BACKGROUND: Vec3 = Vec3::new(0.05, 0.06, 0.08);
 /// A wave holds at least this many camera rays (whole tiles), so each traced batch spreads over
 /// many `tracers::batch` chunks and every core has work even at 1 sample per pixel.
 const WAVE_RAYS: usize = 1 << 16;
@@ -103,39 +102,8 @@ impl DrtSettings {
 }
 
 /// The kinds of rays a distribution frame traces; timings and counts are kept per kind.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub enum DrtRayKind {
-    Primary,
-    Shadow,
-    /// Mirror and glossy reflection rays.
-    Reflection,
-}
-
-impl DrtRayKind {
-    pub const ALL: [DrtRayKind; 3] = [
-        DrtRayKind::Primary,
-        DrtRayKind::Shadow,
-        DrtRayKind::Reflection,
-    ];
-
-    pub fn name(self) -> &'static str {
-        match self {
-            DrtRayKind::Primary => "primary",
-            DrtRayKind::Shadow => "shadow",
-            DrtRayKind::Reflection => "reflection",
-        }
-    }
-
-    /// The batch kind handed to tracers. Reflection rays are closest-hit secondary rays; until
-    /// `RayKind` names reflection rays of its own they travel as `Diffuse` batches.
-    fn batch_kind(self) -> RayKind {
-        match self {
-            DrtRayKind::Primary => RayKind::Primary,
-            DrtRayKind::Shadow => RayKind::Shadow,
-            DrtRayKind::Reflection => RayKind::Diffuse,
-        }
-    }
-}
+/// Reflection rays are mirror and glossy reflection rays alike.
+pub const DRT_KINDS: [RayKind; 3] = [RayKind::Primary, RayKind::Shadow, RayKind::Reflection];
 
 /// Rays, explicit packets and tracing wall time of one kind over a frame.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -149,14 +117,14 @@ pub struct KindTotals {
 #[derive(Clone, Debug)]
 pub struct DrtFrame {
     pub image: Image,
-    /// Indexed like `DrtRayKind::ALL`.
-    pub kinds: [KindTotals; 3],
+    /// Indexed by `RayKind as usize`; only the `DRT_KINDS` entries are ever non-zero.
+    pub kinds: [KindTotals; RayKind::ALL.len()],
     /// Wall time of the whole frame: sampling, shading and tracing.
     pub seconds: f64,
 }
 
 impl DrtFrame {
-    pub fn totals(&self, kind: DrtRayKind) -> KindTotals {
+    pub fn totals(&self, kind: RayKind) -> KindTotals {
         self.kinds[kind as usize]
     }
 
@@ -175,15 +143,16 @@ pub enum FrameGeometry<'a> {
 }
 
 impl FrameGeometry<'_> {
-    fn surface(&self, ray: &Ray, hit: &Hit) -> (SurfacePoint, u32) {
+    /// The triangle `prim` as a ray at `time` sees it, and its material.
+    fn triangle(&self, prim: u32, time: f32) -> (Triangle, u32) {
         match self {
             FrameGeometry::Static(mesh) => (
-                SurfacePoint::of_hit(mesh, ray, hit),
-                mesh.material_ids[hit.prim as usize],
+                mesh.triangles[prim as usize],
+                mesh.material_ids[prim as usize],
             ),
             FrameGeometry::Moving(moving) => (
-                moving.surface_at(ray, hit),
-                moving.material_ids()[hit.prim as usize],
+                moving.triangle(prim, time),
+                moving.material_ids()[prim as usize],
             ),
         }
     }
@@ -206,7 +175,7 @@ struct Path {
 
 /// A batch of one kind under construction, with the path each ray serves and what it carries.
 struct Generation {
-    kind: DrtRayKind,
+    kind: RayKind,
     batch: RayBatch,
     /// Per ray: its path and, for shadow rays, the colour it adds when unoccluded.
     served: Vec<(usize, Vec3)>,
@@ -214,10 +183,10 @@ struct Generation {
 }
 
 impl Generation {
-    fn new(kind: DrtRayKind) -> Self {
+    fn new(kind: RayKind) -> Self {
         Generation {
             kind,
-            batch: RayBatch::new(kind.batch_kind()),
+            batch: RayBatch::new(kind),
             served: Vec::new(),
             last_pixel: None,
         }
@@ -263,10 +232,10 @@ pub fn render_distribution(
         .collect();
 
     let mut sum = vec![Vec3::ZERO; (settings.width * settings.height) as usize];
-    let mut kinds = [KindTotals::default(); 3];
+    let mut kinds = [KindTotals::default(); RayKind::ALL.len()];
     for wave in tiles.chunks(tiles_per_wave) {
         let mut paths = Vec::new();
-        let mut camera = Generation::new(DrtRayKind::Primary);
+        let mut camera = Generation::new(RayKind::Primary);
         for &(tx, ty) in wave {
             for code in 0..TILE * TILE {
                 let (dx, dy) = morton_decode(code);
@@ -300,8 +269,8 @@ pub fn render_distribution(
                 break;
             }
             let hits = timed(&mut kinds, &current, || trace_hits(tracer, &current.batch));
-            let mut shadows = Generation::new(DrtRayKind::Shadow);
-            let mut reflections = Generation::new(DrtRayKind::Reflection);
+            let mut shadows = Generation::new(RayKind::Shadow);
+            let mut reflections = Generation::new(RayKind::Reflection);
             let pairs = PAIRS_BEFORE_BOUNCES + PAIRS_PER_BOUNCE * depth as usize;
             for (i, hit) in hits.iter().enumerate() {
                 let path_index = current.served[i].0;
@@ -311,7 +280,8 @@ pub fn render_distribution(
                     continue;
                 }
                 let ray = current.batch.ray(i);
-                let (surface, material) = geometry.surface(&ray, hit);
+                let (triangle, material) = geometry.triangle(hit.prim, ray.time);
+                let surface = SurfacePoint::on_triangle(&triangle, &ray, hit);
                 let m = &scene.materials[material as usize];
                 colour[path_index] += path.weight * (m.emission + m.diffuse * AMBIENT);
                 let sample = |pair: usize| table.get(path.x, path.y, path.sample, pair);
@@ -330,19 +300,19 @@ pub fn render_distribution(
                     }
                 }
 
-                // One reflection ray: mirror or glossy, chosen by reflectance.
-                let glossy = m.glossy.map_or(0.0, |(_, r)| r);
-                let total = m.mirror + glossy;
+                // One reflection ray carrying the whole reflectance (Fresnel for dielectrics),
+                // its direction mirror or glossy in proportion to the two reflectances.
+                let total = specular_response(m, ray.dir, surface.n, triangle.normal()).reflection;
                 if depth < settings.max_depth && total > 0.0 {
-                    let reflected = mirror(ray.dir, surface.n);
+                    let reflected = reflect(ray.dir, surface.n);
                     let dir = match m.glossy {
-                        Some((exponent, r)) if sample(pairs + 2).0 * total < r => {
+                        Some((exponent, r)) if sample(pairs + 2).0 * (m.mirror + r) < r => {
                             let (u1, u2) = sample(pairs + 1);
                             sample_phong_lobe(reflected, surface.n, exponent, u1, u2)
                         }
                         _ => reflected,
                     };
-                    let next = Ray::new(surface.ray_origin(), dir, 0.0, f32::INFINITY);
+                    let next = reflection_ray(&surface, dir);
                     paths[path_index].weight = path.weight * total;
                     reflections.push(next, path_index, &paths, Vec3::ZERO);
                 }
@@ -390,7 +360,11 @@ pub fn camera_ray(
 }
 
 /// Runs `trace` on `generation`'s batch and books its rays, packets and wall time to its kind.
-fn timed<T>(kinds: &mut [KindTotals; 3], generation: &Generation, trace: impl FnOnce() -> T) -> T {
+fn timed<T>(
+    kinds: &mut [KindTotals; RayKind::ALL.len()],
+    generation: &Generation,
+    trace: impl FnOnce() -> T,
+) -> T {
     let start = Instant::now();
     let out = trace();
     let totals = &mut kinds[generation.kind as usize];
@@ -538,15 +512,15 @@ mod tests {
         let a = render(&scene, 4, 0.1);
         let b = render(&scene, 4, 0.1);
         assert_eq!(a.image, b.image);
-        let primary = a.totals(DrtRayKind::Primary);
+        let primary = a.totals(RayKind::Primary);
         assert_eq!(primary.rays, 64 * 64 * 4);
         assert_eq!(primary.packets, 64 * 64);
         // Per bounce (camera hit and two reflections): at most one shadow packet per pixel, one
         // shadow ray per sample (one light).
-        let shadow = a.totals(DrtRayKind::Shadow);
+        let shadow = a.totals(RayKind::Shadow);
         assert!(shadow.packets <= 3 * 64 * 64 && shadow.rays <= 3 * 64 * 64 * 4);
         assert!(shadow.rays > shadow.packets, "pixels share shadow packets");
-        let reflection = a.totals(DrtRayKind::Reflection);
+        let reflection = a.totals(RayKind::Reflection);
         assert!(reflection.rays > 0 && reflection.packets <= 2 * 64 * 64);
         assert!(reflection.rays <= 2 * 64 * 64 * 4);
         // The same frame at 1 spp differs from 4 spp (it is not the same estimate).
