@@ -428,7 +428,14 @@ fn render_drt(
             FrameGeometry::Static(&frame.mesh),
         ),
     };
-    let drt = render_distribution(scene, frame, geometry, tracer.as_ref(), settings)?;
+    let drt = render_distribution(
+        scene,
+        frame,
+        geometry,
+        tracer.as_ref(),
+        settings,
+        Tracing::Timed,
+    )?;
     for kind in DRT_KINDS {
         let t = drt.totals(kind);
         println!(

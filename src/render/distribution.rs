@@ -17,6 +17,7 @@
 //! proportion to their reflectances (multisampling instead of branching, Boulos §4). Dielectric
 //! transmission is not rendered here (a dielectric shows its diffuse and reflected light only).
 
+use std::collections::BTreeMap;
 use std::time::Instant;
 
 use glam::Vec3;
@@ -24,6 +25,7 @@ use glam::Vec3;
 use crate::error::{Error, Result};
 use crate::geometry::{Ray, RayBatch, RayKind, Triangle};
 use crate::render::area_light::sample_light;
+use crate::render::assembly::BatchKind;
 use crate::render::glossy::sample_phong_lobe;
 use crate::render::image::Image;
 use crate::render::interleaved::{SampleTable, DIMENSION_PAIRS};
@@ -31,8 +33,9 @@ use crate::render::motion::MovingMesh;
 use crate::render::rays::{morton_decode, shadow_ray, CameraProjection, SurfacePoint, TILE};
 use crate::render::shading::{specular_response, AMBIENT, BACKGROUND};
 use crate::render::specular::{reflect, reflection_ray};
+use crate::render::whitted::{trace, Answers, BatchRecord, Tracing};
 use crate::scene::{Camera, Frame, Scene};
-use crate::tracers::batch::{trace_hits, trace_occlusion};
+use crate::stats::Counters;
 use crate::tracers::Tracer;
 
 /// A wave holds at least this many camera rays (whole tiles), so each traced batch spreads over
@@ -114,23 +117,80 @@ pub struct KindTotals {
     pub seconds: f64,
 }
 
-#[derive(Clone, Debug)]
 pub struct DrtFrame {
     pub image: Image,
-    /// Indexed by `RayKind as usize`; only the `DRT_KINDS` entries are ever non-zero.
-    pub kinds: [KindTotals; RayKind::ALL.len()],
+    /// One record per (ray kind, bounce depth), summed over the frame's waves, in (depth, kind)
+    /// order: camera rays have depth 0, the shadow and reflection rays leaving the hits of
+    /// depth-d rays depth d + 1 (as in `whitted`).
+    pub batches: Vec<BatchRecord>,
+    /// Explicit packets (pixels' sample groups) traced, indexed by `RayKind as usize`.
+    pub packets: [u64; RayKind::ALL.len()],
     /// Wall time of the whole frame: sampling, shading and tracing.
     pub seconds: f64,
 }
 
 impl DrtFrame {
     pub fn totals(&self, kind: RayKind) -> KindTotals {
-        self.kinds[kind as usize]
+        let of_kind = self
+            .batches
+            .iter()
+            .filter(|b| b.kind == BatchKind::Rays(kind));
+        KindTotals {
+            rays: of_kind.clone().map(|b| b.rays as u64).sum(),
+            packets: self.packets[kind as usize],
+            seconds: of_kind.map(|b| b.seconds).sum(),
+        }
     }
 
     /// Wall time inside the tracer over all kinds.
     pub fn trace_seconds(&self) -> f64 {
-        self.kinds.iter().map(|k| k.seconds).sum()
+        self.batches.iter().map(|b| b.seconds).sum()
+    }
+
+    /// Rays traced over all kinds.
+    pub fn rays(&self) -> u64 {
+        self.batches.iter().map(|b| b.rays as u64).sum()
+    }
+}
+
+/// The frame's batch records under construction, keyed by (depth, kind).
+#[derive(Default)]
+struct Records {
+    batches: BTreeMap<(u32, BatchKind), BatchRecord>,
+    packets: [u64; RayKind::ALL.len()],
+}
+
+impl Records {
+    /// Traces `generation`'s batch at bounce `depth` and books it.
+    fn trace(
+        &mut self,
+        tracer: &dyn Tracer,
+        generation: &Generation,
+        depth: u32,
+        tracing: Tracing,
+    ) -> Answers {
+        let kind = BatchKind::Rays(generation.kind);
+        let (answers, seconds, counters) = trace(tracer, &generation.batch, kind, tracing);
+        let record = self
+            .batches
+            .entry((depth, kind))
+            .or_insert_with(|| BatchRecord {
+                kind,
+                depth,
+                rays: 0,
+                hits: 0,
+                seconds: 0.0,
+                counters: Counters::default(),
+            });
+        record.rays += generation.batch.len();
+        record.hits += (0..generation.batch.len())
+            .filter(|&i| answers.blocked(i))
+            .count();
+        record.seconds += seconds;
+        record.counters.merge(&counters);
+        self.packets[generation.kind as usize] +=
+            generation.batch.packet_start.iter().filter(|s| **s).count() as u64;
+        answers
     }
 }
 
@@ -214,6 +274,7 @@ pub fn render_distribution(
     geometry: FrameGeometry<'_>,
     tracer: &dyn Tracer,
     settings: &DrtSettings,
+    tracing: Tracing,
 ) -> Result<DrtFrame> {
     settings.check()?;
     let start = Instant::now();
@@ -232,7 +293,7 @@ pub fn render_distribution(
         .collect();
 
     let mut sum = vec![Vec3::ZERO; (settings.width * settings.height) as usize];
-    let mut kinds = [KindTotals::default(); RayKind::ALL.len()];
+    let mut records = Records::default();
     for wave in tiles.chunks(tiles_per_wave) {
         let mut paths = Vec::new();
         let mut camera = Generation::new(RayKind::Primary);
@@ -268,7 +329,9 @@ pub fn render_distribution(
             if current.batch.is_empty() {
                 break;
             }
-            let hits = timed(&mut kinds, &current, || trace_hits(tracer, &current.batch));
+            let Answers::Hits(hits) = records.trace(tracer, &current, depth, tracing) else {
+                unreachable!("camera and reflection rays are traced for closest hits")
+            };
             let mut shadows = Generation::new(RayKind::Shadow);
             let mut reflections = Generation::new(RayKind::Reflection);
             let pairs = PAIRS_BEFORE_BOUNCES + PAIRS_PER_BOUNCE * depth as usize;
@@ -318,13 +381,11 @@ pub fn render_distribution(
                 }
             }
             if !shadows.batch.is_empty() {
-                let occluded = timed(&mut kinds, &shadows, || {
-                    trace_occlusion(tracer, &shadows.batch)
-                });
-                for (&(path, carries), _) in
-                    shadows.served.iter().zip(&occluded).filter(|(_, o)| !**o)
-                {
-                    colour[path] += carries;
+                let answers = records.trace(tracer, &shadows, depth + 1, tracing);
+                for (i, &(path, carries)) in shadows.served.iter().enumerate() {
+                    if !answers.blocked(i) {
+                        colour[path] += carries;
+                    }
                 }
             }
             current = reflections;
@@ -340,7 +401,8 @@ pub fn render_distribution(
     }
     Ok(DrtFrame {
         image,
-        kinds,
+        batches: records.batches.into_values().collect(),
+        packets: records.packets,
         seconds: start.elapsed().as_secs_f64(),
     })
 }
@@ -357,21 +419,6 @@ pub fn camera_ray(
     let (jx, jy) = table.get(x, y, sample, PAIR_PIXEL);
     let lens = table.get(x, y, sample, PAIR_LENS);
     projection.ray(x as f32 + jx, y as f32 + jy, lens)
-}
-
-/// Runs `trace` on `generation`'s batch and books its rays, packets and wall time to its kind.
-fn timed<T>(
-    kinds: &mut [KindTotals; RayKind::ALL.len()],
-    generation: &Generation,
-    trace: impl FnOnce() -> T,
-) -> T {
-    let start = Instant::now();
-    let out = trace();
-    let totals = &mut kinds[generation.kind as usize];
-    totals.seconds += start.elapsed().as_secs_f64();
-    totals.rays += generation.batch.len() as u64;
-    totals.packets += generation.batch.packet_start.iter().filter(|s| **s).count() as u64;
-    out
 }
 
 #[cfg(test)]
@@ -490,6 +537,7 @@ mod tests {
             FrameGeometry::Static(&frame.mesh),
             tracer.as_ref(),
             &settings,
+            Tracing::Counted,
         )
         .unwrap()
     }
@@ -523,6 +571,21 @@ mod tests {
         let reflection = a.totals(RayKind::Reflection);
         assert!(reflection.rays > 0 && reflection.packets <= 2 * 64 * 64);
         assert!(reflection.rays <= 2 * 64 * 64 * 4);
+        // One record per (depth, kind): shadows leave every hit; only the floor reflects, and
+        // what it reflects (walls, boxes) does not, so no reflection ray reaches depth 2.
+        let records: Vec<(u32, &str)> =
+            a.batches.iter().map(|b| (b.depth, b.kind.name())).collect();
+        assert_eq!(
+            records,
+            [
+                (0, "primary"),
+                (1, "shadow"),
+                (1, "reflection"),
+                (2, "shadow"),
+            ]
+        );
+        // Counted: every ray of every record.
+        assert!(a.batches.iter().all(|b| b.counters.rays == b.rays as u64));
         // The same frame at 1 spp differs from 4 spp (it is not the same estimate).
         assert_ne!(render(&scene, 1, 0.1).image, a.image);
     }
