@@ -47,6 +47,7 @@ pub const RUNS_COLUMNS: &[&str] = &[
     "triangle_tests_per_ray",
     "counting_seconds",
     "counting_overhead",
+    "rmse",
 ];
 
 /// runs.csv's columns: the fixed ones, then one per `Event`.
@@ -141,6 +142,7 @@ pub fn write_runs(path: &Path, plan: &Plan, cases: &[Case]) -> Result<()> {
                 cell(internal_per_ray(c.triangle_tests)),
                 cell(same_threads.then_some(case.counted.seconds)),
                 cell(same_threads.then(|| case.counted.seconds / timing.seconds_median)),
+                cell(case.rmse),
             ];
             let events = Event::ALL.iter().map(|&e| cell(internal(c.get(e))));
             let row: Vec<String> = fixed.into_iter().chain(events).collect();
