@@ -729,6 +729,44 @@ series = "scene"
         assert_eq!(bench.tables.len(), 4);
     }
 
+    /// Both Boulos 2007 files parse, and every `render` a table or figure selects is one of the
+    /// file's workloads (a typo would silently give empty cells).
+    #[test]
+    fn the_boulos07_experiments_parse_and_select_their_own_workloads() {
+        for (file, instances, renders, tables, figures) in [
+            ("boulos07.toml", 8, 12, 3, 2),
+            ("boulos07-drt.toml", 5, 8, 2, 1),
+        ] {
+            let exp = Experiment::load(
+                &Path::new(env!("CARGO_MANIFEST_DIR"))
+                    .join("experiments")
+                    .join(file),
+            )
+            .unwrap();
+            assert_eq!(exp.instances.len(), instances, "{file}");
+            assert_eq!(exp.renders.len(), renders, "{file}");
+            assert_eq!((exp.tables.len(), exp.figures.len()), (tables, figures));
+            let labels: Vec<String> = exp.renders.iter().map(|r| r.to_string()).collect();
+            let filters = exp.tables.iter().flat_map(|t| {
+                let rows = match &t.rows {
+                    tables::RowsSpec::List(rows) => rows.iter().map(|r| &r.filter).collect(),
+                    tables::RowsSpec::Field(_) => Vec::new(),
+                };
+                std::iter::once(&t.filter)
+                    .chain(rows)
+                    .chain(t.columns.iter().map(|c| &c.filter))
+            });
+            let mut selected = 0;
+            for filter in filters.chain(exp.figures.iter().map(|f| &f.filter)) {
+                for render in filter.0.get("render").into_iter().flatten() {
+                    assert!(labels.contains(render), "{file}: {render} is no workload");
+                    selected += 1;
+                }
+            }
+            assert!(selected >= renders, "{file}: {selected} selections");
+        }
+    }
+
     /// Nothing but the (empty) experiment directory may remain.
     fn assert_no_results(out: &Path) {
         let left: Vec<_> = fs::read_dir(out.join("t"))

@@ -194,7 +194,7 @@ impl<const L: usize> SimdRay<L> {
                 rel[a][l] = p[a] - self.origin[a][l];
             }
         }
-        self.to_lane_frames(rel)
+        self.in_lane_frames(rel)
     }
 
     /// As `permute` for a vertex that differs per lane (`p[axis][lane]`).
@@ -206,12 +206,12 @@ impl<const L: usize> SimdRay<L> {
                 rel[a][l] = p[a][l] - self.origin[a][l];
             }
         }
-        self.to_lane_frames(rel)
+        self.in_lane_frames(rel)
     }
 
     /// Origin-relative coordinates reordered into each lane's watertight frame `[kx, ky, kz]`.
     #[inline(always)]
-    fn to_lane_frames(&self, rel: [[f32; L]; 3]) -> Permuted<L> {
+    fn in_lane_frames(&self, rel: [[f32; L]; 3]) -> Permuted<L> {
         match self.common_axes {
             Some([kx, ky, kz]) => [rel[kx], rel[ky], rel[kz]],
             None => {
