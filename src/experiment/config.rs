@@ -14,7 +14,14 @@
 //! # A rendering workload (optional): every tracer instance renders each frame with the Whitted
 //! # renderer, once per combination of the lists below (a single value is a one-value list).
 //! # Or `[[render]]` tables, each its own grid (e.g. one per workload of Overbeck 2008, Fig. 5).
-//! render = { renderer = "whitted",     # the only renderer with per-batch records so far
+//! # The distribution renderer takes the same form (Boulos 2007 §4):
+//! #   render = { renderer = "distribution", spp = [1, 4, 16, 64],   # perfect squares
+//! #              aperture = [0, 15], focus = 1650,   # lens radius, focal distance (default: camera's)
+//! #              shutter = 0.25,                     # motion blur over this many seconds (optional)
+//! #              max_depth = 1 }                     # glossy/mirror bounces (default 2)
+//! # Its frame rows also carry `rmse` against the 1024-spp reference image (cached under
+//! # <output>/cache/drt-reference), and workloads differing only in spp give error_vs_time.png.
+//! render = { renderer = "whitted",
 //!            max_depth = [1, 2],       # deepest reflection/refraction generation (default 5)
 //!            shadows = true,           # shadow rays (default true)
 //!            pruning = [true, false],  # ray-tree attenuation: true (threshold 1/256), false, or a
@@ -49,7 +56,8 @@
 //! each render combination one row per traced batch — `ray_kind` (shadow, reflection, refraction,
 //! or blind for blind assembly's mixed batches) and bounce `depth` (camera rays 0) — plus one
 //! `ray_kind = frame` row for the whole frame (all rays; time includes shading and assembly). The
-//! `render` column holds the combination (`assembly=..;materials=..;max_depth=..;...`).
+//! `render` column holds the combination (`assembly=..;materials=..;max_depth=..;...`); tables and
+//! figures read one of its settings as `render:<key>`.
 //!
 //! Tables and figures select runs.csv rows by field (a column or `param:<key>`) and reduce them
 //! over the frames of a run (see `selection`): they are computed from the run's own runs.csv, so

@@ -734,7 +734,7 @@ series = "scene"
     #[test]
     fn the_boulos07_experiments_parse_and_select_their_own_workloads() {
         for (file, instances, renders, tables, figures) in [
-            ("boulos07.toml", 8, 12, 3, 2),
+            ("boulos07.toml", 8, 13, 3, 2),
             ("boulos07-drt.toml", 5, 8, 2, 1),
         ] {
             let exp = Experiment::load(
