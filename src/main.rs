@@ -10,7 +10,7 @@ use raylab::error::{Error, Result};
 use raylab::experiment::results_dir::PendingResults;
 use raylab::experiment::{run_experiment, RunOverrides};
 use raylab::render::assembly::Assembly;
-use raylab::render::distribution::{render_distribution, DrtRayKind, DrtSettings, FrameGeometry};
+use raylab::render::distribution::{render_distribution, DrtSettings, FrameGeometry, DRT_KINDS};
 use raylab::render::image::Image;
 use raylab::render::motion::{tracer_for_motion, MovingMesh};
 use raylab::render::raycast::render_raycast;
@@ -278,8 +278,16 @@ fn execute(command: Command) -> Result<bool> {
                     )?
                 }
                 Renderer::Distribution => {
-                    let depth = max_depth.unwrap_or(2);
-                    render_drt(&scene, &frame, &tracer, &params, width, height, depth, &drt)?
+                    let settings = DrtSettings {
+                        width,
+                        height,
+                        spp: drt.spp,
+                        aperture: drt.aperture,
+                        focus_distance: drt.focus,
+                        max_depth: max_depth.unwrap_or(2),
+                        ..DrtSettings::default()
+                    };
+                    render_drt(&scene, &frame, (&tracer, &params), &settings, drt.shutter)?
                 }
             };
             image.save_png(&output)?;
@@ -405,26 +413,16 @@ fn render_whitted_cli(
     Ok(out.image)
 }
 
+/// Renders a distribution frame with tracer `(name, params)`, over the geometry moving during
+/// `shutter` seconds from the frame's time when given (motion blur).
 fn render_drt(
     scene: &Scene,
     frame: &Frame,
-    tracer: &str,
-    params: &Params,
-    width: u32,
-    height: u32,
-    max_depth: u32,
-    args: &DrtArgs,
+    (tracer, params): (&str, &Params),
+    settings: &DrtSettings,
+    shutter: Option<f32>,
 ) -> Result<Image> {
-    let settings = DrtSettings {
-        width,
-        height,
-        spp: args.spp,
-        aperture: args.aperture,
-        focus_distance: args.focus,
-        max_depth,
-        ..DrtSettings::default()
-    };
-    let moving = match args.shutter {
+    let moving = match shutter {
         Some(shutter) => Some(MovingMesh::of_scene(scene, frame.time, shutter)?),
         None => None,
     };
@@ -438,8 +436,15 @@ fn render_drt(
             FrameGeometry::Static(&frame.mesh),
         ),
     };
-    let drt = render_distribution(scene, frame, geometry, tracer.as_ref(), &settings)?;
-    for kind in DrtRayKind::ALL {
+    let drt = render_distribution(
+        scene,
+        frame,
+        geometry,
+        tracer.as_ref(),
+        settings,
+        Tracing::Timed,
+    )?;
+    for kind in DRT_KINDS {
         let t = drt.totals(kind);
         println!(
             "{:<10} {:>11} rays {:>9} packets {:>9.3} s",

@@ -14,7 +14,14 @@
 //! # A rendering workload (optional): every tracer instance renders each frame with the Whitted
 //! # renderer, once per combination of the lists below (a single value is a one-value list).
 //! # Or `[[render]]` tables, each its own grid (e.g. one per workload of Overbeck 2008, Fig. 5).
-//! render = { renderer = "whitted",     # the only renderer with per-batch records so far
+//! # The distribution renderer takes the same form (Boulos 2007 §4):
+//! #   render = { renderer = "distribution", spp = [1, 4, 16, 64],   # perfect squares
+//! #              aperture = [0, 15], focus = 1650,   # lens radius, focal distance (default: camera's)
+//! #              shutter = 0.25,                     # motion blur over this many seconds (optional)
+//! #              max_depth = 1 }                     # glossy/mirror bounces (default 2)
+//! # Its frame rows also carry `rmse` against the 1024-spp reference image (cached under
+//! # <output>/cache/drt-reference), and workloads differing only in spp give error_vs_time.png.
+//! render = { renderer = "whitted",
 //!            max_depth = [1, 2],       # deepest reflection/refraction generation (default 5)
 //!            max_reflection_depth = 1, # deepest reflection generation (default max_depth)
 //!            max_refraction_depth = 4, # deepest refraction generation (default max_depth)
@@ -51,7 +58,8 @@
 //! each render combination one row per traced batch — `ray_kind` (shadow, reflection, refraction,
 //! or blind for blind assembly's mixed batches) and bounce `depth` (camera rays 0) — plus one
 //! `ray_kind = frame` row for the whole frame (all rays; time includes shading and assembly). The
-//! `render` column holds the combination (`assembly=..;materials=..;max_depth=..;...`).
+//! `render` column holds the combination (`assembly=..;materials=..;max_depth=..;...`); tables and
+//! figures read one of its settings as `render:<key>`.
 //!
 //! Tables and figures select runs.csv rows by field (a column or `param:<key>`) and reduce them
 //! over the frames of a run (see `selection`): they are computed from the run's own runs.csv, so
@@ -71,6 +79,8 @@ use crate::accel::AccelKind;
 use crate::error::{Error, Result};
 use crate::geometry::RayKind;
 use crate::render::assembly::Assembly;
+use crate::render::distribution::DrtSettings;
+use crate::render::interleaved::SampleTable;
 use crate::render::whitted::{WhittedSettings, DEFAULT_PRUNING_THRESHOLD};
 use crate::scene::scene_file::Preset;
 use crate::tracers::{Params, TracerInfo};
@@ -115,31 +125,64 @@ pub struct SceneSpec {
     pub size: Option<u32>,
 }
 
-/// One combination of the `render` grid: rendering a frame with the Whitted renderer.
+/// One combination of a `render` grid: rendering a frame with one renderer and its settings.
 #[derive(Clone, Debug, PartialEq)]
-pub struct RenderWorkload {
-    pub settings: WhittedSettings,
+pub enum RenderWorkload {
+    Whitted(WhittedSettings),
+    Distribution(DistributionWorkload),
+}
+
+/// A distribution ray tracing workload (Boulos et al. 2007 §4). Its `settings` carry no image
+/// size: the runner renders at the experiment's resolution.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DistributionWorkload {
+    pub settings: DrtSettings,
+    /// Shutter interval in seconds of the scene's animation from the frame's time (motion blur);
+    /// the tracers then run over the moving geometry (`render::motion`).
+    pub shutter: Option<f32>,
+}
+
+impl DistributionWorkload {
+    /// The same workload at another sample count: the points of one error-vs-time line.
+    pub fn same_but_spp(&self, other: &DistributionWorkload) -> bool {
+        let with_spp = |w: &DistributionWorkload| DrtSettings {
+            spp: 0,
+            ..w.settings
+        };
+        with_spp(self) == with_spp(other) && self.shutter == other.shutter
+    }
 }
 
 impl fmt::Display for RenderWorkload {
     /// Every setting, defaults included, except the per-kind depth limits, which appear only when
     /// set (unset they are `max_depth`): the `render` column of runs.csv.
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let s = &self.settings;
+        let camera = |v: Option<f32>| v.map_or("camera".to_string(), |v| v.to_string());
         let limit =
             |key: &str, depth: Option<u32>| depth.map_or(String::new(), |d| format!(";{key}={d}"));
-        write!(
-            f,
-            "renderer=whitted;assembly={};materials={};max_depth={}{}{};packet={};pruning={};shadows={}",
-            s.assembly,
-            s.materials.map_or("scene", |p| p.name()),
-            s.max_depth,
-            limit("max_reflection_depth", s.max_reflection_depth),
-            limit("max_refraction_depth", s.max_refraction_depth),
-            s.packet,
-            s.pruning.map_or("false".to_string(), |t| t.to_string()),
-            s.shadows
-        )
+        match self {
+            RenderWorkload::Whitted(s) => write!(
+                f,
+                "renderer=whitted;assembly={};materials={};max_depth={}{}{};packet={};pruning={};shadows={}",
+                s.assembly,
+                s.materials.map_or("scene", |p| p.name()),
+                s.max_depth,
+                limit("max_reflection_depth", s.max_reflection_depth),
+                limit("max_refraction_depth", s.max_refraction_depth),
+                s.packet,
+                s.pruning.map_or("false".to_string(), |t| t.to_string()),
+                s.shadows
+            ),
+            RenderWorkload::Distribution(w) => write!(
+                f,
+                "renderer=distribution;aperture={};focus={};max_depth={};shutter={};spp={}",
+                camera(w.settings.aperture),
+                camera(w.settings.focus_distance),
+                w.settings.max_depth,
+                w.shutter.map_or("none".to_string(), |s| s.to_string()),
+                w.settings.spp
+            ),
+        }
     }
 }
 
@@ -154,6 +197,41 @@ const RENDER_KEYS: [&str; 8] = [
     "packet",
     "materials",
 ];
+
+/// The keys of a distribution `render` table besides `renderer`.
+const DISTRIBUTION_KEYS: [&str; 5] = ["spp", "aperture", "focus", "shutter", "max_depth"];
+
+/// One combination of a distribution `render` grid, or what is wrong with it.
+fn distribution_workload(params: &Params) -> std::result::Result<DistributionWorkload, String> {
+    let mut w = DistributionWorkload {
+        settings: DrtSettings::default(),
+        shutter: None,
+    };
+    for (key, value) in &params.0 {
+        let bad = || format!("render {key} = {value:?} is not valid");
+        let number = || value.parse::<f32>().map_err(|_| bad());
+        match key.as_str() {
+            "spp" => w.settings.spp = value.parse().map_err(|_| bad())?,
+            "aperture" => w.settings.aperture = Some(number()?),
+            "focus" => w.settings.focus_distance = Some(number()?),
+            "max_depth" => w.settings.max_depth = value.parse().map_err(|_| bad())?,
+            "shutter" => match number()? {
+                s if s > 0.0 && s.is_finite() => w.shutter = Some(s),
+                _ => return Err(format!("{} (a shutter interval > 0 s)", bad())),
+            },
+            _ => {
+                return Err(format!(
+                    "unknown distribution render key {key:?} (known: renderer, {})",
+                    DISTRIBUTION_KEYS.join(", ")
+                ))
+            }
+        }
+    }
+    w.settings.check().map_err(|e| e.to_string())?;
+    SampleTable::new(w.settings.spp, w.settings.seed)
+        .map_err(|e| format!("render spp = {}: {e}", w.settings.spp))?;
+    Ok(w)
+}
 
 /// One combination of the `render` grid as settings, or what is wrong with it.
 fn whitted_settings(params: &Params) -> std::result::Result<WhittedSettings, String> {
@@ -651,22 +729,24 @@ fn expand_render_grid(
     table: &Spanned<BTreeMap<String, toml::Value>>,
 ) -> Result<Vec<RenderWorkload>> {
     let mut axes = src.param_axes(table)?;
-    match axes.remove("renderer").as_deref() {
-        Some([name]) if name == "whitted" => {}
-        _ => {
-            return Err(src.usage_error(
-                &table.span(),
-                "render needs renderer = \"whitted\" (the renderer that records its batches)",
-            ))
-        }
-    }
+    let workload: fn(&Params) -> std::result::Result<RenderWorkload, String> =
+        match axes.remove("renderer").as_deref() {
+            Some([name]) if name == "whitted" => {
+                |params| whitted_settings(params).map(RenderWorkload::Whitted)
+            }
+            Some([name]) if name == "distribution" => {
+                |params| distribution_workload(params).map(RenderWorkload::Distribution)
+            }
+            _ => {
+                return Err(src.usage_error(
+                    &table.span(),
+                    "render needs renderer = \"whitted\" or \"distribution\"",
+                ))
+            }
+        };
     cartesian(&axes)
         .iter()
-        .map(|params| {
-            whitted_settings(params)
-                .map(|settings| RenderWorkload { settings })
-                .map_err(|e| src.usage_error(&table.span(), e))
-        })
+        .map(|params| workload(params).map_err(|e| src.usage_error(&table.span(), e)))
         .collect()
 }
 
@@ -884,9 +964,9 @@ mod tests {
                 label("blind", 2, "0.01"),
             ]
         );
-        assert_eq!(exp.renders[1].settings.pruning, Some(0.01));
-        assert_eq!(exp.renders[4].settings.assembly, Assembly::Blind);
-        assert_eq!(exp.renders[0].settings.materials, Some(Preset::Glass));
+        assert_eq!(whitted(&exp, 1).pruning, Some(0.01));
+        assert_eq!(whitted(&exp, 4).assembly, Assembly::Blind);
+        assert_eq!(whitted(&exp, 0).materials, Some(Preset::Glass));
 
         for (bad, word) in [
             ("render = { renderer = \"path\" }", "renderer"),
@@ -913,15 +993,10 @@ mod tests {
              [[render]]\nrenderer = \"whitted\"\nmax_depth = 2\nmaterials = [\"mirror\", \"glass\"]\n"
         );
         let exp = parse(&text).unwrap();
-        let settings: Vec<(u32, bool, Option<Preset>)> = exp
-            .renders
-            .iter()
+        let settings: Vec<(u32, bool, Option<Preset>)> = (0..exp.renders.len())
             .map(|r| {
-                (
-                    r.settings.max_depth,
-                    r.settings.shadows,
-                    r.settings.materials,
-                )
+                let s = whitted(&exp, r);
+                (s.max_depth, s.shadows, s.materials)
             })
             .collect();
         assert_eq!(
@@ -945,7 +1020,7 @@ mod tests {
              max_reflection_depth = 1 }}\n"
         );
         let exp = parse(&split).unwrap();
-        let s = &exp.renders[0].settings;
+        let s = whitted(&exp, 0);
         assert_eq!((s.reflection_depth(), s.refraction_depth()), (1, 4));
         assert_eq!(
             exp.renders[0].to_string(),
@@ -956,5 +1031,57 @@ mod tests {
         let none = "name = \"t\"\nscenes = [\"room\"]\nresolution = { width = 8, height = 4 }\ntracers = [\"reference\"]\n";
         let (_, msg) = line_of_error(parse(none).unwrap_err());
         assert!(msg.contains("no ray kinds and no render workload"), "{msg}");
+    }
+
+    fn whitted(exp: &Experiment, r: usize) -> WhittedSettings {
+        match exp.renders[r] {
+            RenderWorkload::Whitted(s) => s,
+            RenderWorkload::Distribution(_) => panic!("render {r} is not Whitted"),
+        }
+    }
+
+    #[test]
+    fn a_distribution_grid_expands_like_whitted_and_checks_its_settings() {
+        let text = format!(
+            "{BASE}tracers = [\"reference\"]\nrender = {{ renderer = \"distribution\", spp = [1, 4], aperture = [0, 0.05], max_depth = 1 }}\n"
+        );
+        let exp = parse(&text).unwrap();
+        let labels: Vec<String> = exp.renders.iter().map(|r| r.to_string()).collect();
+        let label = |a: &str, spp: u32| {
+            format!("renderer=distribution;aperture={a};focus=camera;max_depth=1;shutter=none;spp={spp}")
+        };
+        assert_eq!(
+            labels,
+            [
+                label("0", 1),
+                label("0", 4),
+                label("0.05", 1),
+                label("0.05", 4)
+            ]
+        );
+        let RenderWorkload::Distribution(w) = exp.renders[3] else {
+            panic!("a distribution workload")
+        };
+        assert_eq!((w.settings.spp, w.settings.aperture), (4, Some(0.05)));
+        let RenderWorkload::Distribution(v) = exp.renders[2] else {
+            panic!("a distribution workload")
+        };
+        assert!(w.same_but_spp(&v));
+        for (bad, word) in [
+            ("spp = 3", "spp"),
+            ("aperture = -1", "aperture"),
+            ("shutter = 0", "shutter"),
+            ("max_depth = 99", "max_depth"),
+            ("assembly = \"runs\"", "assembly"),
+        ] {
+            let text = format!(
+                "{BASE}tracers = [\"reference\"]\nrender = {{ renderer = \"distribution\", {bad} }}\n"
+            );
+            let msg = usage_message(parse(&text).unwrap_err());
+            assert!(
+                msg.starts_with("exp.toml:6:") && msg.contains(word),
+                "{msg}"
+            );
+        }
     }
 }

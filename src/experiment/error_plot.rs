@@ -1,16 +1,24 @@
 //! `error_vs_time.png`: distribution ray tracing's image error against its run time, log-log, one
 //! line per tracer through its sample counts (each point labelled with its spp). Lower left is
 //! better: less error for the time spent.
+//!
+//! In an experiment run (`write_error_plots`), each group of distribution workloads that differ
+//! only in `spp` (at least two sample counts) gives one plot and its `.csv` per scene, from frame
+//! 0's `frame` rows at the widest thread count: time = the fastest frame, trace time = the sum of
+//! the fastest passes of its batches, error = the runs.csv `rmse`.
 
 use std::collections::BTreeMap;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use plotters::prelude::*;
 
 use crate::error::{Error, Result};
-use crate::render::convergence::ErrorPoint;
+use crate::render::convergence::{write_error_csv, ErrorPoint};
 
-use super::plots::register_font;
+use super::config::{Experiment, RenderWorkload};
+use super::plan::Plan;
+use super::plots::{register_font, scene_stem};
+use super::runner::{Case, Traced};
 
 const FONT: &str = "sans-serif";
 
@@ -23,6 +31,120 @@ const PALETTE: [RGBColor; 6] = [
     RGBColor(148, 103, 189),
     RGBColor(140, 86, 75),
 ];
+
+/// Writes `error_vs_time.png` and `.csv` into `dir` for every scene and group of distribution
+/// workloads that differ only in their sample count (named `error_vs_time_<scene>_<n>` when
+/// there are several). Returns the files written.
+pub fn write_error_plots(
+    dir: &Path,
+    exp: &Experiment,
+    plan: &Plan,
+    cases: &[Case],
+) -> Result<Vec<PathBuf>> {
+    let threads = exp.threads.iter().copied().max().unwrap_or(1);
+    let groups = spp_groups(exp);
+    let mut plots = Vec::new();
+    for scene in 0..plan.scenes.len() {
+        for (g, group) in groups.iter().enumerate() {
+            let points = error_points(exp, plan, cases, scene, group, threads);
+            plots.push((scene, g, points));
+        }
+    }
+    let mut written = Vec::new();
+    let several = plots.len() > 1;
+    for (scene, g, points) in plots {
+        let stem = match several {
+            true => format!("error_vs_time_{}_{}", scene_stem(plan, scene), g + 1),
+            false => "error_vs_time".to_string(),
+        };
+        let title = format!(
+            "{}: RMSE vs time per frame ({threads} threads)",
+            plan.scenes[scene].name
+        );
+        let png = dir.join(format!("{stem}.png"));
+        plot_error_vs_time(&png, &title, &points)?;
+        let csv = dir.join(format!("{stem}.csv"));
+        write_error_csv(&csv, &points)?;
+        written.extend([png, csv]);
+    }
+    Ok(written)
+}
+
+/// Indices of the distribution workloads, grouped by everything but `spp`; only groups with at
+/// least two sample counts.
+fn spp_groups(exp: &Experiment) -> Vec<Vec<usize>> {
+    let mut groups: Vec<Vec<usize>> = Vec::new();
+    for (r, workload) in exp.renders.iter().enumerate() {
+        let RenderWorkload::Distribution(w) = workload else {
+            continue;
+        };
+        let same = |&&i: &&usize| matches!(&exp.renders[i], RenderWorkload::Distribution(v) if v.same_but_spp(w));
+        match groups
+            .iter_mut()
+            .find(|g| g.first().is_some_and(|i| same(&i)))
+        {
+            Some(group) => group.push(r),
+            None => groups.push(vec![r]),
+        }
+    }
+    groups.retain(|g| g.len() > 1);
+    groups
+}
+
+/// One point per tracer instance and workload of `group` on frame 0 of `scene`.
+fn error_points(
+    exp: &Experiment,
+    plan: &Plan,
+    cases: &[Case],
+    scene: usize,
+    group: &[usize],
+    threads: usize,
+) -> Vec<ErrorPoint> {
+    let at = |c: &Case| {
+        c.timings
+            .iter()
+            .find(|t| t.threads == threads)
+            .map(|t| t.seconds_min)
+    };
+    let mut points = Vec::new();
+    for frame in cases.iter().filter(|c| c.scene == scene && c.frame == 0) {
+        let Traced::Frame { render } = frame.traced else {
+            continue;
+        };
+        let (Some(rmse), Some(seconds), true) = (frame.rmse, at(frame), group.contains(&render))
+        else {
+            continue;
+        };
+        let RenderWorkload::Distribution(w) = &exp.renders[render] else {
+            continue;
+        };
+        let trace_seconds = cases
+            .iter()
+            .filter(|c| {
+                c.scene == scene
+                    && c.frame == 0
+                    && c.instance == frame.instance
+                    && matches!(c.traced, Traced::Render { render: r, .. } if r == render)
+            })
+            .filter_map(at)
+            .sum();
+        points.push(ErrorPoint {
+            tracer: plan.instances[frame.instance].label.clone(),
+            spp: w.settings.spp,
+            seconds,
+            trace_seconds,
+            rays: frame.rays as u64,
+            rmse,
+        });
+    }
+    points
+}
+
+/// `v` to 3 significant digits (positive values: the axes are logarithmic).
+fn significant(v: f64) -> String {
+    let decimals = (2 - v.log10().floor() as i32).max(0) as usize;
+    format!("{v:.decimals$}")
+}
 
 /// Draws RMSE against wall-clock seconds per frame for `points` into `path`.
 pub fn plot_error_vs_time(path: &Path, title: &str, points: &[ErrorPoint]) -> Result<()> {
@@ -65,6 +187,9 @@ fn draw(
         .x_desc("seconds per frame (wall clock)")
         .y_desc("RMSE against the reference image")
         .label_style((FONT, 14))
+        // Log axes: 3 significant digits, not the f64 round-off of the tick values.
+        .x_label_formatter(&|x| significant(*x))
+        .y_label_formatter(&|y| significant(*y))
         .draw()?;
     let mut by_tracer: BTreeMap<&str, Vec<&ErrorPoint>> = BTreeMap::new();
     for p in &usable {
@@ -106,6 +231,15 @@ fn draw(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn axis_labels_have_three_significant_digits() {
+        assert_eq!(significant(0.0100000000001), "0.0100");
+        assert_eq!(significant(0.4), "0.400");
+        assert_eq!(significant(3.0), "3.00");
+        assert_eq!(significant(250.0), "250");
+        assert_eq!(significant(12345.6), "12346");
+    }
 
     #[test]
     fn draws_a_png_and_refuses_an_empty_plot() {

@@ -110,6 +110,7 @@ pub fn run(
     output::write_runs(&dir.join(output::RUNS_CSV), &plan, &cases)?;
     output::write_histograms(&dir.join(output::HISTOGRAMS_CSV), &plan, &cases)?;
     plots::write_plots(dir, &plan, &cases)?;
+    error_plot::write_error_plots(dir, exp, &plan, &cases)?;
     if !exp.tables.is_empty() || !exp.figures.is_empty() {
         let rows = selection::read_rows(&dir.join(output::RUNS_CSV))?;
         if !exp.tables.is_empty() {
@@ -148,7 +149,7 @@ pub fn run(
 #[cfg(test)]
 mod tests {
     use std::cell::Cell;
-    use std::collections::HashMap;
+    use std::collections::{BTreeMap, HashMap};
     use std::fs;
 
     use super::*;
@@ -468,6 +469,73 @@ mod tests {
         fs::remove_dir_all(&out).unwrap();
     }
 
+    /// The built-in room (point light, mirror floor) at 16×16 with a lens: every sample count
+    /// traces spp camera rays per pixel (all hit: the room is closed), a frame row with the RMSE
+    /// against the 1024-spp reference, which falls as spp grows; the packet tracer's image is the
+    /// reference tracer's (bit-exact hits), so its RMSE is the same.
+    #[test]
+    fn a_distribution_workload_gives_rows_per_batch_and_an_rmse_that_falls_with_spp() {
+        let out = scratch("drt");
+        let text = "name = \"t\"\nscenes = [\"room\"]\ntracers = [\"reference\", \"packet\"]\n\
+                    render = { renderer = \"distribution\", spp = [1, 4, 16], aperture = 0.2, focus = 3, max_depth = 1 }\n\
+                    resolution = { width = 16, height = 16 }\nthreads = [1]\nwarmup = 0\nrepeats = 1\n";
+        let mut exp = Experiment::parse(Path::new("t.toml"), text).unwrap();
+        exp.output = out.clone();
+        let load = |spec: &SceneSpec| crate::scene::library::load_scene(&spec.name, spec.size);
+        let dir = run(&exp, text, &RunOverrides::default(), &load).unwrap();
+        let (_, runs) = read_csv(&dir.join(output::RUNS_CSV));
+        let spp_of = |r: &HashMap<String, String>| -> u32 {
+            r["render"].rsplit("spp=").next().unwrap().parse().unwrap()
+        };
+        let mut rmse = BTreeMap::new();
+        for tracer in ["reference", "packet"] {
+            for spp in [1u32, 4, 16] {
+                let rows: Vec<_> = runs
+                    .iter()
+                    .filter(|r| r["tracer"] == tracer && spp_of(r) == spp)
+                    .collect();
+                let kinds: Vec<(&str, &str)> = rows
+                    .iter()
+                    .map(|r| (r["ray_kind"].as_str(), r["bounce_depth"].as_str()))
+                    .collect();
+                assert_eq!(
+                    kinds,
+                    [
+                        ("primary", "0"),
+                        ("shadow", "1"),
+                        ("reflection", "1"),
+                        ("shadow", "2"),
+                        ("frame", "")
+                    ],
+                    "{tracer} {spp}"
+                );
+                let primary = rows[0];
+                assert_eq!(primary["rays"], (256 * spp).to_string());
+                assert_eq!(primary["hits"], primary["rays"]);
+                let total: u64 = rows[..4]
+                    .iter()
+                    .map(|r| r["rays"].parse::<u64>().unwrap())
+                    .sum();
+                assert_eq!(rows[4]["rays"], total.to_string());
+                assert!(rows[..4].iter().all(|r| r["rmse"].is_empty()));
+                rmse.insert((tracer, spp), rows[4]["rmse"].parse::<f64>().unwrap());
+            }
+        }
+        let r = |t, s| rmse[&(t, s)];
+        assert!(r("reference", 4) < r("reference", 1), "{rmse:?}");
+        assert!(r("reference", 16) < r("reference", 4), "{rmse:?}");
+        for spp in [1, 4, 16] {
+            assert_eq!(r("reference", spp), r("packet", spp));
+        }
+        // One error-vs-time plot: a line per tracer, a point per spp.
+        let (_, points) = read_csv(&dir.join("error_vs_time.csv"));
+        assert_eq!(points.len(), 6);
+        assert!(dir.join("error_vs_time.png").is_file());
+        // The reference image was cached under the results root.
+        assert!(out.join(crate::render::convergence::CACHE_DIR).is_dir());
+        fs::remove_dir_all(&out).unwrap();
+    }
+
     #[test]
     fn the_quick_experiment_plans_as_documented() {
         let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments/quick.toml");
@@ -669,6 +737,44 @@ series = "scene"
             (1024, 2, &[1, 2][..])
         );
         assert_eq!(bench.tables.len(), 4);
+    }
+
+    /// Both Boulos 2007 files parse, and every `render` a table or figure selects is one of the
+    /// file's workloads (a typo would silently give empty cells).
+    #[test]
+    fn the_boulos07_experiments_parse_and_select_their_own_workloads() {
+        for (file, instances, renders, tables, figures) in [
+            ("boulos07.toml", 8, 13, 3, 2),
+            ("boulos07-drt.toml", 5, 8, 2, 1),
+        ] {
+            let exp = Experiment::load(
+                &Path::new(env!("CARGO_MANIFEST_DIR"))
+                    .join("experiments")
+                    .join(file),
+            )
+            .unwrap();
+            assert_eq!(exp.instances.len(), instances, "{file}");
+            assert_eq!(exp.renders.len(), renders, "{file}");
+            assert_eq!((exp.tables.len(), exp.figures.len()), (tables, figures));
+            let labels: Vec<String> = exp.renders.iter().map(|r| r.to_string()).collect();
+            let filters = exp.tables.iter().flat_map(|t| {
+                let rows = match &t.rows {
+                    tables::RowsSpec::List(rows) => rows.iter().map(|r| &r.filter).collect(),
+                    tables::RowsSpec::Field(_) => Vec::new(),
+                };
+                std::iter::once(&t.filter)
+                    .chain(rows)
+                    .chain(t.columns.iter().map(|c| &c.filter))
+            });
+            let mut selected = 0;
+            for filter in filters.chain(exp.figures.iter().map(|f| &f.filter)) {
+                for render in filter.0.get("render").into_iter().flatten() {
+                    assert!(labels.contains(render), "{file}: {render} is no workload");
+                    selected += 1;
+                }
+            }
+            assert!(selected >= renders, "{file}: {selected} selections");
+        }
     }
 
     /// Nothing but the (empty) experiment directory may remain.

@@ -5,6 +5,7 @@
 //! Counts a tracer cannot measure (Embree's box and triangle tests) are empty cells, not zeros.
 //! `build_plus_trace_seconds` is the frame's build (or refit) time of the row's structure plus
 //! the row's fastest pass: "rebuild + render" for that ray kind (0 build when reused).
+//! `rmse`: a distribution frame row's RMSE against its high-spp reference image (empty elsewhere).
 
 use std::path::Path;
 
@@ -47,6 +48,7 @@ pub const RUNS_COLUMNS: &[&str] = &[
     "triangle_tests_per_ray",
     "counting_seconds",
     "counting_overhead",
+    "rmse",
 ];
 
 /// runs.csv's columns: the fixed ones, then one per `Event`.
@@ -141,6 +143,7 @@ pub fn write_runs(path: &Path, plan: &Plan, cases: &[Case]) -> Result<()> {
                 cell(internal_per_ray(c.triangle_tests)),
                 cell(same_threads.then_some(case.counted.seconds)),
                 cell(same_threads.then(|| case.counted.seconds / timing.seconds_median)),
+                cell(case.rmse),
             ];
             let events = Event::ALL.iter().map(|&e| cell(internal(c.get(e))));
             let row: Vec<String> = fixed.into_iter().chain(events).collect();

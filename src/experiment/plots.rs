@@ -63,7 +63,7 @@ fn file_stem(label: &str) -> String {
         .collect()
 }
 
-fn scene_stem(plan: &Plan, scene: usize) -> String {
+pub(super) fn scene_stem(plan: &Plan, scene: usize) -> String {
     let s = &plan.scenes[scene];
     match s.size {
         Some(size) => file_stem(&format!("{}-{size}", s.name)),

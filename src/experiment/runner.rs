@@ -2,7 +2,9 @@
 //! ray batches once (primary, then shadow, diffuse, reflection and refraction rays from the
 //! reference tracer's primary hits), and measure every tracer instance on every ray kind at every
 //! thread count. Every tracer gets the very same batch. Then each instance renders the frame with
-//! every render workload (Whitted), timed like the batches, and once more counting.
+//! every render workload (Whitted or distribution), timed like the batches, and once more
+//! counting; a distribution frame's image is also compared with its cached high-sample reference
+//! (`render::convergence`) by RMSE.
 
 use std::collections::BTreeMap;
 use std::hint::black_box;
@@ -17,14 +19,18 @@ use crate::error::{Error, Result};
 use crate::geometry::{RayBatch, RayKind};
 use crate::random::mix64;
 use crate::render::assembly::BatchKind;
+use crate::render::convergence::reference_image;
+use crate::render::distribution::{render_distribution, DrtSettings, FrameGeometry};
+use crate::render::image::Image;
+use crate::render::motion::{tracer_for_motion, MovingMesh};
 use crate::render::rays::{diffuse_rays, primary_rays, shadow_rays};
 use crate::render::specular::specular_rays;
-use crate::render::whitted::{render_whitted, Tracing, WhittedFrame, WhittedSettings};
+use crate::render::whitted::{render_whitted, BatchRecord, Tracing};
 use crate::scene::{Frame, Scene};
 use crate::tracers::batch::trace_hits;
 use crate::tracers::{build_tracer, Params, Tracer, TracerInfo};
 
-use super::config::{Experiment, StructureKey};
+use super::config::{DistributionWorkload, Experiment, RenderWorkload, StructureKey};
 use super::measure::{count_pass, time_passes, timing_of, Counted, Timing};
 use super::plan::{secondary_ray_structure, Plan, SceneLoader, ScenePlan, SECONDARY_RAY_TRACER};
 
@@ -33,13 +39,13 @@ use super::plan::{secondary_ray_structure, Plan, SceneLoader, ScenePlan, SECONDA
 pub enum Traced {
     /// A batch of one ray kind, traced on its own.
     Batch(RayKind),
-    /// One batch of a Whitted frame of render workload `render` (an index into `Plan::renders`).
+    /// One batch of a rendered frame of render workload `render` (an index into `Plan::renders`).
     Render {
         render: usize,
         batch: BatchKind,
         depth: u32,
     },
-    /// A whole Whitted frame: all its batches plus shading and packet assembly.
+    /// A whole rendered frame: all its batches plus sampling, shading and packet assembly.
     Frame { render: usize },
 }
 
@@ -93,6 +99,8 @@ pub struct Case {
     /// Whether the structure was built this frame (false: reused from frame 0 of a static scene).
     pub built: bool,
     pub timings: Vec<Timing>,
+    /// A distribution frame's RMSE against its reference image (frame rows only).
+    pub rmse: Option<f64>,
 }
 
 /// A built structure with its build time.
@@ -214,10 +222,11 @@ pub fn run_plan(
                         build_seconds,
                         built: built_now,
                         timings,
+                        rmse: None,
                     });
                 }
                 for (r, workload) in exp.renders.iter().enumerate() {
-                    let case = |traced, rays, counted, timings| Case {
+                    let case = |traced, rays, counted, timings, rmse| Case {
                         scene: scene_index,
                         triangles: frame.mesh.len(),
                         frame: f,
@@ -229,19 +238,35 @@ pub fn run_plan(
                         build_seconds,
                         built: built_now,
                         timings,
+                        rmse,
+                    };
+                    // Motion blur traces over the moving geometry: its own structure (untimed).
+                    let moving = match workload {
+                        RenderWorkload::Distribution(DistributionWorkload {
+                            shutter: Some(shutter),
+                            ..
+                        }) => Some(MovingMesh::of_scene(&scene, frame.time, *shutter)?),
+                        _ => None,
+                    };
+                    let motion_tracer = match &moving {
+                        Some(m) => {
+                            Some(tracer_for_motion(instance.info.name, &instance.params, m)?)
+                        }
+                        None => None,
                     };
                     let job = RenderJob {
                         scene: &scene,
                         frame: &frame,
-                        tracer: tracer.as_ref(),
+                        moving: moving.as_ref(),
+                        tracer: motion_tracer.as_deref().unwrap_or(tracer.as_ref()),
                         exp,
-                        settings: &workload.settings,
+                        workload,
                     };
                     let timed: Vec<RenderTimings> = pools
                         .iter()
                         .map(|pool| {
                             progress.set_message(format!(
-                                "{} frame {}/{}: {instance} whitted {} ×{}",
+                                "{} frame {}/{}: {instance} {} ×{}",
                                 spec.name,
                                 f + 1,
                                 exp.frames,
@@ -252,8 +277,9 @@ pub fn run_plan(
                             progress.inc(1);
                             timing
                         })
-                        .collect();
-                    let (counted, seconds) = job.count(widest);
+                        .collect::<Result<_>>()?;
+                    let (counted, seconds) = job.count(widest)?;
+                    let rmse = job.rmse(&counted.image)?;
                     let threads = widest.current_num_threads();
                     let mut total = Counted {
                         threads,
@@ -275,11 +301,17 @@ pub fn run_plan(
                             seconds: record.seconds,
                             threads,
                         };
-                        cases.push(case(traced, record.rays, counted, timings));
+                        cases.push(case(traced, record.rays, counted, timings, None));
                     }
                     let rays = counted.batches.iter().map(|b| b.rays).sum();
                     let timings = timed.iter().map(|t| t.frame).collect();
-                    cases.push(case(Traced::Frame { render: r }, rays, total, timings));
+                    cases.push(case(
+                        Traced::Frame { render: r },
+                        rays,
+                        total,
+                        timings,
+                        rmse,
+                    ));
                 }
             }
         }
@@ -293,41 +325,85 @@ struct RenderTimings {
     frame: Timing,
 }
 
+/// What a render returns to the runner: the image and one record per traced batch.
+struct Rendered {
+    image: Image,
+    batches: Vec<BatchRecord>,
+}
+
 /// One tracer rendering one frame with one workload's settings.
 struct RenderJob<'a> {
     scene: &'a Scene,
     frame: &'a Frame<'a>,
+    /// The frame's geometry over the shutter interval, for motion-blurred workloads; `tracer`
+    /// is then built over it.
+    moving: Option<&'a MovingMesh>,
     tracer: &'a dyn Tracer,
     exp: &'a Experiment,
-    settings: &'a WhittedSettings,
+    workload: &'a RenderWorkload,
 }
 
 impl RenderJob<'_> {
-    fn render(&self, tracing: Tracing) -> WhittedFrame {
+    /// A distribution workload's settings at the experiment's resolution.
+    fn drt_settings(&self, w: &DistributionWorkload) -> DrtSettings {
+        DrtSettings {
+            width: self.exp.width,
+            height: self.exp.height,
+            ..w.settings
+        }
+    }
+
+    fn render(&self, tracing: Tracing) -> Result<Rendered> {
         let (width, height) = (self.exp.width, self.exp.height);
-        render_whitted(
-            self.scene,
-            self.frame,
-            self.tracer,
-            width,
-            height,
-            self.settings,
-            tracing,
-        )
+        match self.workload {
+            RenderWorkload::Whitted(settings) => {
+                let out = render_whitted(
+                    self.scene,
+                    self.frame,
+                    self.tracer,
+                    width,
+                    height,
+                    settings,
+                    tracing,
+                );
+                Ok(Rendered {
+                    image: out.image,
+                    batches: out.batches,
+                })
+            }
+            RenderWorkload::Distribution(w) => {
+                let geometry = match self.moving {
+                    Some(m) => FrameGeometry::Moving(m),
+                    None => FrameGeometry::Static(&self.frame.mesh),
+                };
+                let out = render_distribution(
+                    self.scene,
+                    self.frame,
+                    geometry,
+                    self.tracer,
+                    &self.drt_settings(w),
+                    tracing,
+                )?;
+                Ok(Rendered {
+                    image: out.image,
+                    batches: out.batches,
+                })
+            }
+        }
     }
 
     /// `warmup` untimed renders, then `repeats` timed ones, in `pool`. The renders are
     /// deterministic, so every render traces the same batches in the same order.
-    fn time(&self, pool: &ThreadPool) -> RenderTimings {
+    fn time(&self, pool: &ThreadPool) -> Result<RenderTimings> {
         pool.install(|| {
             for _ in 0..self.exp.warmup {
-                black_box(self.render(Tracing::Timed));
+                black_box(self.render(Tracing::Timed)?);
             }
             let mut frame = Vec::with_capacity(self.exp.repeats);
             let mut batches: Vec<Vec<f64>> = Vec::new();
             for _ in 0..self.exp.repeats {
                 let start = Instant::now();
-                let out = self.render(Tracing::Timed);
+                let out = self.render(Tracing::Timed)?;
                 frame.push(start.elapsed().as_secs_f64());
                 batches.resize(out.batches.len(), Vec::new());
                 for (seconds, record) in batches.iter_mut().zip(&out.batches) {
@@ -336,18 +412,35 @@ impl RenderJob<'_> {
                 black_box(out);
             }
             let threads = pool.current_num_threads();
-            RenderTimings {
+            Ok(RenderTimings {
                 batches: batches.into_iter().map(|s| timing_of(threads, s)).collect(),
                 frame: timing_of(threads, frame),
-            }
+            })
         })
     }
 
     /// One render with the counting calls, in `pool`, and its wall time.
-    fn count(&self, pool: &ThreadPool) -> (WhittedFrame, f64) {
+    fn count(&self, pool: &ThreadPool) -> Result<(Rendered, f64)> {
         let start = Instant::now();
-        let out = pool.install(|| self.render(Tracing::Counted));
-        (out, start.elapsed().as_secs_f64())
+        let out = pool.install(|| self.render(Tracing::Counted))?;
+        Ok((out, start.elapsed().as_secs_f64()))
+    }
+
+    /// A distribution frame's RMSE against the reference image of the same settings, cached
+    /// under the results root (rendered with the reference tracer on first use); `None` for
+    /// other renderers.
+    fn rmse(&self, image: &Image) -> Result<Option<f64>> {
+        let RenderWorkload::Distribution(w) = self.workload else {
+            return Ok(None);
+        };
+        let (reference, _) = reference_image(
+            self.scene,
+            self.frame,
+            self.moving,
+            &self.drt_settings(w),
+            &self.exp.output,
+        )?;
+        Ok(Some(image.rmse(&reference)))
     }
 }
 

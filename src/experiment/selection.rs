@@ -3,7 +3,8 @@
 //!
 //! - A **field** is a runs.csv column (`scene`, `triangles`, `seconds_min`, ...) or `param:<key>`,
 //!   the value of one tracer or structure parameter in the row's `parameters` cell (empty when the
-//!   row's instance does not set it).
+//!   row's instance does not set it), or `render:<key>`, one setting of the row's `render` cell
+//!   (`render:spp`, `render:aperture`; empty for ray-batch rows).
 //! - A **filter** (`where = { field = value, ... }`) keeps rows whose field equals the value, or one
 //!   of the values when a list is given; values compare as text the way runs.csv writes them
 //!   (`threads = 1`, `"param:packet" = 8`, `"param:mailbox" = false`).
@@ -120,33 +121,41 @@ impl Filter {
 
 /// The value of `field` in `row` (see the module comment); empty when absent.
 pub fn field_value(row: &Row, field: &str) -> String {
-    match field.strip_prefix("param:") {
-        Some(key) => row
-            .get("parameters")
-            .and_then(|params| {
-                params
-                    .split(';')
+    // `key=value;...` cells: tracer parameters and render workload settings.
+    let setting = |column: &str, key: &str| {
+        row.get(column)
+            .and_then(|cell| {
+                cell.split(';')
                     .filter_map(|kv| kv.split_once('='))
                     .find(|(k, _)| *k == key)
                     .map(|(_, v)| v.to_string())
             })
-            .unwrap_or_default(),
-        None => row.get(field).cloned().unwrap_or_default(),
+            .unwrap_or_default()
+    };
+    if let Some(key) = field.strip_prefix("param:") {
+        return setting("parameters", key);
     }
+    if let Some(key) = field.strip_prefix("render:") {
+        return setting("render", key);
+    }
+    row.get(field).cloned().unwrap_or_default()
 }
 
-/// A usage error unless `field` is a runs.csv column or `param:<key>`.
+/// A usage error unless `field` is a runs.csv column, `param:<key>` or `render:<key>`.
 pub fn check_field(field: &str, what: &str) -> Result<()> {
     check_field_of(field, what, RUNS_CSV, &runs_columns())
 }
 
-/// A usage error unless `field` is one of the `known` columns of `file` or `param:<key>`.
+/// A usage error unless `field` is one of the `known` columns of `file`, `param:<key>` or
+/// `render:<key>`.
 pub fn check_field_of(field: &str, what: &str, file: &str, known: &[&str]) -> Result<()> {
-    match field.strip_prefix("param:") {
-        Some(key) if !key.is_empty() => Ok(()),
-        _ if known.contains(&field) => Ok(()),
-        _ => Err(Error::usage(format!(
-            "{what}: unknown field {field:?} (a {file} column — {} — or param:<key>)",
+    let keyed = ["param:", "render:"]
+        .iter()
+        .any(|p| field.strip_prefix(p).is_some_and(|key| !key.is_empty()));
+    match keyed || known.contains(&field) {
+        true => Ok(()),
+        false => Err(Error::usage(format!(
+            "{what}: unknown field {field:?} (a {file} column — {} — param:<key> or render:<key>)",
             known.join(", ")
         ))),
     }
@@ -248,6 +257,7 @@ mod tests {
             ("scene", "toys"),
             ("threads", "1"),
             ("parameters", "lambda=5;packet=8"),
+            ("render", "renderer=distribution;aperture=7.5;spp=16"),
         ]);
         assert!(filter("where = { scene = \"toys\", threads = 1 }").matches(&r));
         assert!(filter("where = { \"param:packet\" = [4, 8] }").matches(&r));
@@ -255,6 +265,11 @@ mod tests {
         // An unset parameter is the empty string.
         assert!(filter("where = { \"param:mailbox\" = \"\" }").matches(&r));
         assert_eq!(field_value(&r, "param:lambda"), "5");
+        assert_eq!(field_value(&r, "render:aperture"), "7.5");
+        assert_eq!(field_value(&r, "render:shutter"), "");
+        assert!(filter("where = { \"render:spp\" = 16 }").matches(&r));
+        assert!(check_field("render:spp", "t").is_ok());
+        assert!(check_field("render:", "t").is_err());
         assert!(check_field("param:x", "t").is_ok());
         assert!(check_field("seconds_min", "t").is_ok());
         assert!(check_field("secs", "t").is_err());

@@ -6,6 +6,7 @@
 
 use glam::Vec3;
 
+use crate::render::shading::point_irradiance;
 use crate::scene::Light;
 
 /// Where to aim the shadow ray, and the irradiance-like factor it delivers if unoccluded.
@@ -28,7 +29,7 @@ pub fn sample_light(light: &Light, p: Vec3, n: Vec3, s: f32, t: f32) -> Option<L
         return None;
     }
     let incident = match *light {
-        Light::Point { intensity, .. } => intensity * (cos_surface / d2),
+        Light::Point { intensity, .. } => point_irradiance(p, n, point, intensity),
         Light::Quad {
             edge_u,
             edge_v,

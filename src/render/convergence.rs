@@ -17,6 +17,7 @@ use crate::random::mix64;
 use crate::render::distribution::{render_distribution, DrtFrame, DrtSettings, FrameGeometry};
 use crate::render::image::Image;
 use crate::render::motion::{tracer_for_motion, MovingMesh};
+use crate::render::whitted::Tracing;
 use crate::scene::{Frame, Mesh, Scene};
 use crate::tracers::{Params, Tracer};
 use crate::verify::tracer_for_frame;
@@ -147,6 +148,7 @@ pub fn reference_image(
         geometry(frame, motion),
         tracer.as_ref(),
         &reference,
+        Tracing::Timed,
     )?
     .image;
     write_cached(&path, key, &image)?;
@@ -221,14 +223,20 @@ pub fn error_against_time(
     spps.iter()
         .map(|&spp| {
             let run = DrtSettings { spp, ..*settings };
-            let rendered =
-                render_distribution(scene, frame, geometry(frame, motion), tracer, &run)?;
+            let rendered = render_distribution(
+                scene,
+                frame,
+                geometry(frame, motion),
+                tracer,
+                &run,
+                Tracing::Timed,
+            )?;
             let point = ErrorPoint {
                 tracer: tracer_name.to_string(),
                 spp,
                 seconds: rendered.seconds,
                 trace_seconds: rendered.trace_seconds(),
-                rays: rendered.kinds.iter().map(|k| k.rays).sum(),
+                rays: rendered.rays(),
                 rmse: rendered.image.rmse(reference),
             };
             Ok((point, rendered))

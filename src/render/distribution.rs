@@ -12,30 +12,32 @@
 //! one pixel's samples together in one packet per kind.
 //!
 //! Shading, per sample path: emission + ambient + Lambert under each light sample, and one
-//! reflection ray chosen between the material's mirror and glossy parts in proportion to their
-//! reflectances (multisampling instead of branching, Boulos §4). Dielectric transmission is not
-//! rendered here (a dielectric surface shows its diffuse and reflective parts only).
+//! reflection ray carrying the material's reflectance (`shading::specular_response`: mirror plus
+//! glossy, Fresnel for dielectrics), its direction chosen between the mirror and glossy parts in
+//! proportion to their reflectances (multisampling instead of branching, Boulos §4). Dielectric
+//! transmission is not rendered here (a dielectric shows its diffuse and reflected light only).
 
+use std::collections::BTreeMap;
 use std::time::Instant;
 
 use glam::Vec3;
 
 use crate::error::{Error, Result};
-use crate::geometry::{Hit, Ray, RayBatch, RayKind};
+use crate::geometry::{Ray, RayBatch, RayKind, Triangle};
 use crate::render::area_light::sample_light;
-use crate::render::glossy::{mirror, sample_phong_lobe};
+use crate::render::assembly::BatchKind;
+use crate::render::glossy::sample_phong_lobe;
 use crate::render::image::Image;
 use crate::render::interleaved::{SampleTable, DIMENSION_PAIRS};
 use crate::render::motion::MovingMesh;
 use crate::render::rays::{morton_decode, shadow_ray, CameraProjection, SurfacePoint, TILE};
+use crate::render::shading::{specular_response, AMBIENT, BACKGROUND};
+use crate::render::specular::{reflect, reflection_ray};
+use crate::render::whitted::{trace, Answers, BatchRecord, Tracing};
 use crate::scene::{Camera, Frame, Scene};
-use crate::tracers::batch::{trace_hits, trace_occlusion};
+use crate::stats::Counters;
 use crate::tracers::Tracer;
 
-/// Light reaching surfaces from everywhere, so shadows are dark but not black (as renderer v0).
-const AMBIENT: f32 = 0.08;
-/// Colour of rays that leave the scene (as renderer v0).
-const BACKGROUND: Vec3 = Vec3::new(0.05, 0.06, 0.08);
 /// A wave holds at least this many camera rays (whole tiles), so each traced batch spreads over
 /// many `tracers::batch` chunks and every core has work even at 1 sample per pixel.
 const WAVE_RAYS: usize = 1 << 16;
@@ -103,39 +105,8 @@ impl DrtSettings {
 }
 
 /// The kinds of rays a distribution frame traces; timings and counts are kept per kind.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub enum DrtRayKind {
-    Primary,
-    Shadow,
-    /// Mirror and glossy reflection rays.
-    Reflection,
-}
-
-impl DrtRayKind {
-    pub const ALL: [DrtRayKind; 3] = [
-        DrtRayKind::Primary,
-        DrtRayKind::Shadow,
-        DrtRayKind::Reflection,
-    ];
-
-    pub fn name(self) -> &'static str {
-        match self {
-            DrtRayKind::Primary => "primary",
-            DrtRayKind::Shadow => "shadow",
-            DrtRayKind::Reflection => "reflection",
-        }
-    }
-
-    /// The batch kind handed to tracers. Reflection rays are closest-hit secondary rays; until
-    /// `RayKind` names reflection rays of its own they travel as `Diffuse` batches.
-    fn batch_kind(self) -> RayKind {
-        match self {
-            DrtRayKind::Primary => RayKind::Primary,
-            DrtRayKind::Shadow => RayKind::Shadow,
-            DrtRayKind::Reflection => RayKind::Diffuse,
-        }
-    }
-}
+/// Reflection rays are mirror and glossy reflection rays alike.
+pub const DRT_KINDS: [RayKind; 3] = [RayKind::Primary, RayKind::Shadow, RayKind::Reflection];
 
 /// Rays, explicit packets and tracing wall time of one kind over a frame.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -146,23 +117,80 @@ pub struct KindTotals {
     pub seconds: f64,
 }
 
-#[derive(Clone, Debug)]
 pub struct DrtFrame {
     pub image: Image,
-    /// Indexed like `DrtRayKind::ALL`.
-    pub kinds: [KindTotals; 3],
+    /// One record per (ray kind, bounce depth), summed over the frame's waves, in (depth, kind)
+    /// order: camera rays have depth 0, the shadow and reflection rays leaving the hits of
+    /// depth-d rays depth d + 1 (as in `whitted`).
+    pub batches: Vec<BatchRecord>,
+    /// Explicit packets (pixels' sample groups) traced, indexed by `RayKind as usize`.
+    pub packets: [u64; RayKind::ALL.len()],
     /// Wall time of the whole frame: sampling, shading and tracing.
     pub seconds: f64,
 }
 
 impl DrtFrame {
-    pub fn totals(&self, kind: DrtRayKind) -> KindTotals {
-        self.kinds[kind as usize]
+    pub fn totals(&self, kind: RayKind) -> KindTotals {
+        let of_kind = self
+            .batches
+            .iter()
+            .filter(|b| b.kind == BatchKind::Rays(kind));
+        KindTotals {
+            rays: of_kind.clone().map(|b| b.rays as u64).sum(),
+            packets: self.packets[kind as usize],
+            seconds: of_kind.map(|b| b.seconds).sum(),
+        }
     }
 
     /// Wall time inside the tracer over all kinds.
     pub fn trace_seconds(&self) -> f64 {
-        self.kinds.iter().map(|k| k.seconds).sum()
+        self.batches.iter().map(|b| b.seconds).sum()
+    }
+
+    /// Rays traced over all kinds.
+    pub fn rays(&self) -> u64 {
+        self.batches.iter().map(|b| b.rays as u64).sum()
+    }
+}
+
+/// The frame's batch records under construction, keyed by (depth, kind).
+#[derive(Default)]
+struct Records {
+    batches: BTreeMap<(u32, BatchKind), BatchRecord>,
+    packets: [u64; RayKind::ALL.len()],
+}
+
+impl Records {
+    /// Traces `generation`'s batch at bounce `depth` and books it.
+    fn trace(
+        &mut self,
+        tracer: &dyn Tracer,
+        generation: &Generation,
+        depth: u32,
+        tracing: Tracing,
+    ) -> Answers {
+        let kind = BatchKind::Rays(generation.kind);
+        let (answers, seconds, counters) = trace(tracer, &generation.batch, kind, tracing);
+        let record = self
+            .batches
+            .entry((depth, kind))
+            .or_insert_with(|| BatchRecord {
+                kind,
+                depth,
+                rays: 0,
+                hits: 0,
+                seconds: 0.0,
+                counters: Counters::default(),
+            });
+        record.rays += generation.batch.len();
+        record.hits += (0..generation.batch.len())
+            .filter(|&i| answers.blocked(i))
+            .count();
+        record.seconds += seconds;
+        record.counters.merge(&counters);
+        self.packets[generation.kind as usize] +=
+            generation.batch.packet_start.iter().filter(|s| **s).count() as u64;
+        answers
     }
 }
 
@@ -175,15 +203,16 @@ pub enum FrameGeometry<'a> {
 }
 
 impl FrameGeometry<'_> {
-    fn surface(&self, ray: &Ray, hit: &Hit) -> (SurfacePoint, u32) {
+    /// The triangle `prim` as a ray at `time` sees it, and its material.
+    fn triangle(&self, prim: u32, time: f32) -> (Triangle, u32) {
         match self {
             FrameGeometry::Static(mesh) => (
-                SurfacePoint::of_hit(mesh, ray, hit),
-                mesh.material_ids[hit.prim as usize],
+                mesh.triangles[prim as usize],
+                mesh.material_ids[prim as usize],
             ),
             FrameGeometry::Moving(moving) => (
-                moving.surface_at(ray, hit),
-                moving.material_ids()[hit.prim as usize],
+                moving.triangle(prim, time),
+                moving.material_ids()[prim as usize],
             ),
         }
     }
@@ -206,7 +235,7 @@ struct Path {
 
 /// A batch of one kind under construction, with the path each ray serves and what it carries.
 struct Generation {
-    kind: DrtRayKind,
+    kind: RayKind,
     batch: RayBatch,
     /// Per ray: its path and, for shadow rays, the colour it adds when unoccluded.
     served: Vec<(usize, Vec3)>,
@@ -214,10 +243,10 @@ struct Generation {
 }
 
 impl Generation {
-    fn new(kind: DrtRayKind) -> Self {
+    fn new(kind: RayKind) -> Self {
         Generation {
             kind,
-            batch: RayBatch::new(kind.batch_kind()),
+            batch: RayBatch::new(kind),
             served: Vec::new(),
             last_pixel: None,
         }
@@ -245,6 +274,7 @@ pub fn render_distribution(
     geometry: FrameGeometry<'_>,
     tracer: &dyn Tracer,
     settings: &DrtSettings,
+    tracing: Tracing,
 ) -> Result<DrtFrame> {
     settings.check()?;
     let start = Instant::now();
@@ -263,10 +293,10 @@ pub fn render_distribution(
         .collect();
 
     let mut sum = vec![Vec3::ZERO; (settings.width * settings.height) as usize];
-    let mut kinds = [KindTotals::default(); 3];
+    let mut records = Records::default();
     for wave in tiles.chunks(tiles_per_wave) {
         let mut paths = Vec::new();
-        let mut camera = Generation::new(DrtRayKind::Primary);
+        let mut camera = Generation::new(RayKind::Primary);
         for &(tx, ty) in wave {
             for code in 0..TILE * TILE {
                 let (dx, dy) = morton_decode(code);
@@ -299,9 +329,11 @@ pub fn render_distribution(
             if current.batch.is_empty() {
                 break;
             }
-            let hits = timed(&mut kinds, &current, || trace_hits(tracer, &current.batch));
-            let mut shadows = Generation::new(DrtRayKind::Shadow);
-            let mut reflections = Generation::new(DrtRayKind::Reflection);
+            let Answers::Hits(hits) = records.trace(tracer, &current, depth, tracing) else {
+                unreachable!("camera and reflection rays are traced for closest hits")
+            };
+            let mut shadows = Generation::new(RayKind::Shadow);
+            let mut reflections = Generation::new(RayKind::Reflection);
             let pairs = PAIRS_BEFORE_BOUNCES + PAIRS_PER_BOUNCE * depth as usize;
             for (i, hit) in hits.iter().enumerate() {
                 let path_index = current.served[i].0;
@@ -311,7 +343,8 @@ pub fn render_distribution(
                     continue;
                 }
                 let ray = current.batch.ray(i);
-                let (surface, material) = geometry.surface(&ray, hit);
+                let (triangle, material) = geometry.triangle(hit.prim, ray.time);
+                let surface = SurfacePoint::on_triangle(&triangle, &ray, hit);
                 let m = &scene.materials[material as usize];
                 colour[path_index] += path.weight * (m.emission + m.diffuse * AMBIENT);
                 let sample = |pair: usize| table.get(path.x, path.y, path.sample, pair);
@@ -330,31 +363,29 @@ pub fn render_distribution(
                     }
                 }
 
-                // One reflection ray: mirror or glossy, chosen by reflectance.
-                let glossy = m.glossy.map_or(0.0, |(_, r)| r);
-                let total = m.mirror + glossy;
+                // One reflection ray carrying the whole reflectance (Fresnel for dielectrics),
+                // its direction mirror or glossy in proportion to the two reflectances.
+                let total = specular_response(m, ray.dir, surface.n, triangle.normal()).reflection;
                 if depth < settings.max_depth && total > 0.0 {
-                    let reflected = mirror(ray.dir, surface.n);
+                    let reflected = reflect(ray.dir, surface.n);
                     let dir = match m.glossy {
-                        Some((exponent, r)) if sample(pairs + 2).0 * total < r => {
+                        Some((exponent, r)) if sample(pairs + 2).0 * (m.mirror + r) < r => {
                             let (u1, u2) = sample(pairs + 1);
                             sample_phong_lobe(reflected, surface.n, exponent, u1, u2)
                         }
                         _ => reflected,
                     };
-                    let next = Ray::new(surface.ray_origin(), dir, 0.0, f32::INFINITY);
+                    let next = reflection_ray(&surface, dir);
                     paths[path_index].weight = path.weight * total;
                     reflections.push(next, path_index, &paths, Vec3::ZERO);
                 }
             }
             if !shadows.batch.is_empty() {
-                let occluded = timed(&mut kinds, &shadows, || {
-                    trace_occlusion(tracer, &shadows.batch)
-                });
-                for (&(path, carries), _) in
-                    shadows.served.iter().zip(&occluded).filter(|(_, o)| !**o)
-                {
-                    colour[path] += carries;
+                let answers = records.trace(tracer, &shadows, depth + 1, tracing);
+                for (i, &(path, carries)) in shadows.served.iter().enumerate() {
+                    if !answers.blocked(i) {
+                        colour[path] += carries;
+                    }
                 }
             }
             current = reflections;
@@ -370,7 +401,8 @@ pub fn render_distribution(
     }
     Ok(DrtFrame {
         image,
-        kinds,
+        batches: records.batches.into_values().collect(),
+        packets: records.packets,
         seconds: start.elapsed().as_secs_f64(),
     })
 }
@@ -387,17 +419,6 @@ pub fn camera_ray(
     let (jx, jy) = table.get(x, y, sample, PAIR_PIXEL);
     let lens = table.get(x, y, sample, PAIR_LENS);
     projection.ray(x as f32 + jx, y as f32 + jy, lens)
-}
-
-/// Runs `trace` on `generation`'s batch and books its rays, packets and wall time to its kind.
-fn timed<T>(kinds: &mut [KindTotals; 3], generation: &Generation, trace: impl FnOnce() -> T) -> T {
-    let start = Instant::now();
-    let out = trace();
-    let totals = &mut kinds[generation.kind as usize];
-    totals.seconds += start.elapsed().as_secs_f64();
-    totals.rays += generation.batch.len() as u64;
-    totals.packets += generation.batch.packet_start.iter().filter(|s| **s).count() as u64;
-    out
 }
 
 #[cfg(test)]
@@ -516,6 +537,7 @@ mod tests {
             FrameGeometry::Static(&frame.mesh),
             tracer.as_ref(),
             &settings,
+            Tracing::Counted,
         )
         .unwrap()
     }
@@ -538,17 +560,32 @@ mod tests {
         let a = render(&scene, 4, 0.1);
         let b = render(&scene, 4, 0.1);
         assert_eq!(a.image, b.image);
-        let primary = a.totals(DrtRayKind::Primary);
+        let primary = a.totals(RayKind::Primary);
         assert_eq!(primary.rays, 64 * 64 * 4);
         assert_eq!(primary.packets, 64 * 64);
         // Per bounce (camera hit and two reflections): at most one shadow packet per pixel, one
         // shadow ray per sample (one light).
-        let shadow = a.totals(DrtRayKind::Shadow);
+        let shadow = a.totals(RayKind::Shadow);
         assert!(shadow.packets <= 3 * 64 * 64 && shadow.rays <= 3 * 64 * 64 * 4);
         assert!(shadow.rays > shadow.packets, "pixels share shadow packets");
-        let reflection = a.totals(DrtRayKind::Reflection);
+        let reflection = a.totals(RayKind::Reflection);
         assert!(reflection.rays > 0 && reflection.packets <= 2 * 64 * 64);
         assert!(reflection.rays <= 2 * 64 * 64 * 4);
+        // One record per (depth, kind): shadows leave every hit; only the floor reflects, and
+        // what it reflects (walls, boxes) does not, so no reflection ray reaches depth 2.
+        let records: Vec<(u32, &str)> =
+            a.batches.iter().map(|b| (b.depth, b.kind.name())).collect();
+        assert_eq!(
+            records,
+            [
+                (0, "primary"),
+                (1, "shadow"),
+                (1, "reflection"),
+                (2, "shadow"),
+            ]
+        );
+        // Counted: every ray of every record.
+        assert!(a.batches.iter().all(|b| b.counters.rays == b.rays as u64));
         // The same frame at 1 spp differs from 4 spp (it is not the same estimate).
         assert_ne!(render(&scene, 1, 0.1).image, a.image);
     }

@@ -13,11 +13,6 @@
 
 use glam::Vec3;
 
-/// The mirror reflection of incoming direction `dir` about unit normal `n`.
-pub fn mirror(dir: Vec3, n: Vec3) -> Vec3 {
-    dir - n * (2.0 * dir.dot(n))
-}
-
 /// A direction from the Phong lobe of `exponent` about `reflected` (unit), for the surface with
 /// unit normal `n` on the side the ray leaves to, from a sample `(u1, u2)` in [0, 1)².
 /// Always strictly above the surface when `reflected` is.
@@ -44,6 +39,7 @@ pub fn sample_phong_lobe(reflected: Vec3, n: Vec3, exponent: f32, u1: f32, u2: f
 mod tests {
     use super::*;
     use crate::render::sampling::uniform;
+    use crate::render::specular::reflect as mirror;
 
     #[test]
     fn origin_of_sample_space_is_the_mirror_direction() {

@@ -85,7 +85,8 @@ impl MovingMesh {
 }
 
 /// Tracer `name` over `moving`: its structure built for motion (`AccelKind::build_moving`), so rays
-/// are traced at their time. Only tracers over the BVH or Embree can.
+/// are traced at their time. Only `reference`, `packet` and the Embree tracers can; the others
+/// are refused (`AccelKind::build_moving`, `build_tracer`).
 pub fn tracer_for_motion(
     name: &str,
     params: &Params,
@@ -109,7 +110,7 @@ mod tests {
     use crate::render::rays::primary_rays;
     use crate::render::sampling::uniform;
     use crate::scene::library::load_scene;
-    use crate::tracers::batch::trace_hits;
+    use crate::tracers::batch::{trace_hits, trace_occlusion};
     use crate::verify::{oracle_params, tracer_for_frame};
 
     /// The deforming flag over [1.0 s, 1.25 s]: every flag vertex moves.
@@ -220,5 +221,65 @@ mod tests {
         // The blur is real: rays at different times see the flag at different places.
         let hits = ours.iter().filter(|h| h.is_hit()).count();
         assert!(hits > batch.len() / 4);
+    }
+
+    /// The packet tracer on a moving BVH gives the reference tracer's hits bit for bit on rays
+    /// spread over the shutter, with every traversal, with and without frustum culling (which
+    /// must not cull triangles where they are not at the rays' times), and for occlusion.
+    #[test]
+    fn packet_tracer_agrees_with_the_reference_on_motion_blurred_rays() {
+        let (scene, moving) = moving_flag();
+        let batch = rays_at(&scene, None);
+        let reference = tracer_for_motion("reference", &Params::new(), &moving).unwrap();
+        let want = trace_hits(reference.as_ref(), &batch);
+        let mut shadows = batch.clone();
+        shadows.kind = Some(RayKind::Shadow);
+        let want_occluded = trace_occlusion(reference.as_ref(), &shadows);
+        // The frozen mesh at time 0 answers differently: motion matters for these rays.
+        let frame = crate::scene::Frame {
+            index: 0,
+            time: 1.0,
+            mesh: std::borrow::Cow::Owned(moving.mesh_at(0.0)),
+            camera: scene.camera,
+        };
+        let still = trace_hits(
+            tracer_for_frame("packet", &Params::new(), &frame)
+                .unwrap()
+                .as_ref(),
+            &batch,
+        );
+        let differ = still.iter().zip(&want).filter(|(a, b)| a != b).count();
+        assert!(
+            differ > batch.len() / 10,
+            "only {differ} rays see the motion"
+        );
+        for traversal in ["masked", "ranged", "partition", "ia"] {
+            for (frustum, lanes, packet) in [("true", "16", "8"), ("false", "4", "4")] {
+                let params = Params::new()
+                    .with("traversal", traversal)
+                    .with("frustum", frustum)
+                    .with("lanes", lanes)
+                    .with("packet", packet);
+                let packet = tracer_for_motion("packet", &params, &moving).unwrap();
+                let got = trace_hits(packet.as_ref(), &batch);
+                for (i, (a, b)) in want.iter().zip(&got).enumerate() {
+                    assert_eq!(a, b, "{traversal}, frustum {frustum}: ray {i}");
+                }
+                assert_eq!(
+                    trace_occlusion(packet.as_ref(), &shadows),
+                    want_occluded,
+                    "{traversal}, frustum {frustum}: occlusion"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn tracers_without_motion_blur_refuse_a_moving_structure() {
+        let (_, moving) = moving_flag();
+        for name in ["obvhs", "grid-dda", "cgt"] {
+            let refused = tracer_for_motion(name, &Params::new(), &moving);
+            assert!(refused.is_err(), "{name} accepted a moving mesh");
+        }
     }
 }

@@ -134,14 +134,14 @@ struct Generation {
 }
 
 /// The tracer's answers for one batch.
-enum Answers {
+pub(crate) enum Answers {
     Hits(Vec<Hit>),
     Occluded(Vec<bool>),
 }
 
 impl Answers {
     /// Whether ray `i` met anything: what a shadow ray asks.
-    fn blocked(&self, i: usize) -> bool {
+    pub(crate) fn blocked(&self, i: usize) -> bool {
         match self {
             Answers::Hits(h) => h[i].is_hit(),
             Answers::Occluded(o) => o[i],
@@ -253,7 +253,7 @@ impl Shader<'_> {
 }
 
 /// Traces `batch` as `kind` asks, timing the pass or counting it.
-fn trace(
+pub(crate) fn trace(
     tracer: &dyn Tracer,
     batch: &RayBatch,
     kind: BatchKind,

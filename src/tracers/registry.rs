@@ -105,9 +105,22 @@ impl TracerInfo {
     }
 }
 
+/// The tracers over our BVH that test moving triangles at each ray's time (motion blur); any
+/// other tracer handed a moving BVH is refused rather than answering for the wrong instant.
+const BVH_MOTION_TRACERS: [&str; 2] = ["reference", "packet"];
+
 /// A tracer over `accel`, which must be of the tracer's `AccelKind` built with its parameters.
 pub fn build_tracer(info: &TracerInfo, params: &Params, accel: &Accel) -> Result<Box<dyn Tracer>> {
     params.check_known(info.name, &info.accepts())?;
+    if let Accel::Bvh(bvh) = accel {
+        if bvh.motion_end.is_some() && !BVH_MOTION_TRACERS.contains(&info.name) {
+            return Err(Error::usage(format!(
+                "tracer {} has no motion blur (moving geometry needs one of {} or embree)",
+                info.name,
+                BVH_MOTION_TRACERS.join(", ")
+            )));
+        }
+    }
     match (info.name, accel) {
         ("reference", Accel::Bvh(bvh)) => Ok(Box::new(ReferenceTracer::new(bvh.clone()))),
         ("embree1", Accel::Embree(s)) => {

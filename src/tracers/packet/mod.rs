@@ -18,6 +18,10 @@
 //! - **Exact closest hits**: every lane runs the reference tracer's slab and watertight tests
 //!   bit for bit (`simd`), and culling is conservative, so each ray gets the reference's closest
 //!   hit (up to the order in which triangles at exactly equal distance are met).
+//! - **Motion blur**: on a moving BVH (`Bvh::build_moving`, swept boxes) each lane meets a leaf's
+//!   triangle where it is at that lane's time (`SimdRay::intersect_moving`: the reference tracer's
+//!   interpolation, so hits stay bit-exact); frustum culling then skips triangles (a static
+//!   triangle says nothing about where it is at the rays' times) but still culls swept boxes.
 //! - **Occlusion**: a lane ends at its first hit (its `tmax` becomes −∞, so it hits nothing
 //!   more) and the packet stops as soon as every lane has.
 //!

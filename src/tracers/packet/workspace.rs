@@ -1,7 +1,8 @@
 //! One packet in flight: its SIMD rays, its frustum and interval bounds, and the index lists the
 //! traversals keep. Allocated once per chunk of rays and reused for every packet of the chunk, so
 //! the hot loop never allocates. Also the leaf step all four traversals share (Fig. 2, lines
-//! 21–27): every triangle not culled by the frustum against every active SIMD ray.
+//! 21–27): every triangle not culled by the frustum against every active SIMD ray, a moving
+//! triangle (motion blur) at each lane's time.
 
 use crate::accel::{Bvh, BvhConfig, BvhNode};
 use crate::geometry::{Hit, Rays};
@@ -168,7 +169,10 @@ impl<const L: usize> Packet<L> {
         let bvh = tree.bvh;
         for i in leaf.first as usize..(leaf.first + leaf.count) as usize {
             let tri = &bvh.triangles[i];
-            if let Some(f) = &self.frustum {
+            // A moving triangle is not where `tri` says at the rays' times: no triangle culling
+            // (boxes are swept, so box culling stays exact).
+            let moving_end = bvh.motion_end.as_ref().map(|end| &end[i]);
+            if let Some(f) = self.frustum.as_ref().filter(|_| moving_end.is_none()) {
                 if f.culls_triangle(tri) {
                     if S::ENABLED {
                         stats.event(Event::TrianglesCulled, 1);
@@ -182,7 +186,10 @@ impl<const L: usize> Packet<L> {
                 if S::ENABLED {
                     (0..group.used).for_each(|_| stats.triangle_test(depth));
                 }
-                let hits = group.intersect::<ANY>(tri, prim);
+                let hits = match moving_end {
+                    None => group.intersect::<ANY>(tri, prim),
+                    Some(close) => group.intersect_moving::<ANY>(tri, close, prim),
+                };
                 if ANY {
                     self.live -= hits;
                     if self.live == 0 {
