@@ -10,6 +10,7 @@
 
 use crate::stats::{Event, Stats};
 
+use super::ranged::first_hit;
 use super::walk::RaySelection;
 use super::workspace::{ActiveRays, Packet, Tree};
 
@@ -20,7 +21,8 @@ impl RaySelection for FirstHit {
         0
     }
 
-    /// The first SIMD ray from `ia` on that meets the box of `node`.
+    /// The first SIMD ray from `ia` on that meets the box of `node`; when ray `ia` misses, the
+    /// interval bounds, then the frustum, may cull the box for the whole packet.
     #[inline(always)]
     fn enter<const L: usize, S: Stats>(
         packet: &mut Packet<L>,
@@ -29,32 +31,23 @@ impl RaySelection for FirstHit {
         ia: u32,
         stats: &mut S,
     ) -> Option<u32> {
-        let (n, depth, cell) = (
-            packet.groups.len() as u32,
-            tree.depth::<S>(node),
-            tree.node(node),
-        );
-        if packet.hits_box(ia, cell, depth, stats) {
-            return Some(ia);
-        }
-        let interval = packet
-            .interval
-            .as_ref()
-            .expect("IA traversal loads interval bounds");
-        if interval.culls(
-            cell.bounds.min.to_array(),
-            cell.bounds.max.to_array(),
-            packet.max_t,
-        ) {
-            if S::ENABLED {
-                stats.event(Event::BoxesCulled, 1);
+        first_hit(packet, tree, node, ia, stats, |p, cell, s| {
+            let interval = p
+                .interval
+                .as_ref()
+                .expect("IA traversal loads interval bounds");
+            if interval.culls(
+                cell.bounds.min.to_array(),
+                cell.bounds.max.to_array(),
+                p.max_t,
+            ) {
+                if S::ENABLED {
+                    s.event(Event::BoxesCulled, 1);
+                }
+                return true;
             }
-            return None;
-        }
-        if packet.frustum_culls(cell, stats) {
-            return None;
-        }
-        (ia + 1..n).find(|&g| packet.hits_box(g, cell, depth, stats))
+            p.frustum_culls(cell, s)
+        })
     }
 
     fn at_leaf<const L: usize, S: Stats>(

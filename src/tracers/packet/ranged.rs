@@ -7,10 +7,38 @@
 //! the paper's listing; `getLastHit` does not consult the frustum (the leaf's box was just hit
 //! by ray `ia`).
 
+use crate::accel::BvhNode;
 use crate::stats::Stats;
 
 use super::walk::RaySelection;
 use super::workspace::{ActiveRays, Packet, Tree};
+
+/// The first SIMD ray from `ia` on that meets the box of `node`, or `None`: ray `ia` is tested
+/// first; only when it misses may `culls` reject the box for the whole packet, and otherwise the
+/// rays after it are tested in order (Ranged's `getFirstHit`; IA's first-hit test with interval
+/// culling).
+#[inline(always)]
+pub fn first_hit<const L: usize, S: Stats>(
+    packet: &Packet<L>,
+    tree: &Tree,
+    node: u32,
+    ia: u32,
+    stats: &mut S,
+    culls: impl FnOnce(&Packet<L>, &BvhNode, &mut S) -> bool,
+) -> Option<u32> {
+    let (n, depth, cell) = (
+        packet.groups.len() as u32,
+        tree.depth::<S>(node),
+        tree.node(node),
+    );
+    if packet.hits_box(ia, cell, depth, stats) {
+        return Some(ia);
+    }
+    if culls(packet, cell, stats) {
+        return None;
+    }
+    (ia + 1..n).find(|&g| packet.hits_box(g, cell, depth, stats))
+}
 
 /// App. A.1 `rangedTraverseBVH`.
 pub struct Ranged;
@@ -29,18 +57,9 @@ impl RaySelection for Ranged {
         ia: u32,
         stats: &mut S,
     ) -> Option<u32> {
-        let (n, depth, cell) = (
-            packet.groups.len() as u32,
-            tree.depth::<S>(node),
-            tree.node(node),
-        );
-        if packet.hits_box(ia, cell, depth, stats) {
-            return Some(ia);
-        }
-        if packet.frustum_culls(cell, stats) {
-            return None;
-        }
-        (ia + 1..n).find(|&g| packet.hits_box(g, cell, depth, stats))
+        first_hit(packet, tree, node, ia, stats, |p, cell, s| {
+            p.frustum_culls(cell, s)
+        })
     }
 
     /// `getLastHit`: SIMD rays up to one past the last one after `ia` that meets the leaf's box.
