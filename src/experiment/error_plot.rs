@@ -17,7 +17,7 @@ use crate::render::convergence::{write_error_csv, ErrorPoint};
 
 use super::config::{Experiment, RenderWorkload};
 use super::plan::Plan;
-use super::plots::{register_font, scene_stem};
+use super::plots::{draw_legend, register_font, scene_stem};
 use super::runner::{Case, Traced};
 
 const FONT: &str = "sans-serif";
@@ -217,13 +217,7 @@ fn draw(
             )
         }))?;
     }
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::UpperRight)
-        .label_font((FONT, 14))
-        .background_style(WHITE.mix(0.9))
-        .border_style(BLACK)
-        .draw()?;
+    draw_legend(&mut chart)?;
     root.present()?;
     Ok(())
 }

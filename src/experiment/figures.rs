@@ -32,7 +32,7 @@ use serde::Deserialize;
 use crate::error::{Error, Result};
 
 use super::output::{runs_columns, HISTOGRAMS_CSV, HISTOGRAM_COLUMNS, RUNS_CSV};
-use super::plots::{register_font, FONT};
+use super::plots::{draw_legend, register_font, FONT};
 use super::selection::{check_field_of, distinct, Filter, Measure, Reduce, Row};
 
 #[derive(Clone, Debug, Deserialize, PartialEq)]
@@ -267,13 +267,7 @@ impl FigureSpec {
                 });
             chart.draw_series(line.iter().map(|p| Circle::new(at(p), 4, colour.filled())))?;
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .label_font((FONT, 14))
-            .background_style(WHITE.mix(0.9))
-            .border_style(BLACK)
-            .draw()?;
+        draw_legend(&mut chart)?;
         root.present()?;
         Ok(())
     }

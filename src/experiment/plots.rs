@@ -20,7 +20,24 @@ use super::runner::{Case, Traced};
 const FONT_PATH: &str = "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf";
 pub const FONT: &str = "sans-serif";
 
-type PlotResult = std::result::Result<(), Box<dyn std::error::Error>>;
+pub(super) type PlotResult = std::result::Result<(), Box<dyn std::error::Error>>;
+
+/// The legend every plot of a run draws: upper right, on a white box.
+pub(super) fn draw_legend<'a, DB, CT>(chart: &mut ChartContext<'a, DB, CT>) -> PlotResult
+where
+    DB: DrawingBackend + 'a,
+    DB::ErrorType: 'static,
+    CT: CoordTranslate,
+{
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::UpperRight)
+        .label_font((FONT, 14))
+        .background_style(WHITE.mix(0.9))
+        .border_style(BLACK)
+        .draw()?;
+    Ok(())
+}
 
 /// plotters draws text only with a registered font (its `ab_glyph` backend has none built in):
 /// DejaVu Sans, read once per process and kept for its lifetime.
@@ -228,13 +245,7 @@ fn throughput(path: &Path, plan: &Plan, scene: usize, cases: &[Case]) -> PlotRes
                     }),
             )?;
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .label_font((FONT, 14))
-            .background_style(WHITE.mix(0.9))
-            .border_style(BLACK)
-            .draw()?;
+        draw_legend(&mut chart)?;
     }
     root.present()?;
     Ok(())
