@@ -6,7 +6,6 @@
 
 use raylab::geometry::RayKind;
 use raylab::scene::library::load_scene;
-use raylab::scene::scene_file::Preset;
 use raylab::tracers::Params;
 use raylab::verify::{format_table, verify_frame, Tolerance};
 
@@ -80,29 +79,41 @@ fn cgt_agrees_with_embree() {
 }
 
 /// Reflection rays on the room with every surface a mirror (scenes/room-reflective.toml), and
-/// reflection and refraction rays on the room with every surface glass.
+/// reflection and refraction rays on the room with every surface glass (scenes/room-glass.toml),
+/// for the reference tracer and every traversal of the packet tracer.
 #[test]
-fn reference_agrees_with_embree_on_reflection_and_refraction() {
+fn tracers_agree_with_embree_on_reflection_and_refraction() {
     let tol = Tolerance::default();
     let mirrors = load_scene("room-reflective", None).unwrap();
-    let mut glass = load_scene("room", None).unwrap();
-    Preset::Glass.apply_to_all(&mut glass.materials);
-    for (scene, kinds) in [
+    let glass = load_scene("room-glass", None).unwrap();
+    let packet = |traversal: &str, packet: u32, lanes: u32| {
+        Params::new()
+            .with("traversal", traversal)
+            .with("packet", packet)
+            .with("lanes", lanes)
+    };
+    let tracers = [
+        ("reference", Params::new()),
+        ("packet", packet("ranged", 16, 16)),
+        ("packet", packet("partition", 8, 8)),
+        ("packet", packet("ia", 32, 16)),
+        ("packet", packet("masked", 4, 4)),
+    ];
+    for ((scene, kinds), (tracer, params)) in [
         (&mirrors, &[RayKind::Reflection][..]),
         (&glass, &[RayKind::Reflection, RayKind::Refraction][..]),
-    ] {
+    ]
+    .iter()
+    .flat_map(|s| tracers.iter().map(move |t| (s, t)))
+    {
         let frame = scene.frame(0, 1);
-        let reports = verify_frame(
-            scene,
-            &frame,
-            "reference",
-            &Params::new(),
-            RESOLUTION,
-            RESOLUTION,
-            SEED,
-        )
-        .unwrap();
-        println!("{}:\n{}", scene.name, format_table(&reports, &tol));
+        let reports =
+            verify_frame(scene, &frame, tracer, params, RESOLUTION, RESOLUTION, SEED).unwrap();
+        println!(
+            "{} {tracer} {params}:\n{}",
+            scene.name,
+            format_table(&reports, &tol)
+        );
         let rays = |kind| {
             reports
                 .iter()
@@ -115,10 +126,15 @@ fn reference_agrees_with_embree_on_reflection_and_refraction() {
         assert_eq!(rays(RayKind::Primary), (RESOLUTION * RESOLUTION) as usize);
         assert_eq!(rays(RayKind::Reflection), rays(RayKind::Primary));
         assert!(rays(RayKind::Refraction) <= rays(RayKind::Reflection));
-        for &kind in kinds {
+        for &kind in kinds.iter() {
             assert!(rays(kind) > 0, "{} {}", scene.name, kind.name());
             let r = reports.iter().find(|r| r.kind == kind).unwrap();
-            assert!(r.passes(&tol), "{} {}", scene.name, kind.name());
+            assert!(
+                r.passes(&tol),
+                "{} {tracer} {params} {}",
+                scene.name,
+                kind.name()
+            );
         }
         if scene.name == "room-reflective" {
             assert!(reports.iter().all(|r| r.kind != RayKind::Refraction));

@@ -140,13 +140,13 @@ pub fn format_table(reports: &[KindReport], tol: &Tolerance) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "{:<8} {:>9} {:>9} {:>9} {:>9} {:>6} {:>11} {:>10} {:>10}  verdict",
+        "{:<10} {:>9} {:>9} {:>9} {:>9} {:>6} {:>11} {:>10} {:>10}  verdict",
         "kind", "rays", "hit/miss", "prim", "occl", "ties", "unexplained", "err p50", "err p99",
     );
     for r in reports {
         let _ = writeln!(
             s,
-            "{:<8} {:>9} {:>9} {:>9} {:>9} {:>6} {:>11} {:>10.2e} {:>10.2e}  {}",
+            "{:<10} {:>9} {:>9} {:>9} {:>9} {:>6} {:>11} {:>10.2e} {:>10.2e}  {}",
             r.kind.name(),
             r.rays,
             r.mismatch(Mismatch::HitMiss),
