@@ -1,18 +1,15 @@
 //! The active rays of a packet in SoA lanes, and the watertight ray–triangle test (Woop et al.
-//! 2013) over `L` of them at a time: the packet's SIMD triangle test (Wald et al. 2006, §2.3).
+//! 2013) over `L` of them at a time: the packet's SIMD triangle test (Wald et al. 2006, §2.3),
+//! on the lane kernel the packet tracer shares (`geometry::watertight_lanes`).
 //!
-//! The lane loops run over `[f32; L]` without branches, so LLVM turns them into L-wide vector
-//! code for the target's ISA (`target-cpu=native`; AVX-512 holds 16 lanes in one register). `L`
-//! is a const parameter, one implementation for every width.
-//!
-//! Exactness: each lane computes the scalar test's f32 operations in the scalar test's order
-//! (Rust never contracts `a·b + c` into an FMA), reading the triangle's coordinates along the
-//! lane's own axes `kx, ky, kz` (rays of one packet may differ in their dominant axis). The lanes
+//! Exactness: each lane reads the triangle's coordinates along its own axes `kx, ky, kz` (rays of
+//! one packet may differ in their dominant axis) and runs the scalar test's f32 stage. The lanes
 //! only decide which rays *may* hit: a lane passing the edge and distance tests, or one whose edge
 //! functions come out exactly zero (where the scalar test recomputes them in f64), is handed to
 //! the scalar `WatertightRay::intersect`, which gives the hit. So every hit is bit for bit the
 //! scalar test's, and the scalar test runs about once per hit.
 
+use crate::geometry::watertight_lanes::{accept, edge_functions, edges_have_zero, Permuted};
 use crate::geometry::{Triangle, WatertightRay};
 
 /// A packet's active rays, one lane slot each; the vectors' length is a multiple of `L`, and the
@@ -133,58 +130,41 @@ impl<const L: usize> LaneRays<L> {
     }
 
     /// The lanes of slots `base .. base + L` that may hit the triangle with vertices `v` (bit
-    /// `l` for slot `base + l`): the scalar test's edge and distance tests, lane by lane.
-    // The negated comparisons are the scalar test's, NaN cases included.
-    #[allow(clippy::neg_cmp_op_on_partial_ord)]
+    /// `l` for slot `base + l`): the watertight test's f32 stage (`watertight_lanes`), plus the
+    /// lanes with an exactly zero edge function, which the scalar test settles in f64.
     #[inline(always)]
     fn candidates(&self, base: usize, v: &[[f32; 3]; 3]) -> u32 {
         let lanes = |x: &Vec<f32>| -> [f32; L] { x[base..base + L].try_into().unwrap() };
-        let axes = |x: &Vec<u32>| -> [u32; L] { x[base..base + L].try_into().unwrap() };
-        let [ox, oy, oz] = [0, 1, 2].map(|a| lanes(&self.origin[a]));
-        let [kx, ky, kz] = [0, 1, 2].map(|a| axes(&self.axes[a]));
-        let [sx, sy, sz] = [0, 1, 2].map(|a| lanes(&self.shear[a]));
-        let (tmin, tmax) = (lanes(&self.tmin), lanes(&self.tmax));
-        let mut hit = [false; L];
-        for l in 0..L {
-            let pick = |k: u32, p: &[f32; 3]| {
-                if k == 0 {
-                    p[0]
-                } else if k == 1 {
-                    p[1]
-                } else {
-                    p[2]
-                }
-            };
-            // The vertex relative to the origin, along kx, ky, kz (`WatertightRay::intersect`).
-            let rel = |p: &[f32; 3]| {
-                (
-                    pick(kx[l], p) - ox[l],
-                    pick(ky[l], p) - oy[l],
-                    pick(kz[l], p) - oz[l],
-                )
-            };
-            let (a, b, c) = (rel(&v[0]), rel(&v[1]), rel(&v[2]));
-            let (ax, ay) = (a.0 - sx[l] * a.2, a.1 - sy[l] * a.2);
-            let (bx, by) = (b.0 - sx[l] * b.2, b.1 - sy[l] * b.2);
-            let (cx, cy) = (c.0 - sx[l] * c.2, c.1 - sy[l] * c.2);
-            let u = cx * by - cy * bx;
-            let v = ax * cy - ay * cx;
-            let w = bx * ay - by * ax;
-            let zero = (u == 0.0) | (v == 0.0) | (w == 0.0);
-            let outside = ((u < 0.0) | (v < 0.0) | (w < 0.0)) & ((u > 0.0) | (v > 0.0) | (w > 0.0));
-            let det = u + v + w;
-            let t_scaled = u * sz[l] * a.2 + v * sz[l] * b.2 + w * sz[l] * c.2;
-            let (t_scaled, abs_det) = if det < 0.0 {
-                (-t_scaled, -det)
+        let origin = [0, 1, 2].map(|a| lanes(&self.origin[a]));
+        let shear = [0, 1, 2].map(|a| lanes(&self.shear[a]));
+        let axes =
+            [0, 1, 2].map(|a| -> [u32; L] { self.axes[a][base..base + L].try_into().unwrap() });
+        // Each vertex relative to each lane's origin, along its kx, ky, kz.
+        let ([kx, ky, kz], [ox, oy, oz]) = (axes, origin);
+        let pick = |k: u32, p: &[f32; 3]| {
+            if k == 0 {
+                p[0]
+            } else if k == 1 {
+                p[1]
             } else {
-                (t_scaled, det)
-            };
-            let in_range = !(t_scaled < tmin[l] * abs_det) & !(t_scaled > tmax[l] * abs_det);
-            hit[l] = zero | (!outside & (det != 0.0) & in_range);
-        }
-        hit.iter()
-            .enumerate()
-            .fold(0u32, |m, (l, &h)| m | (h as u32) << l)
+                p[2]
+            }
+        };
+        let permute = |p: &[f32; 3]| -> Permuted<L> {
+            let mut out = [[0.0f32; L]; 3];
+            for l in 0..L {
+                out[0][l] = pick(kx[l], p) - ox[l];
+                out[1][l] = pick(ky[l], p) - oy[l];
+                out[2][l] = pick(kz[l], p) - oz[l];
+            }
+            out
+        };
+        let (a, b, c) = (permute(&v[0]), permute(&v[1]), permute(&v[2]));
+        let e = edge_functions(&shear, &a, &b, &c);
+        let (tmin, tmax) = (lanes(&self.tmin), lanes(&self.tmax));
+        let (hit, _, _) = accept(&e, &shear[2], [&a[2], &b[2], &c[2]], &tmin, &tmax);
+        let accepted = (0..L).fold(0u32, |m, l| m | (hit[l] as u32) << l);
+        accepted | edges_have_zero(&e)
     }
 
     fn resize(&mut self, n: usize) {

@@ -22,6 +22,9 @@
 #![allow(clippy::needless_range_loop)]
 
 use crate::geometry::aabb::FAR_SCALE;
+use crate::geometry::watertight_lanes::{
+    accept, edge_functions, edges_have_zero, redo_zero_edges_in_f64, Permuted,
+};
 use crate::geometry::{Hit, Rays, Triangle};
 
 /// `L` rays, their current closest hits, and what the box and triangle tests precompute.
@@ -69,10 +72,6 @@ impl<const L: usize> Default for SimdRay<L> {
         }
     }
 }
-
-/// Lanes of one triangle's vertex, relative to each lane's origin, in each lane's frame:
-/// `[x, y, z][lane]` with `x = p[kx] − o[kx]` and so on.
-type Permuted<const L: usize> = [[f32; L]; 3];
 
 impl<const L: usize> SimdRay<L> {
     /// Loads rays `first .. first + used` of `rays` (`used ≤ L`) into the lanes; the rest become
@@ -268,7 +267,8 @@ impl<const L: usize> SimdRay<L> {
         self.intersect_permuted::<ANY>(&a, &b, &c, prim)
     }
 
-    /// The watertight test on a triangle already in every lane's frame.
+    /// The watertight test on a triangle already in every lane's frame (`watertight_lanes`),
+    /// ambiguous zero edge functions redone in f64 as the scalar test does.
     #[inline(always)]
     fn intersect_permuted<const ANY: bool>(
         &mut self,
@@ -277,80 +277,33 @@ impl<const L: usize> SimdRay<L> {
         c: &Permuted<L>,
         prim: u32,
     ) -> u32 {
-        let [sx, sy, sz] = &self.shear;
-        let (mut eu, mut ev, mut ew) = ([0.0f32; L], [0.0f32; L], [0.0f32; L]);
-        let mut zero = 0u32;
-        for l in 0..L {
-            let (ax, ay) = (a[0][l] - sx[l] * a[2][l], a[1][l] - sy[l] * a[2][l]);
-            let (bx, by) = (b[0][l] - sx[l] * b[2][l], b[1][l] - sy[l] * b[2][l]);
-            let (cx, cy) = (c[0][l] - sx[l] * c[2][l], c[1][l] - sy[l] * c[2][l]);
-            eu[l] = cx * by - cy * bx;
-            ev[l] = ax * cy - ay * cx;
-            ew[l] = bx * ay - by * ax;
-            zero |= ((eu[l] == 0.0) | (ev[l] == 0.0) | (ew[l] == 0.0)) as u32;
+        let mut e = edge_functions(&self.shear, a, b, c);
+        if edges_have_zero(&e) != 0 {
+            redo_zero_edges_in_f64(&self.shear, a, b, c, &mut e);
         }
-        if zero != 0 {
-            self.redo_zero_edges_in_f64(a, b, c, &mut eu, &mut ev, &mut ew);
-        }
-        let mut t_scaled = [0.0f32; L];
-        let mut abs_det = [0.0f32; L];
-        let mut hit = [false; L];
-        let mut any = 0u32;
-        for l in 0..L {
-            let (u, v, w) = (eu[l], ev[l], ew[l]);
-            let outside = (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0);
-            let det = u + v + w;
-            let ts = u * sz[l] * a[2][l] + v * sz[l] * b[2][l] + w * sz[l] * c[2][l];
-            let (ts, ad) = if det < 0.0 { (-ts, -det) } else { (ts, det) };
-            let out_of_range = ts < self.tmin[l] * ad || ts > self.tmax[l] * ad;
-            hit[l] = !outside && det != 0.0 && !out_of_range;
-            t_scaled[l] = ts;
-            abs_det[l] = ad;
-            any |= hit[l] as u32;
-        }
-        if any == 0 {
+        let (hit, t_scaled, abs_det) = accept(
+            &e,
+            &self.shear[2],
+            [&a[2], &b[2], &c[2]],
+            &self.tmin,
+            &self.tmax,
+        );
+        if !hit.contains(&true) {
             return 0;
         }
         let mut count = 0;
         for l in 0..L {
             let t = t_scaled[l] / abs_det[l];
             if hit[l] && t.is_finite() {
-                let inv = 1.0 / (eu[l] + ev[l] + ew[l]);
+                let inv = 1.0 / (e[0][l] + e[1][l] + e[2][l]);
                 self.prim[l] = prim;
-                self.u[l] = ev[l] * inv;
-                self.v[l] = ew[l] * inv;
+                self.u[l] = e[1][l] * inv;
+                self.v[l] = e[2][l] * inv;
                 self.tmax[l] = if ANY { f32::NEG_INFINITY } else { t };
                 count += 1;
             }
         }
         count
-    }
-
-    /// Edge functions that are exactly zero in f32 are ambiguous: recompute them in f64 for the
-    /// lanes that have one (Woop et al. §4), exactly as `WatertightRay::intersect` does.
-    #[cold]
-    fn redo_zero_edges_in_f64(
-        &self,
-        a: &Permuted<L>,
-        b: &Permuted<L>,
-        c: &Permuted<L>,
-        eu: &mut [f32; L],
-        ev: &mut [f32; L],
-        ew: &mut [f32; L],
-    ) {
-        let [sx, sy, _] = &self.shear;
-        let f = |x: f32| x as f64;
-        for l in 0..L {
-            if eu[l] != 0.0 && ev[l] != 0.0 && ew[l] != 0.0 {
-                continue;
-            }
-            let (ax, ay) = (a[0][l] - sx[l] * a[2][l], a[1][l] - sy[l] * a[2][l]);
-            let (bx, by) = (b[0][l] - sx[l] * b[2][l], b[1][l] - sy[l] * b[2][l]);
-            let (cx, cy) = (c[0][l] - sx[l] * c[2][l], c[1][l] - sy[l] * c[2][l]);
-            eu[l] = (f(cx) * f(by) - f(cy) * f(bx)) as f32;
-            ev[l] = (f(ax) * f(cy) - f(ay) * f(cx)) as f32;
-            ew[l] = (f(bx) * f(ay) - f(by) * f(ax)) as f32;
-        }
     }
 
     /// Lanes still looking for a hit (used and, in occlusion mode, not yet occluded).

@@ -1,0 +1,97 @@
+//! The f32 stage of the watertight ray–triangle test (Woop, Benthin and Wald 2013) for `L` rays
+//! at once, in structure-of-arrays lanes: what the packet tracer's SIMD rays and coherent grid
+//! traversal's lanes both run. Each lane computes `WatertightRay::intersect`'s f32 operations in
+//! its order (Rust never contracts `a·b + c` into an FMA), so a lane's verdict is the scalar
+//! test's. The lane loops are branch-free over `[f32; L]`, which LLVM turns into L-wide vector
+//! code (`target-cpu=native`; AVX-512 holds 16 lanes).
+//!
+//! Edge functions that come out exactly zero are ambiguous in f32; the scalar test recomputes
+//! them in f64. Callers deal with those lanes (`edges_have_zero`): redo them in f64
+//! (`redo_zero_edges_in_f64`) or hand them to the scalar test.
+
+/// A triangle vertex in every lane's frame: `[x, y, z][lane]`, relative to the lane's origin
+/// along its axes `kx, ky, kz`.
+pub type Permuted<const L: usize> = [[f32; L]; 3];
+
+/// The edge functions `[U, V, W][lane]` of the triangle `a, b, c` sheared into each lane's ray
+/// space (`shear` = `[sx, sy, sz][lane]`).
+#[inline(always)]
+pub fn edge_functions<const L: usize>(
+    shear: &[[f32; L]; 3],
+    a: &Permuted<L>,
+    b: &Permuted<L>,
+    c: &Permuted<L>,
+) -> [[f32; L]; 3] {
+    let [sx, sy, _] = shear;
+    let mut e = [[0.0f32; L]; 3];
+    for l in 0..L {
+        let (ax, ay) = (a[0][l] - sx[l] * a[2][l], a[1][l] - sy[l] * a[2][l]);
+        let (bx, by) = (b[0][l] - sx[l] * b[2][l], b[1][l] - sy[l] * b[2][l]);
+        let (cx, cy) = (c[0][l] - sx[l] * c[2][l], c[1][l] - sy[l] * c[2][l]);
+        e[0][l] = cx * by - cy * bx;
+        e[1][l] = ax * cy - ay * cx;
+        e[2][l] = bx * ay - by * ax;
+    }
+    e
+}
+
+/// Bit `l` set when one of lane `l`'s edge functions is exactly zero.
+#[inline(always)]
+pub fn edges_have_zero<const L: usize>(e: &[[f32; L]; 3]) -> u32 {
+    (0..L).fold(0, |m, l| {
+        m | (((e[0][l] == 0.0) | (e[1][l] == 0.0) | (e[2][l] == 0.0)) as u32) << l
+    })
+}
+
+/// Which lanes hit, from their edge functions: inside (all of one sign), a non-zero determinant
+/// and a distance in `[tmin, tmax]`. Also each lane's scaled distance and |determinant|
+/// (`t = t_scaled / abs_det`).
+// The negated comparisons are the scalar test's, NaN cases included.
+#[allow(clippy::neg_cmp_op_on_partial_ord)]
+#[inline(always)]
+pub fn accept<const L: usize>(
+    e: &[[f32; L]; 3],
+    sz: &[f32; L],
+    z: [&[f32; L]; 3],
+    tmin: &[f32; L],
+    tmax: &[f32; L],
+) -> ([bool; L], [f32; L], [f32; L]) {
+    let (mut hit, mut t_scaled, mut abs_det) = ([false; L], [0.0f32; L], [0.0f32; L]);
+    for l in 0..L {
+        let (u, v, w) = (e[0][l], e[1][l], e[2][l]);
+        let outside = ((u < 0.0) | (v < 0.0) | (w < 0.0)) & ((u > 0.0) | (v > 0.0) | (w > 0.0));
+        let det = u + v + w;
+        let ts = u * sz[l] * z[0][l] + v * sz[l] * z[1][l] + w * sz[l] * z[2][l];
+        let (ts, ad) = if det < 0.0 { (-ts, -det) } else { (ts, det) };
+        let in_range = !(ts < tmin[l] * ad) & !(ts > tmax[l] * ad);
+        hit[l] = !outside & (det != 0.0) & in_range;
+        t_scaled[l] = ts;
+        abs_det[l] = ad;
+    }
+    (hit, t_scaled, abs_det)
+}
+
+/// The edge functions of the lanes with an exactly zero one, recomputed in f64 (Woop et al. §4),
+/// exactly as `WatertightRay::intersect` does.
+#[cold]
+pub fn redo_zero_edges_in_f64<const L: usize>(
+    shear: &[[f32; L]; 3],
+    a: &Permuted<L>,
+    b: &Permuted<L>,
+    c: &Permuted<L>,
+    e: &mut [[f32; L]; 3],
+) {
+    let [sx, sy, _] = shear;
+    let f = |x: f32| x as f64;
+    for l in 0..L {
+        if e[0][l] != 0.0 && e[1][l] != 0.0 && e[2][l] != 0.0 {
+            continue;
+        }
+        let (ax, ay) = (a[0][l] - sx[l] * a[2][l], a[1][l] - sy[l] * a[2][l]);
+        let (bx, by) = (b[0][l] - sx[l] * b[2][l], b[1][l] - sy[l] * b[2][l]);
+        let (cx, cy) = (c[0][l] - sx[l] * c[2][l], c[1][l] - sy[l] * c[2][l]);
+        e[0][l] = (f(cx) * f(by) - f(cy) * f(bx)) as f32;
+        e[1][l] = (f(ax) * f(cy) - f(ay) * f(cx)) as f32;
+        e[2][l] = (f(bx) * f(ay) - f(by) * f(ax)) as f32;
+    }
+}
