@@ -15,7 +15,6 @@ use raylab::render::assembly::Assembly;
 use raylab::render::image::Image;
 use raylab::render::whitted::{render_whitted, Tracing, WhittedSettings};
 use raylab::scene::library::load_scene;
-use raylab::scene::scene_file::Preset;
 use raylab::scene::Scene;
 use raylab::tracers::Params;
 use raylab::verify::tracer_for_frame;
@@ -23,18 +22,10 @@ use raylab::verify::tracer_for_frame;
 const WIDTH: u32 = 160;
 const HEIGHT: u32 = 120;
 
-/// The room as loaded (its floor a mirror) with the red and blue boxes turned to glass: camera
-/// rays meet diffuse, mirror and glass surfaces, as in Boulos et al. 2007, Figure 3.
+/// The room with its floor a mirror and its red and blue boxes glass (scenes/room-glass-boxes.toml):
+/// camera rays meet diffuse, mirror and glass surfaces, as in Boulos et al. 2007, Figure 3.
 fn room_with_glass() -> Scene {
-    let mut scene = load_scene("room", None).unwrap();
-    for m in scene
-        .materials
-        .iter_mut()
-        .filter(|m| m.name == "red" || m.name == "blue")
-    {
-        Preset::Glass.apply_to_all(std::slice::from_mut(m));
-    }
-    scene
+    load_scene("room-glass-boxes", None).unwrap()
 }
 
 fn render(scene: &Scene, tracer: &str, assembly: Assembly) -> Image {

@@ -99,7 +99,7 @@ pub struct Experiment {
     /// Every (tracer, parameter combination) to measure, in file order, grid in key order.
     pub instances: Vec<TracerInstance>,
     pub ray_kinds: Vec<RayKind>,
-    /// Whitted render workloads, one per combination of the `render` grid.
+    /// Render workloads (Whitted or distribution), one per combination of a `render` grid.
     pub renders: Vec<RenderWorkload>,
     pub width: u32,
     pub height: u32,

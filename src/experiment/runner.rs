@@ -185,6 +185,16 @@ pub fn run_plan(
             let batches = generate_batches(exp, scene_plan, &scene, &frame, frame_tracers, widest);
             for (i, tracer) in frame_tracers.tracers.iter().enumerate() {
                 let instance = &exp.instances[i];
+                // The progress line of one measurement of this instance at `pool`'s size.
+                let announce = |what: &dyn std::fmt::Display, pool: &ThreadPool| {
+                    progress.set_message(format!(
+                        "{} frame {}/{}: {instance} {what} ×{}",
+                        spec.name,
+                        f + 1,
+                        exp.frames,
+                        pool.current_num_threads()
+                    ))
+                };
                 let build_seconds = match built_now {
                     true => frame_tracers.structures[&instance.structure()].seconds,
                     false => 0.0,
@@ -194,14 +204,7 @@ pub fn run_plan(
                     let timings: Vec<Timing> = pools
                         .iter()
                         .map(|pool| {
-                            progress.set_message(format!(
-                                "{} frame {}/{}: {instance} {} ×{}",
-                                spec.name,
-                                f + 1,
-                                exp.frames,
-                                kind.name(),
-                                pool.current_num_threads()
-                            ));
+                            announce(&kind.name(), pool);
                             let timing =
                                 time_passes(pool, tracer.as_ref(), batch, exp.warmup, exp.repeats);
                             progress.inc(1);
@@ -265,14 +268,7 @@ pub fn run_plan(
                     let timed: Vec<RenderTimings> = pools
                         .iter()
                         .map(|pool| {
-                            progress.set_message(format!(
-                                "{} frame {}/{}: {instance} {} ×{}",
-                                spec.name,
-                                f + 1,
-                                exp.frames,
-                                plan.renders[r],
-                                pool.current_num_threads()
-                            ));
+                            announce(&plan.renders[r], pool);
                             let timing = job.time(pool);
                             progress.inc(1);
                             timing

@@ -378,7 +378,7 @@ pub fn render_whitted(
 mod tests {
     use super::*;
     use crate::geometry::Triangle;
-    use crate::scene::{builtin, Camera, Mesh};
+    use crate::scene::{Camera, Mesh};
     use crate::tracers::Params;
     use crate::verify::tracer_for_frame;
 
@@ -585,17 +585,9 @@ mod tests {
         );
     }
 
-    /// The room with its floor a mirror (as loaded) and the red and blue boxes turned to glass.
+    /// The room with its floor a mirror and its red and blue boxes glass.
     fn room_with_glass() -> Scene {
-        let mut scene = builtin::generate("room", None).unwrap();
-        for m in scene
-            .materials
-            .iter_mut()
-            .filter(|m| m.name == "red" || m.name == "blue")
-        {
-            Preset::Glass.apply_to_all(std::slice::from_mut(m));
-        }
-        scene
+        crate::scene::library::load_scene("room-glass-boxes", None).unwrap()
     }
 
     #[test]
