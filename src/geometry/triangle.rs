@@ -76,17 +76,29 @@ impl WatertightRay {
         } else {
             2
         };
-        let mut kx = (kz + 1) % 3;
-        let mut ky = (kx + 1) % 3;
+        let next = |k: usize| if k == 2 { 0 } else { k + 1 };
         let d = dir.to_array();
+        // Component `k` by selects rather than indexing, so loops over many rays vectorize.
+        let pick = |k: usize| {
+            if k == 0 {
+                d[0]
+            } else if k == 1 {
+                d[1]
+            } else {
+                d[2]
+            }
+        };
+        let dz = pick(kz);
         // Swap to keep the winding of the triangle when dir[kz] is negative.
-        if d[kz] < 0.0 {
-            std::mem::swap(&mut kx, &mut ky);
-        }
+        let (kx, ky) = if dz < 0.0 {
+            (next(next(kz)), next(kz))
+        } else {
+            (next(kz), next(next(kz)))
+        };
         WatertightRay {
             origin: origin.to_array(),
             k: [kx, ky, kz],
-            shear: [d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]],
+            shear: [pick(kx) / dz, pick(ky) / dz, 1.0 / dz],
         }
     }
 

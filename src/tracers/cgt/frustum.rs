@@ -64,14 +64,6 @@ impl MarchFrame {
         [s, a[self.u], a[self.v]]
     }
 
-    /// A grid-space direction as `(s, u, v)` components.
-    #[inline(always)]
-    pub fn dir(&self, d: Vec3) -> [f32; 3] {
-        let a = d.to_array();
-        let s = if self.flip { -a[self.k] } else { a[self.k] };
-        [s, a[self.u], a[self.v]]
-    }
-
     /// The grid slice index (along K) of march slice `slice`.
     #[inline(always)]
     pub fn grid_slice(&self, slice: u32) -> u32 {
@@ -118,10 +110,15 @@ pub struct MarchRays {
     pub b: Vec<f32>,
     pub s_start: Vec<f32>,
     pub s_end: Vec<f32>,
+    /// The packet's rays are the first `len` of each array (which only ever grow, so a packet
+    /// after a smaller one does not refill them).
+    pub len: usize,
 }
 
 impl MarchRays {
-    pub fn clear(&mut self) {
+    /// Makes room for `n` rays and sets `len` (the caller then writes the values).
+    pub fn set_len(&mut self, n: usize) {
+        self.len = n;
         for v in [
             &mut self.o_s,
             &mut self.o_u,
@@ -131,7 +128,9 @@ impl MarchRays {
             &mut self.s_start,
             &mut self.s_end,
         ] {
-            v.clear();
+            if v.len() < n {
+                v.resize(n, 0.0);
+            }
         }
     }
 }
@@ -171,10 +170,35 @@ pub struct Frustum {
     apex: Option<Apex>,
 }
 
-fn min_max(values: impl Iterator<Item = f32>) -> [f32; 2] {
-    values.fold([f32::INFINITY, f32::NEG_INFINITY], |[lo, hi], x| {
-        [lo.min(x), hi.max(x)]
-    })
+/// `[min, max]` of `value(i)` over `i < n`, NaNs ignored. Sixteen running bounds side by side
+/// (selects, not `f32::min`), so the loop runs in SIMD lanes.
+#[inline(always)]
+fn min_max(n: usize, value: impl Fn(usize) -> f32) -> [f32; 2] {
+    const W: usize = 16;
+    let (mut lo, mut hi) = ([f32::INFINITY; W], [f32::NEG_INFINITY; W]);
+    let whole = n / W * W;
+    for base in (0..whole).step_by(W) {
+        for l in 0..W {
+            let x = value(base + l);
+            lo[l] = if x < lo[l] { x } else { lo[l] };
+            hi[l] = if x > hi[l] { x } else { hi[l] };
+        }
+    }
+    for (l, i) in (whole..n).enumerate() {
+        let x = value(i);
+        lo[l] = if x < lo[l] { x } else { lo[l] };
+        hi[l] = if x > hi[l] { x } else { hi[l] };
+    }
+    [
+        lo.into_iter().fold(f32::INFINITY, f32::min),
+        hi.into_iter().fold(f32::NEG_INFINITY, f32::max),
+    ]
+}
+
+/// `[min, max]` of a slice, NaNs ignored.
+#[inline(always)]
+fn slice_min_max(x: &[f32]) -> [f32; 2] {
+    min_max(x.len(), |i| x[i])
 }
 
 #[inline(always)]
@@ -207,23 +231,21 @@ impl Frustum {
     /// largest of the grid's resolution and its world coordinate magnitudes × cells per unit, the
     /// scale of the rounding of the world → grid transform.
     pub fn new(rays: &MarchRays, apex: Option<[f32; 3]>, scale: f32) -> Frustum {
-        let s_first = min_max(rays.s_start.iter().copied())[0];
-        let s_last = min_max(rays.s_end.iter().copied())[1];
-        let du = min_max(rays.a.iter().copied());
-        let dv = min_max(rays.b.iter().copied());
+        let n = rays.len;
+        let (o_s, o_u, o_v) = (&rays.o_s[..n], &rays.o_u[..n], &rays.o_v[..n]);
+        let (a, b) = (&rays.a[..n], &rays.b[..n]);
+        let s_first = slice_min_max(&rays.s_start[..n])[0];
+        let s_last = slice_min_max(&rays.s_end[..n])[1];
+        let du = slice_min_max(a);
+        let dv = slice_min_max(b);
         let (s_ref, u0, v0) = match apex {
             Some(o) => (o[0], [o[1]; 2], [o[2]; 2]),
             None => {
                 // Lines extended back to the first s any ray reaches (§2.2, general packets).
                 let s_ref = s_first;
-                let at_ref = |o: &[f32], slope: &[f32]| {
-                    min_max((0..o.len()).map(|i| o[i] + (s_ref - rays.o_s[i]) * slope[i]))
-                };
-                (
-                    s_ref,
-                    at_ref(&rays.o_u, &rays.a),
-                    at_ref(&rays.o_v, &rays.b),
-                )
+                let at_ref =
+                    |o: &[f32], slope: &[f32]| min_max(n, |i| o[i] + (s_ref - o_s[i]) * slope[i]);
+                (s_ref, at_ref(o_u, a), at_ref(o_v, b))
             }
         };
         let slope = du[0]
@@ -236,10 +258,11 @@ impl Frustum {
         } else {
             0.0
         };
-        let origins = [&rays.o_s, &rays.o_u, &rays.o_v]
-            .iter()
-            .flat_map(|o| o.iter())
-            .fold(0.0f32, |m, x| m.max(x.abs()));
+        let origins = [o_s, o_u, o_v]
+            .map(|o| slice_min_max(o).map(f32::abs))
+            .into_iter()
+            .flatten()
+            .fold(0.0f32, f32::max);
         let mag = [
             1.0,
             scale,
@@ -469,7 +492,6 @@ mod tests {
         let f = MarchFrame::new(1, true, [4, 10, 6]);
         assert_eq!((f.u, f.v, f.res), (2, 0, [10, 6, 4]));
         assert_eq!(f.point(Vec3::new(1.0, 2.5, 3.0)), [7.5, 3.0, 1.0]);
-        assert_eq!(f.dir(Vec3::new(1.0, -2.0, 3.0)), [2.0, 3.0, 1.0]);
         assert_eq!(f.cell(0, 5, 3), [3, 9, 5]);
         // Macro size 4 over 10 grid slices: layers 0..=3, 4..=7 and 8..=9; marching down, grid
         // slice 9 is march slice 0.
@@ -489,6 +511,7 @@ mod tests {
             b: vec![d[2] / d[0]],
             s_start: vec![o[0]],
             s_end: vec![s_end],
+            len: 1,
         }
     }
 
@@ -518,6 +541,7 @@ mod tests {
             b: vec![-0.1, 0.1],
             s_start: vec![0.0; 2],
             s_end: vec![100.0; 2],
+            len: 2,
         };
         let f = Frustum::new(&rays, Some([0.0; 3]), 1.0);
         // Inside: spans the axis at s = 10.

@@ -10,6 +10,8 @@
 //! scalar test's, and the scalar test runs about once per hit.
 
 use crate::geometry::watertight_lanes::{accept, edge_functions, edges_have_zero, Permuted};
+use glam::Vec3;
+
 use crate::geometry::{Triangle, WatertightRay};
 
 /// A packet's active rays, one lane slot each; the vectors' length is a multiple of `L`, and the
@@ -28,6 +30,8 @@ pub struct LaneRays<const L: usize> {
     /// its closest hit; −∞ once an occlusion query has found a hit).
     pub s_limit: Vec<f32>,
     len: usize,
+    /// The scalar test of each ray, by packet position (decides the lanes' candidates).
+    tests: Vec<WatertightRay>,
 }
 
 impl<const L: usize> Default for LaneRays<L> {
@@ -45,6 +49,7 @@ impl<const L: usize> Default for LaneRays<L> {
             tmax: vec![],
             s_limit: vec![],
             len: 0,
+            tests: vec![],
         }
     }
 }
@@ -58,28 +63,54 @@ impl<const L: usize> LaneRays<L> {
         self.len == 0
     }
 
-    pub fn clear(&mut self) {
-        self.len = 0;
+    /// Replaces the lanes' rays by the rays of a packet, all active: slot `p` holds the ray at
+    /// packet position `p`, its origin and direction components `origin[axis][p]`, `dir[axis][p]`.
+    #[inline]
+    pub fn load(
+        &mut self,
+        origin: &[Vec<f32>; 3],
+        dir: &[Vec<f32>; 3],
+        tmin: &[f32],
+        tmax: &[f32],
+        s_limit: &[f32],
+    ) {
+        let n = tmin.len();
+        self.len = n;
         self.pad();
+        self.tests.clear();
+        let pick = |k: usize, x: [f32; 3]| {
+            if k == 0 {
+                x[0]
+            } else if k == 1 {
+                x[1]
+            } else {
+                x[2]
+            }
+        };
+        for p in 0..n {
+            let o = [origin[0][p], origin[1][p], origin[2][p]];
+            let d = Vec3::new(dir[0][p], dir[1][p], dir[2][p]);
+            let test = WatertightRay::new(Vec3::from_array(o), d);
+            self.tests.push(test);
+            let (_, k, shear) = test.parts();
+            self.ray[p] = p as u32;
+            for a in 0..3 {
+                self.origin[a][p] = pick(k[a], o);
+                self.axes[a][p] = k[a] as u32;
+                self.shear[a][p] = shear[a];
+            }
+        }
+        self.tmin[..n].copy_from_slice(tmin);
+        self.tmax[..n].copy_from_slice(tmax);
+        self.s_limit[..n].copy_from_slice(&s_limit[..n]);
     }
 
-    /// Appends the ray at packet position `ray`.
-    pub fn push(&mut self, ray: u32, test: &WatertightRay, tmin: f32, tmax: f32, s_limit: f32) {
-        if self.len == self.ray.len() {
-            self.resize(self.len + L);
-        }
-        let (o, k, s) = test.parts();
-        let i = self.len;
-        self.ray[i] = ray;
-        for a in 0..3 {
-            self.origin[a][i] = o[k[a]];
-            self.axes[a][i] = k[a] as u32;
-            self.shear[a][i] = s[a];
-        }
-        self.tmin[i] = tmin;
-        self.tmax[i] = tmax;
-        self.s_limit[i] = s_limit;
-        self.len += 1;
+    /// Whether some active ray's `s_limit` lies below `s` (branch-free, so it vectorizes).
+    #[inline]
+    pub fn any_s_limit_below(&self, s: f32) -> bool {
+        self.s_limit[..self.len]
+            .iter()
+            .fold(false, |any, &limit| any | (limit < s))
     }
 
     /// Keeps the rays whose `s_limit` passes `keep` (in any order).
@@ -93,21 +124,15 @@ impl<const L: usize> LaneRays<L> {
                 kept += 1;
             }
         }
-        // Called at every slice, where usually no ray leaves: only a change needs the re-pad.
-        if kept != self.len {
-            self.len = kept;
-            self.pad();
-        }
+        self.len = kept;
     }
 
     /// Tests `tri` against every active ray; for each hit in the ray's `[tmin, tmax]`, sets its
-    /// `tmax` to the hit distance and calls `on_hit(lanes, slot, t, u, v)`. `scalar[p]` is the
-    /// test of the ray at packet position `p`.
+    /// `tmax` to the hit distance and calls `on_hit(lanes, slot, t, u, v)`.
     #[inline]
     pub fn intersect(
         &mut self,
         tri: &Triangle,
-        scalar: &[WatertightRay],
         mut on_hit: impl FnMut(&mut Self, usize, f32, f32, f32),
     ) {
         let v = tri.v.map(|p| p.to_array());
@@ -120,7 +145,7 @@ impl<const L: usize> LaneRays<L> {
             while candidates != 0 {
                 let slot = base + candidates.trailing_zeros() as usize;
                 candidates &= candidates - 1;
-                let test = &scalar[self.ray[slot] as usize];
+                let test = &self.tests[self.ray[slot] as usize];
                 if let Some((t, u, w)) = test.intersect(tri, self.tmin[slot], self.tmax[slot]) {
                     self.tmax[slot] = t;
                     on_hit(self, slot, t, u, w);
@@ -182,7 +207,10 @@ impl<const L: usize> LaneRays<L> {
     /// Sizes the vectors to the fewest whole groups of `L` slots holding `len` (at least one), so
     /// the lane loops never run over groups of padding only.
     fn pad(&mut self) {
-        self.resize(self.len.div_ceil(L).max(1) * L);
+        let slots = self.len.div_ceil(L).max(1) * L;
+        if self.ray.len() < slots {
+            self.resize(slots);
+        }
     }
 
     fn move_slot(&mut self, from: usize, to: usize) {
@@ -200,8 +228,6 @@ impl<const L: usize> LaneRays<L> {
 
 #[cfg(test)]
 mod tests {
-    use glam::Vec3;
-
     use super::*;
     use crate::random::SplitMix64;
 
@@ -247,9 +273,12 @@ mod tests {
                 .map(|&(o, d)| WatertightRay::new(o, d))
                 .collect();
             let mut lanes = LaneRays::<L>::default();
-            for (p, s) in scalar.iter().enumerate() {
-                lanes.push(p as u32, s, 0.0, f32::INFINITY, 0.0);
-            }
+            let columns = |f: fn(&(Vec3, Vec3)) -> Vec3| {
+                [0, 1, 2].map(|a| rays.iter().map(|r| f(r)[a]).collect::<Vec<f32>>())
+            };
+            let (origin, dir) = (columns(|r| r.0), columns(|r| r.1));
+            let (tmin, tmax) = (vec![0.0; n], vec![f32::INFINITY; n]);
+            lanes.load(&origin, &dir, &tmin, &tmax, &vec![0.0; n]);
             let mut expected: Vec<Option<(u32, f32, f32, f32)>> = vec![None; n];
             let mut got = expected.clone();
             for (id, tri) in tris.iter().enumerate() {
@@ -259,7 +288,7 @@ mod tests {
                         expected[p] = Some((id as u32, t, u, v));
                     }
                 }
-                lanes.intersect(tri, &scalar, |lanes, slot, t, u, v| {
+                lanes.intersect(tri, |lanes, slot, t, u, v| {
                     got[lanes.ray[slot] as usize] = Some((id as u32, t, u, v));
                 });
             }
@@ -277,17 +306,20 @@ mod tests {
     }
 
     #[test]
-    fn retain_keeps_the_matching_rays_and_pads() {
+    fn retain_keeps_the_matching_rays() {
         let mut lanes = LaneRays::<4>::default();
-        let test = WatertightRay::new(Vec3::ZERO, Vec3::Z);
-        for p in 0..6 {
-            lanes.push(p, &test, 0.0, 10.0, p as f32);
-        }
+        let column = |x: f32| vec![x; 6];
+        let (origin, dir) = (
+            [column(0.0), column(0.0), column(0.0)],
+            [column(0.0), column(0.0), column(1.0)],
+        );
+        let s_limit: Vec<f32> = (0..6).map(|p| p as f32).collect();
+        lanes.load(&origin, &dir, &column(0.0), &column(10.0), &s_limit);
         assert_eq!((lanes.len(), lanes.ray.len()), (6, 8));
         lanes.retain(|s| s >= 3.0);
         assert_eq!(lanes.len(), 3);
         assert_eq!(&lanes.ray[..3], &[3, 4, 5]);
-        assert_eq!(lanes.ray.len(), 4);
+        assert_eq!(lanes.ray.len(), 8, "the slots stay for the next packet");
         lanes.retain(|_| false);
         assert!(lanes.is_empty());
     }

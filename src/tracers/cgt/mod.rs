@@ -67,6 +67,7 @@
 //! origin is not finite, hit nothing.
 
 mod frustum;
+mod gathered;
 mod lanes;
 mod mailbox;
 mod traversal;
@@ -77,12 +78,13 @@ use glam::Vec3;
 
 use crate::accel::Grid;
 use crate::error::{Error, Result};
-use crate::geometry::{Hit, RayBoxTest, Rays, WatertightRay};
+use crate::geometry::{Hit, Rays};
 use crate::stats::{Event, NoStats, Stats};
 use crate::tracers::dda::GridDdaTracer;
 use crate::tracers::{Kernel, Params};
 
 use frustum::{Frustum, MarchFrame, MarchRays, SplitKey};
+use gathered::GatheredRays;
 use lanes::LaneRays;
 use mailbox::Mailbox;
 use traversal::{walk, SliceVisitor};
@@ -179,7 +181,10 @@ struct Workspace {
     /// triangle-test form (indexed by position in the packet).
     march: MarchRays,
     d_s: Vec<f32>,
-    tests: Vec<WatertightRay>,
+    /// The rays of the packet being marched, gathered.
+    gathered: GatheredRays,
+    /// Per ray of the packet being gathered: whether it can hit anything.
+    inside: Vec<bool>,
     /// The rays still active, in SIMD lanes.
     lanes: LaneRays<LANES>,
     mailbox: Mailbox,
@@ -225,22 +230,12 @@ impl CgtTracer {
         let mut ws = Workspace::default();
         let size = (self.config.packet * self.config.packet) as usize;
         for packet in rays.packets(size) {
-            ws.group.clear();
-            for i in packet {
-                if S::ENABLED {
+            if S::ENABLED {
+                for _ in packet.clone() {
                     stats.ray();
                 }
-                let ray = rays.ray(i);
-                let usable = ray.origin.is_finite()
-                    && ray.dir.is_finite()
-                    && ray.dir != Vec3::ZERO
-                    && RayBoxTest::new(ray.origin, ray.dir)
-                        .hit(&self.grid.bounds, ray.tmin, ray.tmax)
-                        .is_some();
-                if usable {
-                    ws.group.push(i as u32);
-                }
             }
+            self.usable_rays(rays, packet, &mut ws);
             if !ws.group.is_empty() {
                 let mut group = std::mem::take(&mut ws.group);
                 self.split::<S, O, ANY>(rays, &mut group, &mut ws, hits, stats, observer);
@@ -328,7 +323,7 @@ impl CgtTracer {
         if S::ENABLED {
             stats.event(Event::Packets, 1);
         }
-        self.load_lanes(rays, group, ws);
+        self.load_lanes(ws);
         let mut packet = Packet::<S, O, ANY> {
             grid: &self.grid,
             frame: &frame,
@@ -365,6 +360,42 @@ impl CgtTracer {
         }
     }
 
+    /// Sets `ws.group` to the rays of `packet` that can hit anything: finite, with a non-zero
+    /// direction, and passing through the grid's box (which is padded well beyond its triangles,
+    /// `Grid::bounds`, so a plain slab test is safe). Branch-free over the packet, so it runs
+    /// in SIMD lanes.
+    fn usable_rays(&self, rays: Rays<'_>, packet: std::ops::Range<usize>, ws: &mut Workspace) {
+        let (lo, hi) = (
+            self.grid.bounds.min.to_array(),
+            self.grid.bounds.max.to_array(),
+        );
+        let (origins, dirs) = ([rays.ox, rays.oy, rays.oz], [rays.dx, rays.dy, rays.dz]);
+        let start = packet.start;
+        ws.inside.resize(packet.len(), false);
+        for (p, usable) in ws.inside.iter_mut().enumerate() {
+            let i = start + p;
+            let (mut enter, mut exit) = (rays.tmin[i], rays.tmax[i]);
+            let (mut finite, mut zero) = (true, true);
+            for a in 0..3 {
+                let (o, d) = (origins[a][i], dirs[a][i]);
+                finite &= o.is_finite() & d.is_finite();
+                zero &= d == 0.0;
+                let inv = 1.0 / d;
+                let (ta, tb) = ((lo[a] - o) * inv, (hi[a] - o) * inv);
+                enter = enter.max(ta.min(tb));
+                exit = exit.min(ta.max(tb));
+            }
+            *usable = finite & !zero & (enter <= exit);
+        }
+        ws.group.clear();
+        let inside = &ws.inside;
+        ws.group.extend(
+            (0..inside.len())
+                .filter(|&p| inside[p])
+                .map(|p| (start + p) as u32),
+        );
+    }
+
     /// Fills the workspace's march coordinates for the packet `group`, whose rays all travel
     /// towards +s in `frame`, and returns its frustum.
     fn march(
@@ -374,51 +405,79 @@ impl CgtTracer {
         frame: &MarchFrame,
         ws: &mut Workspace,
     ) -> Frustum {
-        let grid = &*self.grid;
-        let to_grid = |p: Vec3| (p - grid.bounds.min) * grid.inv_cell_size;
-        let n_box = Vec3::new(grid.res[0] as f32, grid.res[1] as f32, grid.res[2] as f32);
-        ws.march.clear();
-        ws.d_s.clear();
-        let first_origin = rays.ray(group[0] as usize).origin;
-        let mut common_origin = true;
-        for &i in group {
-            let ray = rays.ray(i as usize);
-            common_origin &= ray.origin == first_origin && ray.tmin >= 0.0;
-            let (og, dg) = (to_grid(ray.origin), ray.dir * grid.inv_cell_size);
-            let (o, d) = (frame.point(og), frame.dir(dg));
-            // The ray's stretch inside the grid box [0, N] (slabs; NaN from 0·∞ is ignored by
-            // min/max, and the frustum's margin absorbs rounding).
-            let inv = Vec3::ONE / dg;
-            let (ta, tb) = ((Vec3::ZERO - og) * inv, (n_box - og) * inv);
-            let (enter, exit) = (ta.min(tb), ta.max(tb));
-            let t0 = ray.tmin.max(enter.x).max(enter.y).max(enter.z);
-            let t1 = ray.tmax.min(exit.x).min(exit.y).min(exit.z);
-            let m = &mut ws.march;
-            m.o_s.push(o[0]);
-            m.o_u.push(o[1]);
-            m.o_v.push(o[2]);
-            m.a.push(d[1] / d[0]);
-            m.b.push(d[2] / d[0]);
-            m.s_start.push(o[0] + t0.max(ray.tmin) * d[0]);
-            m.s_end.push(o[0] + t1.max(t0) * d[0]);
-            ws.d_s.push(d[0]);
+        ws.gathered.gather(rays, group);
+        let (grid, g, n) = (&*self.grid, &ws.gathered, group.len());
+        // Per march axis s, u, v: the rays' world components, and the grid's origin, scale and
+        // cells along it.
+        let axes = [frame.k, frame.u, frame.v];
+        let [o_k, o_u, o_v] = axes.map(|a| &g.origin[a][..n]);
+        let [d_k, d_u, d_v] = axes.map(|a| &g.dir[a][..n]);
+        let [lo_k, lo_u, lo_v] = axes.map(|a| grid.bounds.min[a]);
+        let [inv_k, inv_u, inv_v] = axes.map(|a| grid.inv_cell_size[a]);
+        let [n_k, n_u, n_v] = axes.map(|a| grid.res[a] as f32);
+        let (tmin, tmax) = (&g.tmin[..n], &g.tmax[..n]);
+        let m = &mut ws.march;
+        m.set_len(n);
+        if ws.d_s.len() < n {
+            ws.d_s.resize(n, 0.0);
         }
-        let apex = common_origin.then(|| frame.point(to_grid(first_origin)));
+        let (s_o, u_o, v_o) = (&mut m.o_s[..n], &mut m.o_u[..n], &mut m.o_v[..n]);
+        let (slope_u, slope_v) = (&mut m.a[..n], &mut m.b[..n]);
+        let (s_start, s_end, d_s) = (&mut m.s_start[..n], &mut m.s_end[..n], &mut ws.d_s[..n]);
+        // The ray's stretch inside the grid box [0, N] along one axis (slabs; NaN from 0·∞ is
+        // ignored by min/max, and the frustum's margin absorbs rounding).
+        let slab = |g: f32, e: f32, cells: f32| {
+            let inv = 1.0 / e;
+            let (ta, tb) = ((0.0 - g) * inv, (cells - g) * inv);
+            (ta.min(tb), ta.max(tb))
+        };
+        let first = [o_k[0], o_u[0], o_v[0]];
+        let mut common_origin = true;
+        for p in 0..n {
+            common_origin &= (o_k[p] == first[0])
+                & (o_u[p] == first[1])
+                & (o_v[p] == first[2])
+                & (tmin[p] >= 0.0);
+            let (g_k, g_u, g_v) = (
+                (o_k[p] - lo_k) * inv_k,
+                (o_u[p] - lo_u) * inv_u,
+                (o_v[p] - lo_v) * inv_v,
+            );
+            let (e_k, e_u, e_v) = (d_k[p] * inv_k, d_u[p] * inv_u, d_v[p] * inv_v);
+            let (in_k, out_k) = slab(g_k, e_k, n_k);
+            let (in_u, out_u) = slab(g_u, e_u, n_u);
+            let (in_v, out_v) = slab(g_v, e_v, n_v);
+            let t0 = tmin[p].max(in_k).max(in_u).max(in_v);
+            let t1 = tmax[p].min(out_k).min(out_u).min(out_v);
+            let (s, e_s) = if frame.flip {
+                (n_k - g_k, -e_k)
+            } else {
+                (g_k, e_k)
+            };
+            s_o[p] = s;
+            u_o[p] = g_u;
+            v_o[p] = g_v;
+            slope_u[p] = e_u / e_s;
+            slope_v[p] = e_v / e_s;
+            s_start[p] = s + t0.max(tmin[p]) * e_s;
+            s_end[p] = s + t1.max(t0) * e_s;
+            d_s[p] = e_s;
+        }
+        let apex = common_origin.then(|| [s_o[0], u_o[0], v_o[0]]);
         Frustum::new(&ws.march, apex, self.scale)
     }
 
     /// Loads the rays of the packet `group` (marched by `march`) into the lanes, all active, and
     /// empties the mailbox.
-    fn load_lanes(&self, rays: Rays<'_>, group: &[u32], ws: &mut Workspace) {
-        ws.tests.clear();
-        ws.lanes.clear();
-        for (p, &i) in group.iter().enumerate() {
-            let ray = rays.ray(i as usize);
-            let test = WatertightRay::new(ray.origin, ray.dir);
-            ws.lanes
-                .push(p as u32, &test, ray.tmin, ray.tmax, ws.march.s_end[p]);
-            ws.tests.push(test);
-        }
+    fn load_lanes(&self, ws: &mut Workspace) {
+        let g = &ws.gathered;
+        ws.lanes.load(
+            &g.origin,
+            &g.dir,
+            &g.tmin,
+            &g.tmax,
+            &ws.march.s_end[..g.tmin.len()],
+        );
         ws.mailbox.clear();
     }
 }
@@ -464,7 +523,9 @@ impl<S: Stats, O: CellObserver, const ANY: bool> SliceVisitor for Packet<'_, S, 
         // A ray is done when the slab about to be entered starts past its hit or its end
         // (§2.3 early termination, per ray); the margin covers rounding of s.
         let start = slice as f32 - self.frustum.eps();
-        self.ws.lanes.retain(|s_limit| s_limit >= start);
+        if self.ws.lanes.any_s_limit_below(start) {
+            self.ws.lanes.retain(|s_limit| s_limit >= start);
+        }
         !self.ws.lanes.is_empty()
     }
 
@@ -516,7 +577,7 @@ impl<S: Stats, O: CellObserver, const ANY: bool> SliceVisitor for Packet<'_, S, 
             }
             let (hits, group, march, d_s) = (&mut *self.hits, self.group, &ws.march, &ws.d_s);
             let mut any_done = false;
-            ws.lanes.intersect(tri, &ws.tests, |lanes, slot, t, u, v| {
+            ws.lanes.intersect(tri, |lanes, slot, t, u, v| {
                 let p = lanes.ray[slot] as usize;
                 hits[group[p] as usize] = Hit { t, prim: id, u, v };
                 if ANY {
