@@ -13,7 +13,7 @@ pub struct GatheredRays {
 }
 
 impl GatheredRays {
-    /// Gathers the rays `group` (batch indices) of `rays`.
+    /// Gathers the rays `group` (batch indices, at least one) of `rays`.
     pub fn gather(&mut self, rays: Rays<'_>, group: &[u32]) {
         let [ox, oy, oz] = &mut self.origin;
         let [dx, dy, dz] = &mut self.dir;
@@ -27,9 +27,16 @@ impl GatheredRays {
             (&mut self.tmin, rays.tmin),
             (&mut self.tmax, rays.tmax),
         ];
+        // An unsplit packet is a run of consecutive rays: copied, not gathered.
+        let first = group[0] as usize;
+        let run = group.iter().enumerate().fold(true, |run, (p, &i)| run & (i as usize == first + p));
         for (dst, src) in columns {
             dst.clear();
-            dst.extend(group.iter().map(|&i| src[i as usize]));
+            if run {
+                dst.extend_from_slice(&src[first..first + group.len()]);
+            } else {
+                dst.extend(group.iter().map(|&i| src[i as usize]));
+            }
         }
     }
 }

@@ -260,21 +260,16 @@ impl CgtTracer {
             self.trace_alone::<S, ANY>(rays, group, hits, stats);
             return;
         }
-        let grid_dir = |i: u32| rays.ray(i as usize).dir * self.grid.inv_cell_size;
-        let k = dominant_axis(grid_dir(group[0]));
-        // 0: +K, 1: −K, 2: zero along K.
+        let inv_cell = self.grid.inv_cell_size;
+        let k = dominant_axis(rays.ray(group[0] as usize).dir * inv_cell);
+        let (dir_k, inv_k) = ([rays.dx, rays.dy, rays.dz][k], inv_cell[k]);
+        // 0: +K, 1: −K, 2: zero along K (in grid space, as the march sees it).
         let class = |i: &u32| {
-            let d = grid_dir(*i)[k];
-            if d > 0.0 {
-                0u8
-            } else if d < 0.0 {
-                1
-            } else {
-                2
-            }
+            let d = dir_k[*i as usize] * inv_k;
+            (d < 0.0) as u8 + 2 * (d == 0.0) as u8
         };
         let first = class(&group[0]);
-        if !group.iter().all(|i| class(i) == first) {
+        if !group.iter().fold(true, |all, i| all & (class(i) == first)) {
             group.sort_unstable_by_key(class);
             let mut rest: &mut [u32] = group;
             while !rest.is_empty() {
