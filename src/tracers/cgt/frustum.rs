@@ -516,6 +516,22 @@ mod tests {
     }
 
     #[test]
+    fn min_max_ignores_nans_over_whole_lane_groups_and_the_rest() {
+        // 37 values: two groups of 16 and a rest of 5, extremes in the group part and the rest.
+        let mut x: Vec<f32> = (0..37).map(|i| (i as f32 * 7.0) % 37.0 - 18.0).collect();
+        x[3] = f32::NAN;
+        x[20] = -40.0;
+        x[35] = 50.0;
+        x[36] = f32::NAN;
+        assert_eq!(slice_min_max(&x), [-40.0, 50.0]);
+        assert_eq!(slice_min_max(&x[..3]), [-18.0, -4.0]);
+        assert_eq!(
+            slice_min_max(&[f32::NAN]),
+            [f32::INFINITY, f32::NEG_INFINITY]
+        );
+    }
+
+    #[test]
     fn overlap_of_a_single_ray_follows_its_line() {
         let rays = one_ray_packet([0.5, 1.25, 2.5], [1.0, 0.5, -0.25], 8.0);
         let f = Frustum::new(&rays, None, 10.0);

@@ -29,7 +29,10 @@ impl GatheredRays {
         ];
         // An unsplit packet is a run of consecutive rays: copied, not gathered.
         let first = group[0] as usize;
-        let run = group.iter().enumerate().fold(true, |run, (p, &i)| run & (i as usize == first + p));
+        let run = group
+            .iter()
+            .enumerate()
+            .fold(true, |run, (p, &i)| run & (i as usize == first + p));
         for (dst, src) in columns {
             dst.clear();
             if run {
