@@ -172,6 +172,14 @@ mod tests {
         exp
     }
 
+    /// Parses the experiment `text`, runs it into `out` with scenes from `load`, and returns the
+    /// run's directory.
+    fn run_text(text: &str, out: &Path, load: SceneLoader) -> PathBuf {
+        let mut exp = Experiment::parse(Path::new("t.toml"), text).unwrap();
+        exp.output = out.to_path_buf();
+        run(&exp, text, &RunOverrides::default(), load).unwrap()
+    }
+
     fn read_csv(path: &Path) -> (Vec<String>, Vec<HashMap<String, String>>) {
         let mut reader = csv::Reader::from_path(path).unwrap();
         let header: Vec<String> = reader.headers().unwrap().iter().map(String::from).collect();
@@ -354,15 +362,7 @@ mod tests {
         let out = scratch("embree");
         let text = "name = \"t\"\nscenes = [\"lit\"]\ntracers = [\"embree1\", \"embree16\"]\n\
                     rays = [\"primary\", \"shadow\"]\nresolution = { width = 32, height = 32 }\nrepeats = 1\n";
-        let mut exp = Experiment::parse(Path::new("t.toml"), text).unwrap();
-        exp.output = out.clone();
-        let dir = run(
-            &exp,
-            text,
-            &RunOverrides::default(),
-            &plan::tests::load_quads,
-        )
-        .unwrap();
+        let dir = run_text(text, &out, &plan::tests::load_quads);
         let (_, runs) = read_csv(&dir.join(output::RUNS_CSV));
         assert_eq!(runs.len(), 2 * 2);
         for r in &runs {
@@ -401,15 +401,7 @@ mod tests {
         let text = "name = \"t\"\nscenes = [\"glass\"]\ntracers = [\"reference\"]\n\
                     render = { renderer = \"whitted\", max_depth = [0, 1], assembly = [\"ray_types\", \"blind\"] }\n\
                     resolution = { width = 32, height = 32 }\nthreads = [1, 2]\nwarmup = 0\nrepeats = 2\n";
-        let mut exp = Experiment::parse(Path::new("t.toml"), text).unwrap();
-        exp.output = out.clone();
-        let dir = run(
-            &exp,
-            text,
-            &RunOverrides::default(),
-            &plan::tests::load_quads,
-        )
-        .unwrap();
+        let dir = run_text(text, &out, &plan::tests::load_quads);
         let (_, runs) = read_csv(&dir.join(output::RUNS_CSV));
         let rows: Vec<(String, String, String, String, String, String)> = runs
             .iter()
@@ -479,10 +471,8 @@ mod tests {
         let text = "name = \"t\"\nscenes = [\"room\"]\ntracers = [\"reference\", \"packet\"]\n\
                     render = { renderer = \"distribution\", spp = [1, 4, 16], aperture = 0.2, focus = 3, max_depth = 1 }\n\
                     resolution = { width = 16, height = 16 }\nthreads = [1]\nwarmup = 0\nrepeats = 1\n";
-        let mut exp = Experiment::parse(Path::new("t.toml"), text).unwrap();
-        exp.output = out.clone();
         let load = |spec: &SceneSpec| crate::scene::library::load_scene(&spec.name, spec.size);
-        let dir = run(&exp, text, &RunOverrides::default(), &load).unwrap();
+        let dir = run_text(text, &out, &load);
         let (_, runs) = read_csv(&dir.join(output::RUNS_CSV));
         let spp_of = |r: &HashMap<String, String>| -> u32 {
             r["render"].rsplit("spp=").next().unwrap().parse().unwrap()
@@ -607,15 +597,7 @@ series = "scene"
     #[test]
     fn tables_and_figures_come_from_runs_csv_and_refit_embree_per_frame() {
         let out = scratch("tables");
-        let mut exp = Experiment::parse(Path::new("t.toml"), TABLES_TEXT).unwrap();
-        exp.output = out.clone();
-        let dir = run(
-            &exp,
-            TABLES_TEXT,
-            &RunOverrides::default(),
-            &plan::tests::load_quads,
-        )
-        .unwrap();
+        let dir = run_text(TABLES_TEXT, &out, &plan::tests::load_quads);
         // The moving quad's primary hits per frame are 900, 576, 400 (see expected_primary_hits):
         // mean 625.3, best 900, ratio 0.695. Refitted and rebuilt Embree scenes hit the same.
         let tables = fs::read_to_string(dir.join(tables::TABLES_MD)).unwrap();
@@ -636,6 +618,7 @@ series = "scene"
              | high | – | – |\n\n"
         );
         let rows = selection::read_rows(&dir.join(output::RUNS_CSV)).unwrap();
+        let exp = Experiment::parse(Path::new("t.toml"), TABLES_TEXT).unwrap();
         let lines = exp.figures[0].lines(&rows);
         assert_eq!(
             lines,

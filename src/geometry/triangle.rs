@@ -65,6 +65,19 @@ pub struct WatertightRay {
     shear: [f32; 3],
 }
 
+/// Component `k` of `x`, by selects rather than indexing, so loops over many rays whose axes
+/// differ lane by lane vectorize.
+#[inline(always)]
+pub fn axis_component(x: [f32; 3], k: usize) -> f32 {
+    if k == 0 {
+        x[0]
+    } else if k == 1 {
+        x[1]
+    } else {
+        x[2]
+    }
+}
+
 impl WatertightRay {
     #[inline(always)]
     pub fn new(origin: Vec3, dir: Vec3) -> Self {
@@ -78,16 +91,7 @@ impl WatertightRay {
         };
         let next = |k: usize| if k == 2 { 0 } else { k + 1 };
         let d = dir.to_array();
-        // Component `k` by selects rather than indexing, so loops over many rays vectorize.
-        let pick = |k: usize| {
-            if k == 0 {
-                d[0]
-            } else if k == 1 {
-                d[1]
-            } else {
-                d[2]
-            }
-        };
+        let pick = |k: usize| axis_component(d, k);
         let dz = pick(kz);
         // Swap to keep the winding of the triangle when dir[kz] is negative.
         let (kx, ky) = if dz < 0.0 {

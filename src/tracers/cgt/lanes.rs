@@ -12,6 +12,7 @@
 use crate::geometry::watertight_lanes::{accept, edge_functions, edges_have_zero, Permuted};
 use glam::Vec3;
 
+use crate::geometry::triangle::axis_component;
 use crate::geometry::{Triangle, WatertightRay};
 
 /// A packet's active rays, one lane slot each; the vectors' length is a multiple of `L`, and the
@@ -78,15 +79,6 @@ impl<const L: usize> LaneRays<L> {
         self.len = n;
         self.pad();
         self.tests.clear();
-        let pick = |k: usize, x: [f32; 3]| {
-            if k == 0 {
-                x[0]
-            } else if k == 1 {
-                x[1]
-            } else {
-                x[2]
-            }
-        };
         for p in 0..n {
             let o = [origin[0][p], origin[1][p], origin[2][p]];
             let d = Vec3::new(dir[0][p], dir[1][p], dir[2][p]);
@@ -95,7 +87,7 @@ impl<const L: usize> LaneRays<L> {
             let (_, k, shear) = test.parts();
             self.ray[p] = p as u32;
             for a in 0..3 {
-                self.origin[a][p] = pick(k[a], o);
+                self.origin[a][p] = axis_component(o, k[a]);
                 self.axes[a][p] = k[a] as u32;
                 self.shear[a][p] = shear[a];
             }
@@ -166,15 +158,7 @@ impl<const L: usize> LaneRays<L> {
             [0, 1, 2].map(|a| -> [u32; L] { self.axes[a][base..base + L].try_into().unwrap() });
         // Each vertex relative to each lane's origin, along its kx, ky, kz.
         let ([kx, ky, kz], [ox, oy, oz]) = (axes, origin);
-        let pick = |k: u32, p: &[f32; 3]| {
-            if k == 0 {
-                p[0]
-            } else if k == 1 {
-                p[1]
-            } else {
-                p[2]
-            }
-        };
+        let pick = |k: u32, p: &[f32; 3]| axis_component(*p, k as usize);
         let permute = |p: &[f32; 3]| -> Permuted<L> {
             let mut out = [[0.0f32; L]; 3];
             for l in 0..L {

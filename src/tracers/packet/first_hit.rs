@@ -17,10 +17,6 @@ use super::workspace::{ActiveRays, Packet, Tree};
 pub struct FirstHit;
 
 impl RaySelection for FirstHit {
-    fn root<const L: usize>(_: &Packet<L>) -> u32 {
-        0
-    }
-
     /// The first SIMD ray from `ia` on that meets the box of `node`; when ray `ia` misses, the
     /// interval bounds, then the frustum, may cull the box for the whole packet.
     #[inline(always)]

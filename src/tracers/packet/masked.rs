@@ -15,10 +15,6 @@ use super::workspace::{ActiveRays, Packet, Tree};
 pub struct Masked;
 
 impl RaySelection for Masked {
-    fn root<const L: usize>(_: &Packet<L>) -> u32 {
-        0
-    }
-
     #[inline(always)]
     fn enter<const L: usize, S: Stats>(
         packet: &mut Packet<L>,

@@ -44,10 +44,6 @@ pub fn first_hit<const L: usize, S: Stats>(
 pub struct Ranged;
 
 impl RaySelection for Ranged {
-    fn root<const L: usize>(_: &Packet<L>) -> u32 {
-        0
-    }
-
     /// `getFirstHit`: the first SIMD ray from `ia` on that meets the box of `node` (§3.2).
     #[inline(always)]
     fn enter<const L: usize, S: Stats>(

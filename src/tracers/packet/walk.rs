@@ -11,8 +11,10 @@ use super::workspace::{ActiveRays, Packet, Pending, Stack, Tree};
 /// restored from the stack (Ranged/IA: the first active SIMD ray; Partition: the number of alive
 /// ones at the front of the index list; Masked: unused).
 pub trait RaySelection {
-    /// The state at the root.
-    fn root<const L: usize>(packet: &Packet<L>) -> u32;
+    /// The state at the root (the first SIMD ray, by default).
+    fn root<const L: usize>(_: &Packet<L>) -> u32 {
+        0
+    }
 
     /// Tests the box of `node` against the packet: the state below it, or `None` when no ray
     /// meets it (the subtree is skipped).
