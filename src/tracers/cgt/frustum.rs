@@ -18,6 +18,13 @@
 //! corners of a rectangle), so bounding every ray gives the paper's corner-ray frustum without
 //! trusting that the batch is laid out in screen blocks.
 //!
+//! General packets are bounded a second time by the same slopes anchored at the packet's last `s`:
+//! every ray lies, at every `s` before `s_end_ref`, within `u ∈ [u1_min + (s − s_end_ref)·du_max,
+//! u1_max + (s − s_end_ref)·du_min]`, `u1` being where the rays' lines cross `s_end_ref`. Shadow rays
+//! towards a point light converge there (§4.7's light frustum, without reversing the rays), so
+//! this pyramid narrows to the light while the first one widens from the surfaces; the overlap
+//! box is the intersection of the two, and culling uses both sets of planes.
+//!
 //! Rounding: each bound is widened by `eps`, a fixed fraction (2⁻¹⁵) of the largest magnitude in
 //! the computation (grid resolution, origins, slope × distance, world coordinates × cells per unit),
 //! far above the few ulps by which a computed ray position or cell can differ from the grid
@@ -162,6 +169,13 @@ pub struct Frustum {
     v0: [f32; 2],
     du: [f32; 2],
     dv: [f32; 2],
+    /// The same lines anchored at the packet's last `s` instead (general packets; unbounded for
+    /// common-origin ones): the interval where the rays' lines cross `s_end_ref`, from which they
+    /// spread backwards. Converging rays (shadow rays towards a point light, §4.7) have a narrow
+    /// interval there, so this bound is the tighter one near their end.
+    s_end_ref: f32,
+    u1: [f32; 2],
+    v1: [f32; 2],
     /// The packet's extent along the march axis, `[first, last]`.
     s_range: [f32; 2],
     /// Largest magnitude in the frustum's arithmetic, and the margin derived from it.
@@ -170,35 +184,44 @@ pub struct Frustum {
     apex: Option<Apex>,
 }
 
-/// `[min, max]` of `value(i)` over `i < n`, NaNs ignored. Sixteen running bounds side by side
-/// (selects, not `f32::min`), so the loop runs in SIMD lanes.
+/// `[min, max]` of each of the `Q` quantities `value(i)` over `i < n`, NaNs ignored, in one pass.
+/// Sixteen running bounds per quantity side by side (selects, not `f32::min`), so the loop runs in
+/// SIMD lanes.
 #[inline(always)]
-fn min_max(n: usize, value: impl Fn(usize) -> f32) -> [f32; 2] {
+fn min_max<const Q: usize>(n: usize, value: impl Fn(usize) -> [f32; Q]) -> [[f32; 2]; Q] {
     const W: usize = 16;
-    let (mut lo, mut hi) = ([f32::INFINITY; W], [f32::NEG_INFINITY; W]);
+    let (mut lo, mut hi) = ([[f32::INFINITY; W]; Q], [[f32::NEG_INFINITY; W]; Q]);
+    let mut bound = |l: usize, x: [f32; Q]| {
+        for q in 0..Q {
+            lo[q][l] = if x[q] < lo[q][l] { x[q] } else { lo[q][l] };
+            hi[q][l] = if x[q] > hi[q][l] { x[q] } else { hi[q][l] };
+        }
+    };
     let whole = n / W * W;
     for base in (0..whole).step_by(W) {
         for l in 0..W {
-            let x = value(base + l);
-            lo[l] = if x < lo[l] { x } else { lo[l] };
-            hi[l] = if x > hi[l] { x } else { hi[l] };
+            bound(l, value(base + l));
         }
     }
     for (l, i) in (whole..n).enumerate() {
-        let x = value(i);
-        lo[l] = if x < lo[l] { x } else { lo[l] };
-        hi[l] = if x > hi[l] { x } else { hi[l] };
+        bound(l, value(i));
     }
-    [
-        lo.into_iter().fold(f32::INFINITY, f32::min),
-        hi.into_iter().fold(f32::NEG_INFINITY, f32::max),
-    ]
+    std::array::from_fn(|q| {
+        [
+            lo[q].into_iter().fold(f32::INFINITY, f32::min),
+            hi[q].into_iter().fold(f32::NEG_INFINITY, f32::max),
+        ]
+    })
 }
 
-/// `[min, max]` of a slice, NaNs ignored.
+/// `|x|`, or 0 when `x` is not finite.
 #[inline(always)]
-fn slice_min_max(x: &[f32]) -> [f32; 2] {
-    min_max(x.len(), |i| x[i])
+fn finite_abs(x: f32) -> f32 {
+    if x.is_finite() {
+        x.abs()
+    } else {
+        0.0
+    }
 }
 
 #[inline(always)]
@@ -234,18 +257,27 @@ impl Frustum {
         let n = rays.len;
         let (o_s, o_u, o_v) = (&rays.o_s[..n], &rays.o_u[..n], &rays.o_v[..n]);
         let (a, b) = (&rays.a[..n], &rays.b[..n]);
-        let s_first = slice_min_max(&rays.s_start[..n])[0];
-        let s_last = slice_min_max(&rays.s_end[..n])[1];
-        let du = slice_min_max(a);
-        let dv = slice_min_max(b);
-        let (s_ref, u0, v0) = match apex {
-            Some(o) => (o[0], [o[1]; 2], [o[2]; 2]),
+        let (s_start, s_end) = (&rays.s_start[..n], &rays.s_end[..n]);
+        let [starts, ends, du, dv, os, ou, ov] = min_max(n, |i| {
+            [s_start[i], s_end[i], a[i], b[i], o_s[i], o_u[i], o_v[i]]
+        });
+        let (s_first, s_last) = (starts[0], ends[1]);
+        let unbounded = [f32::NEG_INFINITY, f32::INFINITY];
+        let ((s_ref, u0, v0), (u1, v1)) = match apex {
+            Some(o) => ((o[0], [o[1]; 2], [o[2]; 2]), (unbounded, unbounded)),
             None => {
-                // Lines extended back to the first s any ray reaches (§2.2, general packets).
-                let s_ref = s_first;
-                let at_ref =
-                    |o: &[f32], slope: &[f32]| min_max(n, |i| o[i] + (s_ref - o_s[i]) * slope[i]);
-                (s_ref, at_ref(o_u, a), at_ref(o_v, b))
+                // Lines extended back to the first s any ray reaches (§2.2, general packets),
+                // and forward to the last.
+                let [u0, v0, u1, v1] = min_max(n, |i| {
+                    let (to_first, to_last) = (s_first - o_s[i], s_last - o_s[i]);
+                    [
+                        o_u[i] + to_first * a[i],
+                        o_v[i] + to_first * b[i],
+                        o_u[i] + to_last * a[i],
+                        o_v[i] + to_last * b[i],
+                    ]
+                });
+                ((s_first, u0, v0), (u1, v1))
             }
         };
         let slope = du[0]
@@ -253,16 +285,11 @@ impl Frustum {
             .max(du[1].abs())
             .max(dv[0].abs())
             .max(dv[1].abs());
-        let finite_last = if s_last.is_finite() {
-            s_last.abs()
-        } else {
-            0.0
-        };
-        let origins = [o_s, o_u, o_v]
-            .map(|o| slice_min_max(o).map(f32::abs))
+        let finite_last = finite_abs(s_last);
+        let origins = [os, ou, ov]
             .into_iter()
             .flatten()
-            .fold(0.0f32, f32::max);
+            .fold(0.0f32, |m, x| m.max(x.abs()));
         let mag = [
             1.0,
             scale,
@@ -274,6 +301,10 @@ impl Frustum {
             u0[1].abs(),
             v0[0].abs(),
             v0[1].abs(),
+            finite_abs(u1[0]),
+            finite_abs(u1[1]),
+            finite_abs(v1[0]),
+            finite_abs(v1[1]),
             slope * (scale + s_ref.abs() + finite_last),
         ]
         .into_iter()
@@ -289,6 +320,19 @@ impl Frustum {
                 [v0[0] - eps * dv[0].abs(), v0[1] + eps * dv[1].abs()],
             ),
         };
+        // Moved forward by eps likewise for the end anchor (its lines spread towards lower s,
+        // so its lower u bound follows the largest slope).
+        let (s_end_ref, u1, v1) = (
+            s_last + eps,
+            [
+                u1[0] - eps * du[1].abs() - eps,
+                u1[1] + eps * du[0].abs() + eps,
+            ],
+            [
+                v1[0] - eps * dv[1].abs() - eps,
+                v1[1] + eps * dv[0].abs() + eps,
+            ],
+        );
         let apex = apex.map(|origin| {
             let corners = [
                 [1.0, du[0], dv[0]],
@@ -308,6 +352,9 @@ impl Frustum {
             v0: [v0[0] - eps, v0[1] + eps],
             du,
             dv,
+            s_end_ref,
+            u1,
+            v1,
             s_range: [s_first - eps, s_last + eps],
             mag,
             eps,
@@ -404,11 +451,20 @@ impl Frustum {
         if lo > hi {
             return None;
         }
+        // The same slab seen from the end anchor (both ends ≤ 0 there).
+        let (lo_e, hi_e) = (
+            lo + self.s_ref - self.s_end_ref,
+            hi + self.s_ref - self.s_end_ref,
+        );
         Some([
-            self.u0[0] + (lo * self.du[0]).min(hi * self.du[0]),
-            self.u0[1] + (lo * self.du[1]).max(hi * self.du[1]),
-            self.v0[0] + (lo * self.dv[0]).min(hi * self.dv[0]),
-            self.v0[1] + (lo * self.dv[1]).max(hi * self.dv[1]),
+            (self.u0[0] + (lo * self.du[0]).min(hi * self.du[0]))
+                .max(self.u1[0] + (lo_e * self.du[1]).min(hi_e * self.du[1])),
+            (self.u0[1] + (lo * self.du[1]).max(hi * self.du[1]))
+                .min(self.u1[1] + (lo_e * self.du[0]).max(hi_e * self.du[0])),
+            (self.v0[0] + (lo * self.dv[0]).min(hi * self.dv[0]))
+                .max(self.v1[0] + (lo_e * self.dv[1]).min(hi_e * self.dv[1])),
+            (self.v0[1] + (lo * self.dv[1]).max(hi * self.dv[1]))
+                .min(self.v1[1] + (lo_e * self.dv[0]).max(hi_e * self.dv[0])),
         ])
     }
 
@@ -440,7 +496,18 @@ impl Frustum {
             return true;
         }
         let Some(apex) = &self.apex else {
-            return false;
+            // General packets: the lines from the end anchor (their lower bound follows the
+            // largest slope, as they spread towards lower s).
+            let mut beyond_all = 0b1111u8;
+            for q in p {
+                let ds = q[0] - self.s_end_ref;
+                let beyond = (q[1] < self.u1[0] + ds * self.du[1] - tol) as u8
+                    | ((q[1] > self.u1[1] + ds * self.du[0] + tol) as u8) << 1
+                    | ((q[2] < self.v1[0] + ds * self.dv[1] - tol) as u8) << 2
+                    | ((q[2] > self.v1[1] + ds * self.dv[0] + tol) as u8) << 3;
+                beyond_all &= beyond;
+            }
+            return beyond_all != 0;
         };
         // A ray from the apex with direction d meets the triangle (at t > 0) iff d = αA + βB + γC
         // with α, β, γ ≥ 0, A, B, C the vertices seen from the apex; γ = d·(A×B)/V with
@@ -515,6 +582,10 @@ mod tests {
         }
     }
 
+    fn slice_min_max(x: &[f32]) -> [f32; 2] {
+        min_max(x.len(), |i| [x[i]])[0]
+    }
+
     #[test]
     fn min_max_ignores_nans_over_whole_lane_groups_and_the_rest() {
         // 37 values: two groups of 16 and a rest of 5, extremes in the group part and the rest.
@@ -544,6 +615,37 @@ mod tests {
         assert_eq!(cell_range(b, 4, 4), Some([1, 2, 1, 2]));
         assert_eq!(f.slice_range(5), Some((0, 4)));
         assert_eq!(f.slice_range(20), Some((0, 8)));
+    }
+
+    #[test]
+    fn converging_rays_are_bounded_by_their_shared_end_too() {
+        // Two rays from (s, u) = (0, 0) and (0, 8) to the end point (8, 4), v = 0: slopes ±0.5.
+        let rays = MarchRays {
+            o_s: vec![0.0; 2],
+            o_u: vec![0.0, 8.0],
+            o_v: vec![0.0; 2],
+            a: vec![0.5, -0.5],
+            b: vec![0.0; 2],
+            s_start: vec![0.0; 2],
+            s_end: vec![8.0; 2],
+            len: 2,
+        };
+        let f = Frustum::new(&rays, None, 16.0);
+        let e = 8.0 * f.eps();
+        // The last slab: the rays are within u ∈ [3.5, 4.5]; the start-anchored lines alone
+        // give [−3.5, 11.5].
+        let b = f.overlap(7.0, 8.0).unwrap();
+        for (got, want) in b.iter().zip([3.5, 4.5, 0.0, 0.0]) {
+            assert!((got - want).abs() <= e, "{b:?}");
+        }
+        // The first slab: [0, 8] where the start anchor alone gives [−0.5, 8.5].
+        let b = f.overlap(0.0, 1.0).unwrap();
+        assert!(b[0].abs() <= e && (b[1] - 8.0).abs() <= e, "{b:?}");
+        // Near the end, beside the rays: only the end-anchored planes cull it.
+        let beside = [[7.0, 6.0, -1.0], [7.5, 6.5, 1.0], [7.0, 7.0, 0.0]];
+        assert!(f.culls(&beside));
+        let across = [[7.0, 3.0, -1.0], [7.5, 5.0, 1.0], [7.0, 4.0, 0.0]];
+        assert!(!f.culls(&across));
     }
 
     #[test]

@@ -32,10 +32,11 @@
 //! - **Macrocells (§2.4).** `macrocells` uses the grid's M³ macrocells (`macro_size`).
 //! - **Shadow rays (§4.7).** Occlusion uses the same walk; a ray is done at its first hit. The
 //!   batch's shadow rays leave the surface points towards the light, so they share an end point,
-//!   not an origin: we trace them as given, with the general frustum (interval of origins), rather
-//!   than reversed from the light. Reversed rays would be other rays — the watertight test is not
-//!   symmetric in the ray's direction, so at edges they could disagree with the rays every other
-//!   tracer answers.
+//!   not an origin: we trace them as given, with the general frustum, rather than reversed from
+//!   the light. Its second anchor at the packet's last `s` makes it the paper's light pyramid near
+//!   the light (`frustum`: both pyramids bound the rays, and the walk uses their intersection).
+//!   Reversed rays would be other rays — the watertight test is not symmetric in the ray's
+//!   direction, so at edges they could disagree with the rays every other tracer answers.
 //! - **Incoherent packets are split (§4.7).** The paper splits shadow packets whose hit points
 //!   lie too far apart. We measure that on the frustum: a packet whose rays start more than
 //!   `MAX_ORIGIN_SPREAD` cells apart, or whose frustum widens by more than `MAX_SLOPE_SPREAD`
