@@ -132,17 +132,7 @@ pub fn assemble(method: Assembly, candidates: &[Candidate]) -> Vec<OutPacket> {
             // light; with several, one packet mixing them has no common end point (no §4.2
             // frustum) and spreads over every light's direction.
             for kind in SECONDARY_KINDS {
-                let mut types: Vec<(u32, Vec<usize>)> = Vec::new();
-                for (i, c) in of_kind(kind) {
-                    match types.iter_mut().find(|(light, _)| *light == c.light) {
-                        Some((_, members)) => members.push(i),
-                        None => types.push((c.light, vec![i])),
-                    }
-                }
-                packets.extend(types.into_iter().map(|(_, members)| OutPacket {
-                    batch: BatchKind::Rays(kind),
-                    members,
-                }));
+                packets.extend(grouped(kind, of_kind(kind), |c| c.light));
             }
         }
         Assembly::Runs => {
@@ -171,22 +161,32 @@ pub fn assemble(method: Assembly, candidates: &[Candidate]) -> Vec<OutPacket> {
         }
         Assembly::Groups => {
             for kind in SECONDARY_KINDS {
-                // Materials in order of first appearance, each with its rays.
-                let mut groups: Vec<(u32, Vec<usize>)> = Vec::new();
-                for (i, c) in of_kind(kind) {
-                    match groups.iter_mut().find(|(m, _)| *m == c.material) {
-                        Some((_, members)) => members.push(i),
-                        None => groups.push((c.material, vec![i])),
-                    }
-                }
-                packets.extend(groups.into_iter().map(|(_, members)| OutPacket {
-                    batch: BatchKind::Rays(kind),
-                    members,
-                }));
+                packets.extend(grouped(kind, of_kind(kind), |c| c.material));
             }
         }
     }
     packets
+}
+
+/// One packet of `kind` per distinct `key` among `candidates`, in order of first appearance,
+/// each with its members in candidate order.
+fn grouped<'a>(
+    kind: RayKind,
+    candidates: impl Iterator<Item = (usize, &'a Candidate)>,
+    key: impl Fn(&Candidate) -> u32,
+) -> impl Iterator<Item = OutPacket> {
+    let mut groups: Vec<(u32, Vec<usize>)> = Vec::new();
+    for (i, c) in candidates {
+        let k = key(c);
+        match groups.iter_mut().find(|(g, _)| *g == k) {
+            Some((_, members)) => members.push(i),
+            None => groups.push((k, vec![i])),
+        }
+    }
+    groups.into_iter().map(move |(_, members)| OutPacket {
+        batch: BatchKind::Rays(kind),
+        members,
+    })
 }
 
 #[cfg(test)]
