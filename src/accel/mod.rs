@@ -169,14 +169,14 @@ mod tests {
         let Accel::Embree(scene) = &first else {
             panic!("an Embree scene")
         };
-        let before = Arc::as_ptr(scene);
+        assert_eq!(scene.refits, 0);
         let next = AccelKind::Embree
             .rebuild(Some(first), &mesh(1.0), &refit)
             .unwrap();
         let Accel::Embree(scene) = &next else {
             panic!("an Embree scene")
         };
-        assert_eq!(Arc::as_ptr(scene), before);
+        assert_eq!(scene.refits, 1, "refitted, not rebuilt");
         assert!(AccelKind::Embree.refits(&refit));
         assert!(!AccelKind::Embree.refits(&Params::new().with("quality", "low")));
         assert!(!AccelKind::Grid.refits(&Params::new()));
@@ -189,5 +189,10 @@ mod tests {
             panic!("Embree scenes")
         };
         assert!(!Arc::ptr_eq(a, b));
+        assert_eq!(
+            (a.refits, b.refits),
+            (1, 0),
+            "the shared scene untouched, a new one built"
+        );
     }
 }

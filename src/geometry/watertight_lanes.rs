@@ -13,6 +13,47 @@
 /// along its axes `kx, ky, kz`.
 pub type Permuted<const L: usize> = [[f32; L]; 3];
 
+/// The axes `[kx, ky, kz]` the first `used` lanes all share (`axes[a][lane]`), if they do: then a
+/// vertex is reordered once for every lane rather than picked lane by lane.
+#[inline(always)]
+pub fn common_axes<const L: usize>(axes: &[[u32; L]; 3], used: usize) -> Option<[usize; 3]> {
+    let k0 = [axes[0][0], axes[1][0], axes[2][0]];
+    let mut differ = 0u32;
+    for (lanes, k) in axes.iter().zip(k0) {
+        for &lane in &lanes[..used] {
+            differ |= (lane != k) as u32;
+        }
+    }
+    (differ == 0).then(|| k0.map(|k| k as usize))
+}
+
+/// Origin-relative coordinates `rel` (`[x, y, z][lane]`) reordered into each lane's watertight
+/// frame `[kx, ky, kz]` (`axes[a][lane]`, the axes `WatertightRay` picks); `common`: the axes
+/// every lane shares, if known (`common_axes`).
+#[inline(always)]
+pub fn in_lane_frames<const L: usize>(
+    rel: [[f32; L]; 3],
+    axes: &[[u32; L]; 3],
+    common: Option<[usize; 3]>,
+) -> Permuted<L> {
+    match common {
+        Some([kx, ky, kz]) => [rel[kx], rel[ky], rel[kz]],
+        None => {
+            let mut out = [[0.0f32; L]; 3];
+            for (o, k) in out.iter_mut().zip(axes) {
+                for l in 0..L {
+                    o[l] = match k[l] {
+                        0 => rel[0][l],
+                        1 => rel[1][l],
+                        _ => rel[2][l],
+                    };
+                }
+            }
+            out
+        }
+    }
+}
+
 /// The edge functions `[U, V, W][lane]` of the triangle `a, b, c` sheared into each lane's ray
 /// space (`shear` = `[sx, sy, sz][lane]`).
 #[inline(always)]

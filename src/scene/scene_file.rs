@@ -99,8 +99,7 @@ pub enum LightSpec {
     },
 }
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
-#[serde(rename_all = "lowercase")]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Preset {
     /// Plain Lambertian: no mirror, glossy or dielectric part.
     Diffuse,
@@ -131,6 +130,11 @@ impl Preset {
 
     pub fn parse(name: &str) -> Option<Preset> {
         Self::ALL.into_iter().find(|p| p.name() == name)
+    }
+
+    /// The names, quoted, for messages: `"diffuse", "mirror", …`.
+    pub fn known() -> String {
+        Self::ALL.map(|p| format!("{:?}", p.name())).join(", ")
     }
 
     /// What `[materials] all = "<preset>"` does: the preset on every material (Overbeck et al.
@@ -174,13 +178,30 @@ pub struct DielectricSpec {
 #[derive(Clone, Debug, PartialEq)]
 pub struct MaterialEntry(pub MaterialOverride);
 
+/// A preset by its `name()`, so the names live in one place.
+impl<'de> Deserialize<'de> for Preset {
+    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> std::result::Result<Self, D::Error> {
+        let name = String::deserialize(deserializer)?;
+        Preset::parse(&name).ok_or_else(|| {
+            de::Error::custom(format!(
+                "unknown preset {name:?} (known: {})",
+                Preset::known()
+            ))
+        })
+    }
+}
+
 impl<'de> Deserialize<'de> for MaterialEntry {
     fn deserialize<D: Deserializer<'de>>(deserializer: D) -> std::result::Result<Self, D::Error> {
         struct EntryVisitor;
         impl<'de> Visitor<'de> for EntryVisitor {
             type Value = MaterialEntry;
             fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
-                f.write_str("a preset (\"diffuse\", \"mirror\", \"glossy\", \"glass\") or a table of material fields")
+                write!(
+                    f,
+                    "a preset ({}) or a table of material fields",
+                    Preset::known()
+                )
             }
             fn visit_str<E: de::Error>(self, name: &str) -> std::result::Result<MaterialEntry, E> {
                 let preset = Preset::deserialize(name.into_deserializer())?;

@@ -79,7 +79,7 @@ use glam::Vec3;
 
 use crate::accel::Grid;
 use crate::error::{Error, Result};
-use crate::geometry::{Hit, Rays};
+use crate::geometry::{Hit, RayBoxTest, Rays};
 use crate::stats::{Event, NoStats, Stats};
 use crate::tracers::dda::GridDdaTracer;
 use crate::tracers::{Kernel, Params};
@@ -357,31 +357,22 @@ impl CgtTracer {
     }
 
     /// Sets `ws.group` to the rays of `packet` that can hit anything: finite, with a non-zero
-    /// direction, and passing through the grid's box (which is padded well beyond its triangles,
-    /// `Grid::bounds`, so a plain slab test is safe). Branch-free over the packet, so it runs
-    /// in SIMD lanes.
+    /// direction, and meeting the grid's box. Branch-free over the packet (`&`, not `&&`), so it
+    /// runs in SIMD lanes.
     fn usable_rays(&self, rays: Rays<'_>, packet: std::ops::Range<usize>, ws: &mut Workspace) {
-        let (lo, hi) = (
-            self.grid.bounds.min.to_array(),
-            self.grid.bounds.max.to_array(),
-        );
-        let (origins, dirs) = ([rays.ox, rays.oy, rays.oz], [rays.dx, rays.dy, rays.dz]);
+        let bounds = &self.grid.bounds;
         let start = packet.start;
         ws.inside.resize(packet.len(), false);
         for (p, usable) in ws.inside.iter_mut().enumerate() {
             let i = start + p;
-            let (mut enter, mut exit) = (rays.tmin[i], rays.tmax[i]);
-            let (mut finite, mut zero) = (true, true);
-            for a in 0..3 {
-                let (o, d) = (origins[a][i], dirs[a][i]);
-                finite &= o.is_finite() & d.is_finite();
-                zero &= d == 0.0;
-                let inv = 1.0 / d;
-                let (ta, tb) = ((lo[a] - o) * inv, (hi[a] - o) * inv);
-                enter = enter.max(ta.min(tb));
-                exit = exit.min(ta.max(tb));
-            }
-            *usable = finite & !zero & (enter <= exit);
+            let o = Vec3::new(rays.ox[i], rays.oy[i], rays.oz[i]);
+            let d = Vec3::new(rays.dx[i], rays.dy[i], rays.dz[i]);
+            *usable = o.is_finite()
+                & d.is_finite()
+                & (d != Vec3::ZERO)
+                & RayBoxTest::new(o, d)
+                    .hit(bounds, rays.tmin[i], rays.tmax[i])
+                    .is_some();
         }
         ws.group.clear();
         let inside = &ws.inside;

@@ -22,6 +22,8 @@ pub struct EmbreeScene {
     pub config: EmbreeConfig,
     /// Wall time of the last build or refit: buffer fill plus commit.
     pub build_seconds: f64,
+    /// Refits since the scene was built (its tree keeps the build's topology).
+    pub refits: u32,
 }
 
 // SAFETY: Embree allows rtcIntersect*/rtcOccluded* on a committed scene from many threads at
@@ -79,6 +81,7 @@ impl EmbreeScene {
             moving: close.is_some(),
             config,
             build_seconds: 0.0,
+            refits: 0,
         };
         created(&scene.device, raw, "creating a scene")?;
         // SAFETY: a live scene, not yet committed.
@@ -208,6 +211,7 @@ impl EmbreeScene {
         }
         self.commit("refitting a scene")?;
         self.build_seconds = start.elapsed().as_secs_f64();
+        self.refits += 1;
         Ok(())
     }
 
@@ -253,6 +257,7 @@ impl fmt::Debug for EmbreeScene {
             .field("triangles", &self.triangle_count)
             .field("config", &self.config)
             .field("build_seconds", &self.build_seconds)
+            .field("refits", &self.refits)
             .finish()
     }
 }

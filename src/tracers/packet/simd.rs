@@ -23,9 +23,11 @@
 
 use crate::geometry::aabb::FAR_SCALE;
 use crate::geometry::watertight_lanes::{
-    accept, edge_functions, edges_have_zero, redo_zero_edges_in_f64, Permuted,
+    accept, common_axes, edge_functions, edges_have_zero, in_lane_frames, redo_zero_edges_in_f64,
+    Permuted,
 };
-use crate::geometry::{Hit, Rays, Triangle};
+use crate::geometry::{Hit, Rays, Triangle, WatertightRay};
+use glam::Vec3;
 
 /// `L` rays, their current closest hits, and what the box and triangle tests precompute.
 #[derive(Clone, Copy, Debug)]
@@ -106,54 +108,16 @@ impl<const L: usize> SimdRay<L> {
                 self.negative[a][l] = d[a][l].is_sign_negative() as u32;
             }
         }
+        // Each lane's watertight frame is the one `WatertightRay` picks (bit for bit).
         for l in 0..L {
-            let (x, y, z) = (d[0][l], d[1][l], d[2][l]);
-            let (ax, ay, az) = (x.abs(), y.abs(), z.abs());
-            let kz = if ax >= ay && ax >= az {
-                0
-            } else if ay >= az {
-                1
-            } else {
-                2
-            };
-            let dz = if kz == 0 {
-                x
-            } else if kz == 1 {
-                y
-            } else {
-                z
-            };
-            let (mut kx, mut ky) = (
-                if kz == 2 { 0 } else { kz + 1 },
-                if kz == 0 { 2 } else { kz - 1 },
-            );
-            if dz < 0.0 {
-                std::mem::swap(&mut kx, &mut ky);
-            }
-            let pick = |k: u32| {
-                if k == 0 {
-                    x
-                } else if k == 1 {
-                    y
-                } else {
-                    z
-                }
-            };
-            self.axes[0][l] = kx;
-            self.axes[1][l] = ky;
-            self.axes[2][l] = kz;
-            self.shear[0][l] = pick(kx) / dz;
-            self.shear[1][l] = pick(ky) / dz;
-            self.shear[2][l] = 1.0 / dz;
-        }
-        let k0 = [self.axes[0][0], self.axes[1][0], self.axes[2][0]];
-        let mut differ = 0u32;
-        for a in 0..3 {
-            for l in 0..used {
-                differ |= (self.axes[a][l] != k0[a]) as u32;
+            let dir = Vec3::new(d[0][l], d[1][l], d[2][l]);
+            let (_, k, shear) = WatertightRay::new(Vec3::ZERO, dir).parts();
+            for a in 0..3 {
+                self.axes[a][l] = k[a] as u32;
+                self.shear[a][l] = shear[a];
             }
         }
-        self.common_axes = (differ == 0).then(|| k0.map(|k| k as usize));
+        self.common_axes = common_axes(&self.axes, used);
     }
 
     /// Whether any lane's segment `[tmin, tmax]` meets the box `[lo, hi]` (`RayBoxTest::hit` per
@@ -187,13 +151,7 @@ impl<const L: usize> SimdRay<L> {
     /// A vertex relative to every lane's origin, in every lane's watertight frame.
     #[inline(always)]
     fn permute(&self, p: [f32; 3]) -> Permuted<L> {
-        let mut rel = [[0.0f32; L]; 3];
-        for a in 0..3 {
-            for l in 0..L {
-                rel[a][l] = p[a] - self.origin[a][l];
-            }
-        }
-        self.in_lane_frames(rel)
+        self.permute_lanes(&p.map(|x| [x; L]))
     }
 
     /// As `permute` for a vertex that differs per lane (`p[axis][lane]`).
@@ -205,28 +163,7 @@ impl<const L: usize> SimdRay<L> {
                 rel[a][l] = p[a][l] - self.origin[a][l];
             }
         }
-        self.in_lane_frames(rel)
-    }
-
-    /// Origin-relative coordinates reordered into each lane's watertight frame `[kx, ky, kz]`.
-    #[inline(always)]
-    fn in_lane_frames(&self, rel: [[f32; L]; 3]) -> Permuted<L> {
-        match self.common_axes {
-            Some([kx, ky, kz]) => [rel[kx], rel[ky], rel[kz]],
-            None => {
-                let mut out = [[0.0f32; L]; 3];
-                for (o, k) in out.iter_mut().zip(&self.axes) {
-                    for l in 0..L {
-                        o[l] = match k[l] {
-                            0 => rel[0][l],
-                            1 => rel[1][l],
-                            _ => rel[2][l],
-                        };
-                    }
-                }
-                out
-            }
-        }
+        in_lane_frames(rel, &self.axes, self.common_axes)
     }
 
     /// The watertight test of every lane against `tri` (scene id `prim`); lanes that hit within
