@@ -90,7 +90,8 @@ fn timed<T: Send>(
     })
 }
 
-fn median_of_sorted(sorted: &[f64]) -> f64 {
+/// The median of an ascending slice (the mean of the middle two for an even length).
+pub(super) fn median_of_sorted(sorted: &[f64]) -> f64 {
     let n = sorted.len();
     if n % 2 == 1 {
         sorted[n / 2]

@@ -19,6 +19,7 @@ use serde::Deserialize;
 
 use crate::error::{Error, Result};
 
+use super::measure::median_of_sorted;
 use super::output::{runs_columns, RUNS_CSV};
 
 /// One runs.csv row: column → cell.
@@ -46,11 +47,7 @@ impl Reduce {
             Reduce::Median => {
                 let mut sorted = values.to_vec();
                 sorted.sort_by(f64::total_cmp);
-                let n = sorted.len();
-                match n % 2 {
-                    1 => sorted[n / 2],
-                    _ => (sorted[n / 2 - 1] + sorted[n / 2]) / 2.0,
-                }
+                median_of_sorted(&sorted)
             }
             Reduce::Min => values.iter().copied().fold(f64::INFINITY, f64::min),
             Reduce::Max => values.iter().copied().fold(f64::NEG_INFINITY, f64::max),
