@@ -12,15 +12,15 @@ use std::path::{Path, PathBuf};
 
 use plotters::prelude::*;
 
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::render::convergence::{write_error_csv, ErrorPoint};
 
 use super::config::{Experiment, RenderWorkload};
 use super::plan::Plan;
-use super::plots::{draw_legend, register_font, scene_stem};
+use super::plots::{
+    draw_legend, plot_error, register_font, scene_stem, significant, PlotResult, FONT,
+};
 use super::runner::{Case, Traced};
-
-const FONT: &str = "sans-serif";
 
 /// Tableau colours, one per tracer in name order.
 const PALETTE: [RGBColor; 6] = [
@@ -140,24 +140,13 @@ fn error_points(
     points
 }
 
-/// `v` to 3 significant digits (positive values: the axes are logarithmic).
-fn significant(v: f64) -> String {
-    let decimals = (2 - v.log10().floor() as i32).max(0) as usize;
-    format!("{v:.decimals$}")
-}
-
 /// Draws RMSE against wall-clock seconds per frame for `points` into `path`.
 pub fn plot_error_vs_time(path: &Path, title: &str, points: &[ErrorPoint]) -> Result<()> {
     register_font()?;
-    draw(path, title, points)
-        .map_err(|e| Error::runtime(format!("cannot draw {}: {e}", path.display())))
+    draw(path, title, points).map_err(|e| plot_error(path, e))
 }
 
-fn draw(
-    path: &Path,
-    title: &str,
-    points: &[ErrorPoint],
-) -> std::result::Result<(), Box<dyn std::error::Error>> {
+fn draw(path: &Path, title: &str, points: &[ErrorPoint]) -> PlotResult {
     let usable: Vec<&ErrorPoint> = points
         .iter()
         .filter(|p| p.seconds > 0.0 && p.rmse > 0.0)
@@ -187,9 +176,8 @@ fn draw(
         .x_desc("seconds per frame (wall clock)")
         .y_desc("RMSE against the reference image")
         .label_style((FONT, 14))
-        // Log axes: 3 significant digits, not the f64 round-off of the tick values.
-        .x_label_formatter(&|x| significant(*x))
-        .y_label_formatter(&|y| significant(*y))
+        .x_label_formatter(&|x| significant(*x, false))
+        .y_label_formatter(&|y| significant(*y, false))
         .draw()?;
     let mut by_tracer: BTreeMap<&str, Vec<&ErrorPoint>> = BTreeMap::new();
     for p in &usable {
@@ -225,15 +213,6 @@ fn draw(
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn axis_labels_have_three_significant_digits() {
-        assert_eq!(significant(0.0100000000001), "0.0100");
-        assert_eq!(significant(0.4), "0.400");
-        assert_eq!(significant(3.0), "3.00");
-        assert_eq!(significant(250.0), "250");
-        assert_eq!(significant(12345.6), "12346");
-    }
 
     #[test]
     fn draws_a_png_and_refuses_an_empty_plot() {

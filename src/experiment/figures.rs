@@ -32,7 +32,7 @@ use serde::Deserialize;
 use crate::error::{Error, Result};
 
 use super::output::{runs_columns, HISTOGRAMS_CSV, HISTOGRAM_COLUMNS, RUNS_CSV};
-use super::plots::{draw_legend, register_font, FONT};
+use super::plots::{draw_legend, plot_error, register_font, significant, PlotResult, FONT};
 use super::selection::{check_field_of, distinct, Filter, Measure, Reduce, Row};
 
 #[derive(Clone, Debug, Deserialize, PartialEq)]
@@ -202,14 +202,10 @@ impl FigureSpec {
         register_font()?;
         let path = dir.join(&self.file);
         self.draw_lines(&path, &self.lines(rows))
-            .map_err(|e| Error::runtime(format!("cannot draw {}: {e}", path.display())))
+            .map_err(|e| plot_error(&path, e))
     }
 
-    fn draw_lines(
-        &self,
-        path: &Path,
-        lines: &[Line],
-    ) -> std::result::Result<(), Box<dyn std::error::Error>> {
+    fn draw_lines(&self, path: &Path, lines: &[Line]) -> PlotResult {
         let axis = |v: f64, log: bool| if log { v.max(1e-12).log10() } else { v };
         let points = || lines.iter().flat_map(|l| l.1.iter());
         let range = |values: Vec<f64>, log: bool| {
@@ -237,16 +233,8 @@ impl FigureSpec {
             .x_label_area_size(45)
             .y_label_area_size(75)
             .build_cartesian_2d(xs, ys)?;
-        // Three significant digits, no trailing zeros.
-        let tick = |v: &f64, log: bool| {
-            let v = if log { 10f64.powf(*v) } else { *v };
-            let digits = (2 - v.abs().max(1e-12).log10().floor() as i32).max(0) as usize;
-            let text = format!("{v:.digits$}");
-            match text.contains('.') {
-                true => text.trim_end_matches('0').trim_end_matches('.').to_string(),
-                false => text,
-            }
-        };
+        // Log axes are drawn in log10 units: label them with the value itself.
+        let tick = |v: &f64, log: bool| significant(if log { 10f64.powf(*v) } else { *v }, true);
         chart
             .configure_mesh()
             .x_desc(self.x_label.clone().unwrap_or(self.x.clone()))

@@ -115,8 +115,21 @@ pub fn write_plots(dir: &Path, plan: &Plan, cases: &[Case]) -> Result<Vec<PathBu
     Ok(written)
 }
 
-fn plot_error(path: &Path, e: Box<dyn std::error::Error>) -> Error {
+/// The error of a plot that could not be drawn.
+pub(super) fn plot_error(path: &Path, e: Box<dyn std::error::Error>) -> Error {
     Error::runtime(format!("cannot draw {}: {e}", path.display()))
+}
+
+/// `v` to 3 significant digits for an axis label (not the f64 round-off of the tick value);
+/// `trim` drops trailing zeros (`0.4` rather than `0.400`). Magnitudes below 1e-12 are treated
+/// as 1e-12, so zero gets a label instead of an overflowing digit count.
+pub(super) fn significant(v: f64, trim: bool) -> String {
+    let decimals = (2 - v.abs().max(1e-12).log10().floor() as i32).max(0) as usize;
+    let text = format!("{v:.decimals$}");
+    match trim && text.contains('.') {
+        true => text.trim_end_matches('0').trim_end_matches('.').to_string(),
+        false => text,
+    }
 }
 
 /// Mrays/s over all frames (total rays / total fastest-pass seconds) of one instance, ray kind
@@ -354,4 +367,22 @@ fn depth_histograms(
     }
     root.present()?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn axis_labels_have_three_significant_digits() {
+        assert_eq!(significant(0.0100000000001, false), "0.0100");
+        assert_eq!(significant(0.4, false), "0.400");
+        assert_eq!(significant(3.0, false), "3.00");
+        assert_eq!(significant(250.0, false), "250");
+        assert_eq!(significant(12345.6, false), "12346");
+        assert_eq!(significant(0.4, true), "0.4");
+        assert_eq!(significant(3.0, true), "3");
+        assert_eq!(significant(250.0, true), "250");
+        assert_eq!(significant(0.012345, true), "0.0123");
+    }
 }
