@@ -34,7 +34,7 @@ use crate::render::specular::{reflect, reflection_ray, refraction_ray, specular_
 use crate::scene::scene_file::Preset;
 use crate::scene::{Frame, Material, Scene};
 use crate::stats::Counters;
-use crate::tracers::batch::{counted_pass, pass};
+use crate::tracers::batch::{counted_pass, trace_hits, trace_occlusion};
 use crate::tracers::Tracer;
 
 /// Default ray-tree attenuation threshold: 1/256, one step of an 8-bit pixel. A subtree whose
@@ -261,26 +261,28 @@ pub(crate) fn trace(
 ) -> (Answers, f64, Counters) {
     let rays = batch.view();
     let start = Instant::now();
-    let mut counters = Counters::default();
-    let answers = if kind == BatchKind::Rays(RayKind::Shadow) {
-        let mut out = vec![false; batch.len()];
-        match tracing {
-            Tracing::Timed => pass(rays, &mut out, &|r, o| tracer.occluded(r, o)),
-            Tracing::Counted => {
-                counters = counted_pass(rays, &mut out, &|r, o, c| tracer.occluded_counted(r, o, c))
-            }
+    let shadow = kind == BatchKind::Rays(RayKind::Shadow);
+    let (answers, counters) = match (shadow, tracing) {
+        (true, Tracing::Timed) => (
+            Answers::Occluded(trace_occlusion(tracer, batch)),
+            Counters::default(),
+        ),
+        (false, Tracing::Timed) => (
+            Answers::Hits(trace_hits(tracer, batch)),
+            Counters::default(),
+        ),
+        (true, Tracing::Counted) => {
+            let mut out = vec![false; batch.len()];
+            let counters =
+                counted_pass(rays, &mut out, &|r, o, c| tracer.occluded_counted(r, o, c));
+            (Answers::Occluded(out), counters)
         }
-        Answers::Occluded(out)
-    } else {
-        let mut out = vec![Hit::MISS; batch.len()];
-        match tracing {
-            Tracing::Timed => pass(rays, &mut out, &|r, h| tracer.intersect(r, h)),
-            Tracing::Counted => {
-                counters =
-                    counted_pass(rays, &mut out, &|r, h, c| tracer.intersect_counted(r, h, c))
-            }
+        (false, Tracing::Counted) => {
+            let mut out = vec![Hit::MISS; batch.len()];
+            let counters =
+                counted_pass(rays, &mut out, &|r, h, c| tracer.intersect_counted(r, h, c));
+            (Answers::Hits(out), counters)
         }
-        Answers::Hits(out)
     };
     (answers, start.elapsed().as_secs_f64(), counters)
 }
