@@ -35,7 +35,6 @@ use crate::render::shading::{specular_response, AMBIENT, BACKGROUND};
 use crate::render::specular::{reflect, reflection_ray};
 use crate::render::whitted::{trace, Answers, BatchRecord, Tracing};
 use crate::scene::{Camera, Frame, Scene};
-use crate::stats::Counters;
 use crate::tracers::Tracer;
 
 /// A wave holds at least this many camera rays (whole tiles), so each traced batch spreads over
@@ -170,24 +169,11 @@ impl Records {
         tracing: Tracing,
     ) -> Answers {
         let kind = BatchKind::Rays(generation.kind);
-        let (answers, seconds, counters) = trace(tracer, &generation.batch, kind, tracing);
-        let record = self
-            .batches
+        let (answers, traced) = trace(tracer, &generation.batch, kind, depth, tracing);
+        self.batches
             .entry((depth, kind))
-            .or_insert_with(|| BatchRecord {
-                kind,
-                depth,
-                rays: 0,
-                hits: 0,
-                seconds: 0.0,
-                counters: Counters::default(),
-            });
-        record.rays += generation.batch.len();
-        record.hits += (0..generation.batch.len())
-            .filter(|&i| answers.blocked(i))
-            .count();
-        record.seconds += seconds;
-        record.counters.merge(&counters);
+            .and_modify(|record| record.add(&traced))
+            .or_insert(traced);
         self.packets[generation.kind as usize] +=
             generation.batch.packet_start.iter().filter(|s| **s).count() as u64;
         answers

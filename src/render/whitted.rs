@@ -113,6 +113,16 @@ pub struct BatchRecord {
     pub counters: Counters,
 }
 
+impl BatchRecord {
+    /// Adds `other`'s rays, hits, time and counters: another wave of the same kind and depth.
+    pub(crate) fn add(&mut self, other: &BatchRecord) {
+        self.rays += other.rays;
+        self.hits += other.hits;
+        self.seconds += other.seconds;
+        self.counters.merge(&other.counters);
+    }
+}
+
 pub struct WhittedFrame {
     pub image: Image,
     /// In tracing order: by depth, then `BatchKind` order.
@@ -146,6 +156,18 @@ impl Answers {
             Answers::Hits(h) => h[i].is_hit(),
             Answers::Occluded(o) => o[i],
         }
+    }
+
+    fn len(&self) -> usize {
+        match self {
+            Answers::Hits(h) => h.len(),
+            Answers::Occluded(o) => o.len(),
+        }
+    }
+
+    /// How many rays met anything (`BatchRecord::hits`).
+    fn blocked_count(&self) -> usize {
+        (0..self.len()).filter(|&i| self.blocked(i)).count()
     }
 }
 
@@ -252,13 +274,15 @@ impl Shader<'_> {
     }
 }
 
-/// Traces `batch` as `kind` asks, timing the pass or counting it.
+/// Traces `batch` (bounce `depth`) as `kind` asks, timing the pass or counting it; returns the
+/// answers and the batch's record.
 pub(crate) fn trace(
     tracer: &dyn Tracer,
     batch: &RayBatch,
     kind: BatchKind,
+    depth: u32,
     tracing: Tracing,
-) -> (Answers, f64, Counters) {
+) -> (Answers, BatchRecord) {
     let rays = batch.view();
     let start = Instant::now();
     let shadow = kind == BatchKind::Rays(RayKind::Shadow);
@@ -284,7 +308,16 @@ pub(crate) fn trace(
             (Answers::Hits(out), counters)
         }
     };
-    (answers, start.elapsed().as_secs_f64(), counters)
+    let seconds = start.elapsed().as_secs_f64();
+    let record = BatchRecord {
+        kind,
+        depth,
+        rays: batch.len(),
+        hits: answers.blocked_count(),
+        seconds,
+        counters,
+    };
+    (answers, record)
 }
 
 /// Renders `frame` of `scene` with `tracer` in the current rayon pool.
@@ -326,16 +359,8 @@ pub fn render_whitted(
         }
         let mut next: BTreeMap<BatchKind, Generation> = BTreeMap::new();
         for (kind, gen) in generation {
-            let (answers, seconds, counters) = trace(tracer, &gen.batch, kind, tracing);
-            let hits = (0..gen.batch.len()).filter(|&i| answers.blocked(i)).count();
-            records.push(BatchRecord {
-                kind,
-                depth,
-                rays: gen.batch.len(),
-                hits,
-                seconds,
-                counters,
-            });
+            let (answers, record) = trace(tracer, &gen.batch, kind, depth, tracing);
+            records.push(record);
             let ranges: Vec<Range<usize>> = gen.batch.view().packets(packet_rays).collect();
             let outputs: Vec<PacketOutput> = ranges
                 .into_par_iter()
