@@ -12,7 +12,7 @@ use raylab::experiment::{run_experiment, RunOverrides};
 use raylab::render::assembly::Assembly;
 use raylab::render::distribution::{render_distribution, DrtSettings, FrameGeometry, DRT_KINDS};
 use raylab::render::image::Image;
-use raylab::render::motion::{tracer_for_motion, MovingMesh};
+use raylab::render::motion::MovingMesh;
 use raylab::render::raycast::render_raycast;
 use raylab::render::whitted::{
     render_whitted, Tracing, WhittedSettings, DEFAULT_PRUNING_THRESHOLD,
@@ -426,16 +426,8 @@ fn render_drt(
         Some(shutter) => Some(MovingMesh::of_scene(scene, frame.time, shutter)?),
         None => None,
     };
-    let (tracer, geometry) = match &moving {
-        Some(m) => (
-            tracer_for_motion(tracer, params, m)?,
-            FrameGeometry::Moving(m),
-        ),
-        None => (
-            verify::tracer_for_frame(tracer, params, frame)?,
-            FrameGeometry::Static(&frame.mesh),
-        ),
-    };
+    let geometry = FrameGeometry::of(frame, moving.as_ref());
+    let tracer = geometry.tracer(tracer, params)?;
     let drt = render_distribution(
         scene,
         frame,

@@ -251,12 +251,10 @@ pub fn run_plan(
                         }) => Some(MovingMesh::of_scene(&scene, frame.time, *shutter)?),
                         _ => None,
                     };
-                    let motion_tracer = match &moving {
-                        Some(m) => {
-                            Some(tracer_for_motion(instance.info.name, &instance.params, m)?)
-                        }
-                        None => None,
-                    };
+                    let motion_tracer = moving
+                        .as_ref()
+                        .map(|m| tracer_for_motion(instance.info.name, &instance.params, m))
+                        .transpose()?;
                     let job = RenderJob {
                         scene: &scene,
                         frame: &frame,
@@ -368,14 +366,10 @@ impl RenderJob<'_> {
                 })
             }
             RenderWorkload::Distribution(w) => {
-                let geometry = match self.moving {
-                    Some(m) => FrameGeometry::Moving(m),
-                    None => FrameGeometry::Static(&self.frame.mesh),
-                };
                 let out = render_distribution(
                     self.scene,
                     self.frame,
-                    geometry,
+                    FrameGeometry::of(self.frame, self.moving),
                     self.tracer,
                     &self.drt_settings(w),
                     tracing,

@@ -16,11 +16,10 @@ use crate::error::{Error, Result};
 use crate::random::mix64;
 use crate::render::distribution::{render_distribution, DrtFrame, DrtSettings, FrameGeometry};
 use crate::render::image::Image;
-use crate::render::motion::{tracer_for_motion, MovingMesh};
+use crate::render::motion::MovingMesh;
 use crate::render::whitted::Tracing;
 use crate::scene::{Frame, Mesh, Scene};
 use crate::tracers::{Params, Tracer};
-use crate::verify::tracer_for_frame;
 
 /// Samples per pixel of the reference image.
 pub const REFERENCE_SPP: u32 = 1024;
@@ -41,14 +40,6 @@ pub struct ErrorPoint {
     pub trace_seconds: f64,
     pub rays: u64,
     pub rmse: f64,
-}
-
-/// The geometry of a frame for the cache key and for rendering: static, or moving.
-fn geometry<'a>(frame: &'a Frame, motion: Option<&'a MovingMesh>) -> FrameGeometry<'a> {
-    match motion {
-        Some(moving) => FrameGeometry::Moving(moving),
-        None => FrameGeometry::Static(&frame.mesh),
-    }
 }
 
 /// Hash of everything the reference image of this frame depends on.
@@ -134,10 +125,8 @@ pub fn reference_image(
     if let Some(image) = read_cached(&path, key, settings)? {
         return Ok((image, true));
     }
-    let tracer = match motion {
-        Some(moving) => tracer_for_motion("reference", &Params::new(), moving)?,
-        None => tracer_for_frame("reference", &Params::new(), frame)?,
-    };
+    let geometry = FrameGeometry::of(frame, motion);
+    let tracer = geometry.tracer("reference", &Params::new())?;
     let reference = DrtSettings {
         spp: REFERENCE_SPP,
         ..*settings
@@ -145,7 +134,7 @@ pub fn reference_image(
     let image = render_distribution(
         scene,
         frame,
-        geometry(frame, motion),
+        geometry,
         tracer.as_ref(),
         &reference,
         Tracing::Timed,
@@ -226,7 +215,7 @@ pub fn error_against_time(
             let rendered = render_distribution(
                 scene,
                 frame,
-                geometry(frame, motion),
+                FrameGeometry::of(frame, motion),
                 tracer,
                 &run,
                 Tracing::Timed,

@@ -29,13 +29,14 @@ use crate::render::assembly::BatchKind;
 use crate::render::glossy::sample_phong_lobe;
 use crate::render::image::Image;
 use crate::render::interleaved::{SampleTable, DIMENSION_PAIRS};
-use crate::render::motion::MovingMesh;
+use crate::render::motion::{tracer_for_motion, MovingMesh};
 use crate::render::rays::{morton_decode, shadow_ray, CameraProjection, SurfacePoint, TILE};
 use crate::render::shading::{specular_response, AMBIENT, BACKGROUND};
 use crate::render::specular::{reflect, reflection_ray};
 use crate::render::whitted::{trace, Answers, BatchRecord, Tracing};
 use crate::scene::{Camera, Frame, Scene};
-use crate::tracers::Tracer;
+use crate::tracers::{Params, Tracer};
+use crate::verify::tracer_for_mesh;
 
 /// A wave holds at least this many camera rays (whole tiles), so each traced batch spreads over
 /// many `tracers::batch` chunks and every core has work even at 1 sample per pixel.
@@ -188,7 +189,24 @@ pub enum FrameGeometry<'a> {
     Moving(&'a MovingMesh),
 }
 
-impl FrameGeometry<'_> {
+impl<'a> FrameGeometry<'a> {
+    /// The frame's own mesh, or `moving` when the frame is rendered with motion blur.
+    pub fn of(frame: &'a Frame, moving: Option<&'a MovingMesh>) -> Self {
+        match moving {
+            Some(moving) => FrameGeometry::Moving(moving),
+            None => FrameGeometry::Static(&frame.mesh),
+        }
+    }
+
+    /// Builds tracer `name` with `params` over this geometry (its own structure, built here;
+    /// over both ends of the shutter when moving).
+    pub fn tracer(&self, name: &str, params: &Params) -> Result<Box<dyn Tracer>> {
+        match self {
+            FrameGeometry::Static(mesh) => tracer_for_mesh(name, params, mesh),
+            FrameGeometry::Moving(moving) => tracer_for_motion(name, params, moving),
+        }
+    }
+
     /// The triangle `prim` as a ray at `time` sees it, and its material.
     fn triangle(&self, prim: u32, time: f32) -> (Triangle, u32) {
         match self {

@@ -14,7 +14,7 @@ use crate::error::Result;
 use crate::geometry::{RayBatch, RayKind};
 use crate::render::rays::{diffuse_rays, primary_rays, shadow_rays};
 use crate::render::specular::specular_rays;
-use crate::scene::{Frame, Scene};
+use crate::scene::{Frame, Mesh, Scene};
 use crate::tracers::batch::{trace_hits, trace_occlusion};
 use crate::tracers::{build_tracer, Params, Tracer, TracerInfo};
 
@@ -30,10 +30,15 @@ pub fn oracle_params() -> Params {
 
 /// Builds `name` with `params` over `frame`'s geometry (its own structure, built here).
 pub fn tracer_for_frame(name: &str, params: &Params, frame: &Frame) -> Result<Box<dyn Tracer>> {
+    tracer_for_mesh(name, params, &frame.mesh)
+}
+
+/// Builds `name` with `params` over `mesh` (its own structure, built here).
+pub fn tracer_for_mesh(name: &str, params: &Params, mesh: &Mesh) -> Result<Box<dyn Tracer>> {
     let info = TracerInfo::find(name)?;
     let accel = info
         .accel
-        .build(&frame.mesh, &params.subset(info.accel.params()))?;
+        .build(mesh, &params.subset(info.accel.params()))?;
     build_tracer(info, params, &accel)
 }
 
