@@ -15,10 +15,9 @@ use raylab::render::image::Image;
 use raylab::render::motion::MovingMesh;
 use raylab::render::raycast::render_raycast;
 use raylab::render::whitted::{
-    render_whitted, Tracing, WhittedSettings, DEFAULT_PRUNING_THRESHOLD,
+    parse_materials, render_whitted, Tracing, WhittedSettings, DEFAULT_PRUNING_THRESHOLD,
 };
 use raylab::scene::library::{list_scenes, load_scene};
-use raylab::scene::scene_file::Preset;
 use raylab::scene::{Frame, Scene};
 use raylab::tracers::Params;
 use raylab::verify::{self, format_table, Tolerance};
@@ -188,15 +187,6 @@ fn parse_assembly(s: &str) -> std::result::Result<Assembly, String> {
         .ok_or_else(|| format!("unknown assembly {s:?} (known: {})", Assembly::names()))
 }
 
-fn parse_materials(s: &str) -> std::result::Result<Option<Preset>, String> {
-    match s {
-        "scene" => Ok(None),
-        _ => Preset::parse(s).map(Some).ok_or_else(|| {
-            format!("unknown materials {s:?} (scene, diffuse, mirror, glossy, glass)")
-        }),
-    }
-}
-
 fn parse_param(s: &str) -> std::result::Result<(String, String), String> {
     s.split_once('=')
         .map(|(k, v)| (k.trim().to_string(), v.trim().to_string()))
@@ -266,7 +256,7 @@ fn execute(command: Command) -> Result<bool> {
                 }
                 Renderer::Whitted => {
                     let tracer = verify::tracer_for_frame(&tracer, &params, &frame)?;
-                    let depth = max_depth.unwrap_or(5);
+                    let depth = max_depth.unwrap_or(WhittedSettings::default().max_depth);
                     render_whitted_cli(
                         &scene,
                         &frame,
@@ -284,7 +274,7 @@ fn execute(command: Command) -> Result<bool> {
                         spp: drt.spp,
                         aperture: drt.aperture,
                         focus_distance: drt.focus,
-                        max_depth: max_depth.unwrap_or(2),
+                        max_depth: max_depth.unwrap_or(DrtSettings::default().max_depth),
                         ..DrtSettings::default()
                     };
                     render_drt(&scene, &frame, (&tracer, &params), &settings, drt.shutter)?
@@ -369,15 +359,6 @@ fn render_whitted_cli(
     max_depth: u32,
     args: &WhittedArgs,
 ) -> Result<Image> {
-    if args.packet == 0 {
-        return Err(Error::usage("--packet must be at least 1"));
-    }
-    if args
-        .pruning_threshold
-        .is_some_and(|t| !(t > 0.0 && t.is_finite()))
-    {
-        return Err(Error::usage("--pruning-threshold must be > 0"));
-    }
     let settings = WhittedSettings {
         max_depth,
         max_reflection_depth: args.max_reflection_depth,
@@ -389,8 +370,9 @@ fn render_whitted_cli(
         },
         assembly: args.assembly,
         packet: args.packet,
-        materials: parse_materials(&args.materials).map_err(Error::usage)?,
+        materials: parse_materials(&args.materials)?,
     };
+    settings.check()?;
     let out = render_whitted(
         scene,
         frame,

@@ -81,8 +81,7 @@ use crate::geometry::RayKind;
 use crate::render::assembly::Assembly;
 use crate::render::distribution::DrtSettings;
 use crate::render::interleaved::SampleTable;
-use crate::render::whitted::{WhittedSettings, DEFAULT_PRUNING_THRESHOLD};
-use crate::scene::scene_file::Preset;
+use crate::render::whitted::{parse_materials, WhittedSettings, DEFAULT_PRUNING_THRESHOLD};
 use crate::tracers::{Params, TracerInfo};
 
 use super::figures::FigureSpec;
@@ -252,7 +251,7 @@ fn whitted_settings(params: &Params) -> std::result::Result<WhittedSettings, Str
                     "true" => Some(DEFAULT_PRUNING_THRESHOLD),
                     "false" => None,
                     v => match v.parse::<f32>() {
-                        Ok(t) if t > 0.0 && t.is_finite() => Some(t),
+                        Ok(t) => Some(t),
                         _ => return Err(format!("{} (true, false or a threshold > 0)", bad())),
                     },
                 }
@@ -261,17 +260,13 @@ fn whitted_settings(params: &Params) -> std::result::Result<WhittedSettings, Str
                 s.assembly = Assembly::parse(value)
                     .ok_or_else(|| format!("{} (known: {})", bad(), Assembly::names()))?
             }
-            "packet" => match value.parse::<usize>() {
-                Ok(n) if n > 0 => s.packet = n,
-                _ => return Err(format!("{} (a packet side ≥ 1)", bad())),
-            },
+            "packet" => {
+                s.packet = value
+                    .parse()
+                    .map_err(|_| format!("{} (a packet side ≥ 1)", bad()))?
+            }
             "materials" => {
-                s.materials = match value.as_str() {
-                    "scene" => None,
-                    v => Some(Preset::parse(v).ok_or_else(|| {
-                        format!("{} (scene, diffuse, mirror, glossy or glass)", bad())
-                    })?),
-                }
+                s.materials = parse_materials(value).map_err(|e| format!("render: {e}"))?
             }
             _ => {
                 return Err(format!(
@@ -281,6 +276,7 @@ fn whitted_settings(params: &Params) -> std::result::Result<WhittedSettings, Str
             }
         }
     }
+    s.check().map_err(|e| format!("render: {e}"))?;
     Ok(s)
 }
 
@@ -764,6 +760,7 @@ fn cartesian(axes: &BTreeMap<String, Vec<String>>) -> Vec<Params> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::scene::scene_file::Preset;
 
     fn parse(text: &str) -> Result<Experiment> {
         Experiment::parse(Path::new("exp.toml"), text)

@@ -25,6 +25,7 @@ use std::time::Instant;
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
+use crate::error::{Error, Result};
 use crate::geometry::{Hit, Ray, RayBatch, RayKind};
 use crate::render::assembly::{assemble, Assembly, BatchKind, Candidate};
 use crate::render::image::Image;
@@ -73,6 +74,36 @@ impl WhittedSettings {
     /// Deepest refraction generation in effect.
     pub fn refraction_depth(&self) -> u32 {
         self.max_refraction_depth.unwrap_or(self.max_depth)
+    }
+
+    /// A usage error naming the offending value unless the packet side is ≥ 1 and the pruning
+    /// threshold (when set) is a finite number > 0. The command line and experiment files both
+    /// check through here.
+    pub fn check(&self) -> Result<()> {
+        if self.packet == 0 {
+            return Err(Error::usage("packet side 0: must be at least 1"));
+        }
+        match self.pruning {
+            Some(t) if !(t > 0.0 && t.is_finite()) => Err(Error::usage(format!(
+                "pruning threshold {t}: must be a finite number > 0"
+            ))),
+            _ => Ok(()),
+        }
+    }
+}
+
+/// A `materials` setting: `scene` (the materials as loaded) or a preset name applied to every
+/// material.
+pub fn parse_materials(name: &str) -> Result<Option<Preset>> {
+    match name {
+        "scene" => Ok(None),
+        _ => Preset::parse(name).map(Some).ok_or_else(|| {
+            let presets: Vec<&str> = Preset::ALL.iter().map(|p| p.name()).collect();
+            Error::usage(format!(
+                "unknown materials {name:?} (known: scene, {})",
+                presets.join(", ")
+            ))
+        }),
     }
 }
 
