@@ -93,100 +93,130 @@ pub struct Candidate {
     pub light: u32,
 }
 
-/// One outgoing packet: the candidates (indices into the candidate list) it holds, in order.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct OutPacket {
-    pub batch: BatchKind,
-    pub members: Vec<usize>,
+/// The outgoing packets of one incoming packet, in buffers the caller keeps from packet to packet
+/// (no allocation per packet, or per ray with `none`): every packet's members (indices into the
+/// candidate list) one packet after another, and where each packet ends.
+#[derive(Clone, Debug, Default)]
+pub struct OutPackets {
+    members: Vec<usize>,
+    /// Per packet: the batch it joins and the end of its members.
+    packets: Vec<(BatchKind, usize)>,
+    /// Scratch: group keys in order of first appearance.
+    keys: Vec<u32>,
 }
 
-/// The outgoing packets of one incoming packet's `candidates`: per kind in `SECONDARY_KINDS`
-/// order (blind: one packet), each packet's members in candidate order.
-pub fn assemble(method: Assembly, candidates: &[Candidate]) -> Vec<OutPacket> {
+impl OutPackets {
+    /// The packets in order: the batch each joins and its members in candidate order.
+    pub fn iter(&self) -> impl Iterator<Item = (BatchKind, &[usize])> + '_ {
+        let starts = std::iter::once(0).chain(self.packets.iter().map(|&(_, end)| end));
+        self.packets
+            .iter()
+            .zip(starts)
+            .map(|(&(batch, end), start)| (batch, &self.members[start..end]))
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.packets.is_empty()
+    }
+
+    /// The members pushed since the last packet ended.
+    fn open(&self) -> &[usize] {
+        let start = self.packets.last().map_or(0, |&(_, end)| end);
+        &self.members[start..]
+    }
+
+    /// Ends the open packet as one of `batch`, unless it is empty.
+    fn close(&mut self, batch: BatchKind) {
+        if !self.open().is_empty() {
+            self.packets.push((batch, self.members.len()));
+        }
+    }
+}
+
+/// The outgoing packets of one incoming packet's `candidates` into `out` (replacing what it held):
+/// per kind in `SECONDARY_KINDS` order (blind: one packet), each packet's members in candidate
+/// order.
+pub fn assemble(method: Assembly, candidates: &[Candidate], out: &mut OutPackets) {
+    out.members.clear();
+    out.packets.clear();
     let of_kind = |kind: RayKind| {
         candidates
             .iter()
             .enumerate()
             .filter(move |(_, c)| c.kind == kind)
     };
-    let mut packets = Vec::new();
     match method {
         Assembly::None => {
             for kind in SECONDARY_KINDS {
-                packets.extend(of_kind(kind).map(|(i, _)| OutPacket {
-                    batch: BatchKind::Rays(kind),
-                    members: vec![i],
-                }));
+                for (i, _) in of_kind(kind) {
+                    out.members.push(i);
+                    out.close(BatchKind::Rays(kind));
+                }
             }
         }
         Assembly::Blind => {
-            if !candidates.is_empty() {
-                packets.push(OutPacket {
-                    batch: BatchKind::Blind,
-                    members: (0..candidates.len()).collect(),
-                });
-            }
+            out.members.extend(0..candidates.len());
+            out.close(BatchKind::Blind);
         }
         Assembly::RayTypes => {
             // Shadow rays toward each light are a type of their own: Boulos's Fig. 3 has one
             // light; with several, one packet mixing them has no common end point (no §4.2
             // frustum) and spreads over every light's direction.
             for kind in SECONDARY_KINDS {
-                packets.extend(grouped(kind, of_kind(kind), |c| c.light));
+                grouped(out, kind, candidates, |c| c.light);
             }
         }
         Assembly::Runs => {
             for kind in SECONDARY_KINDS {
-                let mut run: Vec<usize> = Vec::new();
                 for (i, c) in of_kind(kind) {
-                    let continues = run.last().is_some_and(|&last| {
+                    let continues = out.open().last().is_some_and(|&last| {
                         let prev = &candidates[last];
                         prev.material == c.material && c.parent - prev.parent <= 1
                     });
-                    if !continues && !run.is_empty() {
-                        packets.push(OutPacket {
-                            batch: BatchKind::Rays(kind),
-                            members: std::mem::take(&mut run),
-                        });
+                    if !continues {
+                        out.close(BatchKind::Rays(kind));
                     }
-                    run.push(i);
+                    out.members.push(i);
                 }
-                if !run.is_empty() {
-                    packets.push(OutPacket {
-                        batch: BatchKind::Rays(kind),
-                        members: run,
-                    });
-                }
+                out.close(BatchKind::Rays(kind));
             }
         }
         Assembly::Groups => {
             for kind in SECONDARY_KINDS {
-                packets.extend(grouped(kind, of_kind(kind), |c| c.material));
+                grouped(out, kind, candidates, |c| c.material);
             }
         }
     }
-    packets
 }
 
-/// One packet of `kind` per distinct `key` among `candidates`, in order of first appearance,
-/// each with its members in candidate order.
-fn grouped<'a>(
+/// One packet of `kind` per distinct `key` among the `candidates` of that kind, in order of first
+/// appearance, each with its members in candidate order.
+fn grouped(
+    out: &mut OutPackets,
     kind: RayKind,
-    candidates: impl Iterator<Item = (usize, &'a Candidate)>,
+    candidates: &[Candidate],
     key: impl Fn(&Candidate) -> u32,
-) -> impl Iterator<Item = OutPacket> {
-    let mut groups: Vec<(u32, Vec<usize>)> = Vec::new();
-    for (i, c) in candidates {
-        let k = key(c);
-        match groups.iter_mut().find(|(g, _)| *g == k) {
-            Some((_, members)) => members.push(i),
-            None => groups.push((k, vec![i])),
+) {
+    let of_kind = || {
+        candidates
+            .iter()
+            .enumerate()
+            .filter(|(_, c)| c.kind == kind)
+    };
+    // One pass per key over the candidates (a handful of materials or lights) rather than a
+    // member list per group.
+    out.keys.clear();
+    for (_, c) in of_kind() {
+        if !out.keys.contains(&key(c)) {
+            out.keys.push(key(c));
         }
     }
-    groups.into_iter().map(move |(_, members)| OutPacket {
-        batch: BatchKind::Rays(kind),
-        members,
-    })
+    for g in 0..out.keys.len() {
+        let k = out.keys[g];
+        out.members
+            .extend(of_kind().filter(|(_, c)| key(c) == k).map(|(i, _)| i));
+        out.close(BatchKind::Rays(kind));
+    }
 }
 
 #[cfg(test)]
@@ -230,11 +260,12 @@ mod tests {
     /// The packets as (kind, paper ray numbers).
     fn packets(method: Assembly) -> Vec<(&'static str, Vec<usize>)> {
         let candidates = figure_3();
-        assemble(method, &candidates)
-            .into_iter()
-            .map(|p| {
-                let rays = p.members.iter().map(|&i| candidates[i].parent + 1);
-                (p.batch.name(), rays.collect())
+        let mut out = OutPackets::default();
+        assemble(method, &candidates, &mut out);
+        out.iter()
+            .map(|(batch, members)| {
+                let rays = members.iter().map(|&i| candidates[i].parent + 1);
+                (batch.name(), rays.collect())
             })
             .collect()
     }
@@ -292,7 +323,11 @@ mod tests {
         assert_eq!(blind.len(), 1);
         assert_eq!(blind[0].0, "blind");
         assert_eq!(blind[0].1.len(), 24);
-        assert!(assemble(Assembly::Blind, &[]).is_empty());
+        // A reused buffer holds only the latest packets.
+        let mut out = OutPackets::default();
+        assemble(Assembly::None, &figure_3(), &mut out);
+        assemble(Assembly::Blind, &[], &mut out);
+        assert!(out.is_empty());
     }
 
     #[test]
@@ -306,8 +341,9 @@ mod tests {
         };
         let candidates = [c(0, 0), c(0, 1), c(1, 0), c(1, 1), c(3, 0), c(3, 1)];
         let members = |method| -> Vec<Vec<usize>> {
-            let out = assemble(method, &candidates);
-            out.into_iter().map(|p| p.members).collect()
+            let mut out = OutPackets::default();
+            assemble(method, &candidates, &mut out);
+            out.iter().map(|(_, members)| members.to_vec()).collect()
         };
         assert_eq!(members(Assembly::Runs), vec![vec![0, 1, 2, 3], vec![4, 5]]);
         // Ray types: one shadow packet per light.

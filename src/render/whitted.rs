@@ -27,7 +27,7 @@ use rayon::prelude::*;
 
 use crate::error::{Error, Result};
 use crate::geometry::{Hit, Ray, RayBatch, RayKind};
-use crate::render::assembly::{assemble, Assembly, BatchKind, Candidate};
+use crate::render::assembly::{assemble, Assembly, BatchKind, Candidate, OutPackets};
 use crate::render::image::Image;
 use crate::render::rays::{primary_rays, shadow_ray};
 use crate::render::shading::{light_as_point, point_irradiance, AMBIENT, BACKGROUND};
@@ -209,7 +209,18 @@ type Child = (Ray, u32, Role);
 #[derive(Default)]
 struct PacketOutput {
     radiance: Vec<(u32, Vec3)>,
-    packets: Vec<(BatchKind, Vec<Child>)>,
+    /// The outgoing packets' rays, one packet after another (one vector, not one per packet).
+    rays: Vec<Child>,
+    /// Per outgoing packet: the batch it joins and the end of its rays.
+    packets: Vec<(BatchKind, usize)>,
+}
+
+/// One worker's buffers, reused from incoming packet to incoming packet.
+#[derive(Default)]
+struct Scratch {
+    candidates: Vec<Candidate>,
+    children: Vec<Child>,
+    assembled: OutPackets,
 }
 
 /// Scene data every shading call reads.
@@ -229,10 +240,16 @@ impl Shader<'_> {
         answers: &Answers,
         range: Range<usize>,
         depth: u32,
+        scratch: &mut Scratch,
     ) -> PacketOutput {
         let mut out = PacketOutput::default();
-        let mut candidates = Vec::new();
-        let mut children: Vec<Child> = Vec::new();
+        let Scratch {
+            candidates,
+            children,
+            assembled,
+        } = scratch;
+        candidates.clear();
+        children.clear();
         let mesh = &*self.frame.mesh;
         let s = self.settings;
         let keep = |w: f32| w > 0.0 && s.pruning.is_none_or(|t| w >= t);
@@ -297,10 +314,12 @@ impl Shader<'_> {
                 }
             }
         }
-        out.packets = assemble(s.assembly, &candidates)
-            .into_iter()
-            .map(|p| (p.batch, p.members.iter().map(|&c| children[c]).collect()))
-            .collect();
+        assemble(s.assembly, candidates, assembled);
+        out.rays.reserve_exact(children.len());
+        for (batch, members) in assembled.iter() {
+            out.rays.extend(members.iter().map(|&c| children[c]));
+            out.packets.push((batch, out.rays.len()));
+        }
         out
     }
 }
@@ -395,13 +414,16 @@ pub fn render_whitted(
             let ranges: Vec<Range<usize>> = gen.batch.view().packets(packet_rays).collect();
             let outputs: Vec<PacketOutput> = ranges
                 .into_par_iter()
-                .map(|range| shader.packet(&gen, &answers, range, depth))
+                .map_init(Scratch::default, |scratch, range| {
+                    shader.packet(&gen, &answers, range, depth, scratch)
+                })
                 .collect();
             for output in outputs {
                 for (pixel, c) in output.radiance {
                     radiance[pixel as usize] += c.as_dvec3();
                 }
-                for (kind, rays) in output.packets {
+                let mut start = 0;
+                for (kind, end) in output.packets {
                     let target = next.entry(kind).or_insert_with(|| Generation {
                         batch: RayBatch::new(match kind {
                             BatchKind::Rays(k) => k,
@@ -410,13 +432,14 @@ pub fn render_whitted(
                         }),
                         roles: Vec::new(),
                     });
-                    for (j, (ray, pixel, role)) in rays.into_iter().enumerate() {
+                    for (j, &(ray, pixel, role)) in output.rays[start..end].iter().enumerate() {
                         match j {
                             0 => target.batch.push_packet_start(ray, pixel),
                             _ => target.batch.push(ray, pixel),
                         }
                         target.roles.push(role);
                     }
+                    start = end;
                 }
             }
         }
