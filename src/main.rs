@@ -14,8 +14,9 @@ use raylab::render::distribution::{render_distribution, DrtSettings, FrameGeomet
 use raylab::render::image::Image;
 use raylab::render::motion::MovingMesh;
 use raylab::render::raycast::render_raycast;
+use raylab::render::wavefront::Tracing;
 use raylab::render::whitted::{
-    parse_materials, render_whitted, Tracing, WhittedSettings, DEFAULT_PRUNING_THRESHOLD,
+    parse_materials, render_whitted, WhittedSettings, DEFAULT_PRUNING_THRESHOLD,
 };
 use raylab::scene::library::{list_scenes, load_scene};
 use raylab::scene::{Frame, Scene};

@@ -13,7 +13,8 @@
 
 use raylab::render::assembly::Assembly;
 use raylab::render::image::Image;
-use raylab::render::whitted::{render_whitted, Tracing, WhittedSettings};
+use raylab::render::wavefront::Tracing;
+use raylab::render::whitted::{render_whitted, WhittedSettings};
 use raylab::scene::library::load_scene;
 use raylab::scene::Scene;
 use raylab::tracers::Params;

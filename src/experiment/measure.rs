@@ -1,15 +1,14 @@
-//! Timing and counting one tracer on one batch. A pass splits the batch into contiguous chunks
-//! spread over a rayon pool; timed passes run the counter-free kernel, one extra pass runs the
-//! counting kernel and merges the per-chunk counters.
+//! Timing and counting one tracer on one wavefront (`render::wavefront::answer`: a batch or a
+//! light-visibility query, split into chunks over a rayon pool); timed passes run the
+//! counter-free kernel, one extra pass runs the counting kernel and merges the per-chunk counters.
 
 use std::hint::black_box;
 use std::time::Instant;
 
 use rayon::ThreadPool;
 
-use crate::geometry::{Hit, RayBatch};
+use crate::render::wavefront::{answer, Answers, Work};
 use crate::stats::Counters;
-use crate::tracers::batch::{counted_pass, pass};
 use crate::tracers::Tracer;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -36,22 +35,26 @@ pub struct Counted {
 pub fn time_passes(
     pool: &ThreadPool,
     tracer: &dyn Tracer,
-    batch: &RayBatch,
+    work: Work<'_>,
     warmup: usize,
     repeats: usize,
 ) -> Timing {
-    let rays = batch.view();
-    let seconds = if batch.kind().is_occlusion() {
-        let mut out = vec![false; batch.len()];
-        timed(pool, &mut out, warmup, repeats, &|out| {
-            pass(rays, out, &|r, o| tracer.occluded(r, o))
-        })
-    } else {
-        let mut out = vec![Hit::MISS; batch.len()];
-        timed(pool, &mut out, warmup, repeats, &|out| {
-            pass(rays, out, &|r, h| tracer.intersect(r, h))
-        })
-    };
+    let mut answers = Answers::blank(&work);
+    let seconds = pool.install(|| {
+        for _ in 0..warmup {
+            answer(tracer, work, &mut answers, None);
+            black_box(&mut answers);
+        }
+        (0..repeats)
+            .map(|_| {
+                let start = Instant::now();
+                answer(tracer, work, &mut answers, None);
+                let elapsed = start.elapsed().as_secs_f64();
+                black_box(&mut answers);
+                elapsed
+            })
+            .collect()
+    });
     timing_of(pool.current_num_threads(), seconds)
 }
 
@@ -65,31 +68,6 @@ pub fn timing_of(threads: usize, mut seconds: Vec<f64>) -> Timing {
     }
 }
 
-/// Seconds of each timed pass.
-fn timed<T: Send>(
-    pool: &ThreadPool,
-    out: &mut [T],
-    warmup: usize,
-    repeats: usize,
-    run: &(dyn Fn(&mut [T]) + Sync),
-) -> Vec<f64> {
-    pool.install(|| {
-        for _ in 0..warmup {
-            run(out);
-            black_box(&mut *out);
-        }
-        (0..repeats)
-            .map(|_| {
-                let start = Instant::now();
-                run(out);
-                let elapsed = start.elapsed().as_secs_f64();
-                black_box(&mut *out);
-                elapsed
-            })
-            .collect()
-    })
-}
-
 /// The median of an ascending slice (the mean of the middle two for an even length).
 pub(super) fn median_of_sorted(sorted: &[f64]) -> f64 {
     let n = sorted.len();
@@ -101,25 +79,14 @@ pub(super) fn median_of_sorted(sorted: &[f64]) -> f64 {
 }
 
 /// One pass with the counting kernel, in `pool`.
-pub fn count_pass(pool: &ThreadPool, tracer: &dyn Tracer, batch: &RayBatch) -> Counted {
-    let rays = batch.view();
+pub fn count_pass(pool: &ThreadPool, tracer: &dyn Tracer, work: Work<'_>) -> Counted {
     let start = Instant::now();
-    let (counters, hits) = pool.install(|| {
-        if batch.kind().is_occlusion() {
-            let mut out = vec![false; batch.len()];
-            let counters =
-                counted_pass(rays, &mut out, &|r, o, c| tracer.occluded_counted(r, o, c));
-            (counters, out.iter().filter(|&&o| o).count())
-        } else {
-            let mut out = vec![Hit::MISS; batch.len()];
-            let counters =
-                counted_pass(rays, &mut out, &|r, h, c| tracer.intersect_counted(r, h, c));
-            (counters, out.iter().filter(|h| h.is_hit()).count())
-        }
-    });
+    let mut answers = Answers::blank(&work);
+    let mut counters = Counters::default();
+    pool.install(|| answer(tracer, work, &mut answers, Some(&mut counters)));
     Counted {
         counters,
-        hits,
+        hits: answers.blocked_count(&work),
         seconds: start.elapsed().as_secs_f64(),
         threads: pool.current_num_threads(),
     }
@@ -133,7 +100,7 @@ mod tests {
 
     use super::*;
     use crate::accel::{Bvh, BvhConfig};
-    use crate::geometry::{Ray, RayKind, Triangle};
+    use crate::geometry::{Ray, RayBatch, RayKind, Triangle};
     use crate::tracers::reference::ReferenceTracer;
 
     #[test]
@@ -168,7 +135,7 @@ mod tests {
             .num_threads(2)
             .build()
             .unwrap();
-        let counted = count_pass(&pool, &tracer, &batch);
+        let counted = count_pass(&pool, &tracer, Work::of_batch(&batch));
         assert_eq!(counted.hits, 5_000);
         assert_eq!(counted.counters.rays, 10_000);
         assert_eq!(counted.counters.aabb_tests, 10_000);
@@ -176,10 +143,10 @@ mod tests {
         assert_eq!(counted.counters.triangle_tests, 5_000);
 
         batch.kind = Some(RayKind::Shadow);
-        let counted = count_pass(&pool, &tracer, &batch);
+        let counted = count_pass(&pool, &tracer, Work::of_batch(&batch));
         assert_eq!(counted.hits, 5_000);
 
-        let timing = time_passes(&pool, &tracer, &batch, 1, 3);
+        let timing = time_passes(&pool, &tracer, Work::of_batch(&batch), 1, 3);
         assert_eq!(timing.threads, 2);
         assert!(timing.seconds_min > 0.0 && timing.seconds_min <= timing.seconds_median);
     }

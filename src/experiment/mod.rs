@@ -209,6 +209,32 @@ mod tests {
     }
 
     #[test]
+    fn soft_shadows_are_one_ray_per_light_sample() {
+        let out = scratch("soft");
+        let text = "name = \"t\"\nscenes = [\"soft\", \"lit\"]\ntracers = [\"reference\"]\n\
+            rays = [\"primary\", \"soft_shadow\"]\nsoft_shadow = { samples = 4 }\n\
+            resolution = { width = 32, height = 32 }\nwarmup = 0\nrepeats = 1\n";
+        let dir = run_text(text, &out, &plan::tests::load_quads);
+        let (_, runs) = read_csv(&dir.join(output::RUNS_CSV));
+        // The point-lit scene has no soft shadows; the quad-lit one has 4 unblocked rays per
+        // primary hit, all in front of the quad.
+        let soft: Vec<_> = runs
+            .iter()
+            .filter(|r| r["ray_kind"] == "soft_shadow")
+            .collect();
+        assert_eq!(soft.len(), 1, "{runs:?}");
+        let r = soft[0];
+        assert_eq!(r["scene"], "soft");
+        let hits = expected_primary_hits("soft", 0);
+        assert_eq!(
+            (r["rays"].as_str(), r["hits"].as_str()),
+            (&*(4 * hits).to_string(), "0")
+        );
+        assert_eq!(r["counted_rays"], r["rays"]);
+        assert_eq!(r["bounce_depth"], "1");
+    }
+
+    #[test]
     fn end_to_end_on_hand_made_scenes() {
         let out = scratch("e2e");
         let exp = experiment(&out);

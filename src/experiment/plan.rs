@@ -225,6 +225,9 @@ fn plan_scene(exp: &Experiment, spec: &SceneSpec, scene: &Scene) -> ScenePlan {
     for &kind in &exp.ray_kinds {
         let missing = match kind {
             RayKind::Shadow if scene.lights.is_empty() => Some("the scene has no lights"),
+            RayKind::SoftShadow if scene.quad_light().is_none() => {
+                Some("the scene has no quad light")
+            }
             RayKind::Reflection if !reflects => Some("no material reflects"),
             RayKind::Refraction if !refracts => Some("no material refracts"),
             _ => None,
@@ -435,6 +438,16 @@ pub(crate) mod tests {
             "lit" => Ok(quad_scene("lit", true, false)),
             "dark" => Ok(quad_scene("dark", false, false)),
             "moving" => Ok(quad_scene("moving", true, true)),
+            // A 0.5 × 0.5 quad light 3 units in front of the quad.
+            "soft" => Ok(Scene {
+                lights: vec![Light::Quad {
+                    corner: Vec3::new(-0.25, -0.25, 3.0),
+                    edge_u: Vec3::new(0.5, 0.0, 0.0),
+                    edge_v: Vec3::new(0.0, 0.5, 0.0),
+                    emission: Vec3::ONE,
+                }],
+                ..quad_scene("soft", true, false)
+            }),
             "glass" => {
                 let mut scene = quad_scene("glass", true, false);
                 scene.materials[0].dielectric = Some((1.5, 1.0));

@@ -63,6 +63,7 @@ fn kind_colour(kind: RayKind) -> RGBColor {
         RayKind::Diffuse => RGBColor(44, 160, 44),
         RayKind::Reflection => RGBColor(214, 39, 40),
         RayKind::Refraction => RGBColor(148, 103, 189),
+        RayKind::SoftShadow => RGBColor(140, 86, 75),
     }
 }
 

@@ -1,10 +1,11 @@
 //! Executes a plan: per scene and frame, build the structures the plan lists (timed), generate the
-//! ray batches once (primary, then shadow, diffuse, reflection and refraction rays from the
-//! reference tracer's primary hits), and measure every tracer instance on every ray kind at every
-//! thread count. Every tracer gets the very same batch. Then each instance renders the frame with
-//! every render workload (Whitted or distribution), timed like the batches, and once more
-//! counting; a distribution frame's image is also compared with its cached high-sample reference
-//! (`render::convergence`) by RMSE.
+//! workloads once (primary rays, then shadow, diffuse, reflection and refraction rays and the
+//! soft-shadow light-visibility query from the reference tracer's primary hits), and measure
+//! every tracer instance on every workload at every thread count (`Measure::batch`). Every
+//! tracer gets the very same rays. Then each instance renders the frame with every render
+//! workload (Whitted or distribution), timed like the batches, and once more counting; a
+//! distribution frame's image is also compared with its cached high-sample reference
+//! (`render::convergence`) by RMSE (`Measure::render`).
 
 use std::collections::BTreeMap;
 use std::hint::black_box;
@@ -18,6 +19,7 @@ use crate::accel::Accel;
 use crate::error::{Error, Result};
 use crate::geometry::{RayBatch, RayKind};
 use crate::random::mix64;
+use crate::render::area_light::soft_shadow_points;
 use crate::render::assembly::BatchKind;
 use crate::render::convergence::reference_image;
 use crate::render::distribution::{render_distribution, DrtSettings, FrameGeometry};
@@ -25,10 +27,12 @@ use crate::render::image::Image;
 use crate::render::motion::{tracer_for_motion, MovingMesh};
 use crate::render::rays::{diffuse_rays, primary_rays, shadow_rays};
 use crate::render::specular::specular_rays;
-use crate::render::whitted::{render_whitted, BatchRecord, Tracing};
+use crate::render::wavefront::{BatchRecord, Tracing, Work};
+use crate::render::whitted::render_whitted;
 use crate::scene::{Frame, Scene};
 use crate::tracers::batch::trace_hits;
-use crate::tracers::{build_tracer, Params, Tracer, TracerInfo};
+use crate::tracers::visibility::{LightSamples, QuadLight, ShadingPoints};
+use crate::tracers::{build_tracer, Params, Tracer, TracerInfo, VisibilityQuery};
 
 use super::config::{DistributionWorkload, Experiment, RenderWorkload, StructureKey};
 use super::measure::{count_pass, time_passes, timing_of, Counted, Timing};
@@ -182,135 +186,177 @@ pub fn run_plan(
                 current = Some(build_frame(exp, scene_plan, &frame, previous)?);
             }
             let frame_tracers = current.as_ref().expect("built above");
-            let batches = generate_batches(exp, scene_plan, &scene, &frame, frame_tracers, widest);
+            let workloads =
+                generate_workloads(exp, scene_plan, &scene, &frame, frame_tracers, widest)?;
             for (i, tracer) in frame_tracers.tracers.iter().enumerate() {
-                let instance = &exp.instances[i];
-                // The progress line of one measurement of this instance at `pool`'s size.
-                let announce = |what: &dyn std::fmt::Display, pool: &ThreadPool| {
-                    progress.set_message(format!(
-                        "{} frame {}/{}: {instance} {what} ×{}",
-                        spec.name,
-                        f + 1,
-                        exp.frames,
-                        pool.current_num_threads()
-                    ))
+                let measure = Measure {
+                    exp,
+                    pools: &pools,
+                    widest,
+                    progress,
+                    scene: &scene,
+                    scene_name: &spec.name,
+                    scene_index,
+                    frame: &frame,
+                    instance: i,
+                    tracer: tracer.as_ref(),
+                    build_seconds: match built_now {
+                        true => frame_tracers.structures[&exp.instances[i].structure()].seconds,
+                        false => 0.0,
+                    },
+                    built: built_now,
                 };
-                let build_seconds = match built_now {
-                    true => frame_tracers.structures[&instance.structure()].seconds,
-                    false => 0.0,
-                };
-                for batch in &batches {
-                    let kind = batch.kind();
-                    let timings: Vec<Timing> = pools
-                        .iter()
-                        .map(|pool| {
-                            announce(&kind.name(), pool);
-                            let timing =
-                                time_passes(pool, tracer.as_ref(), batch, exp.warmup, exp.repeats);
-                            progress.inc(1);
-                            timing
-                        })
-                        .collect();
-                    // After the timed passes, so it never acts as an extra warm-up for them.
-                    let counted = count_pass(widest, tracer.as_ref(), batch);
-                    cases.push(Case {
-                        scene: scene_index,
-                        triangles: frame.mesh.len(),
-                        frame: f,
-                        instance: i,
-                        traced: Traced::Batch(kind),
-                        rays: batch.len(),
-                        counted,
-                        counts_internals: tracer.counts_internals(),
-                        build_seconds,
-                        built: built_now,
-                        timings,
-                        rmse: None,
-                    });
+                for workload in &workloads {
+                    cases.push(measure.batch(workload));
                 }
                 for (r, workload) in exp.renders.iter().enumerate() {
-                    let case = |traced, rays, counted, timings, rmse| Case {
-                        scene: scene_index,
-                        triangles: frame.mesh.len(),
-                        frame: f,
-                        instance: i,
-                        traced,
-                        rays,
-                        counted,
-                        counts_internals: tracer.counts_internals(),
-                        build_seconds,
-                        built: built_now,
-                        timings,
-                        rmse,
-                    };
-                    // Motion blur traces over the moving geometry: its own structure (untimed).
-                    let moving = match workload {
-                        RenderWorkload::Distribution(DistributionWorkload {
-                            shutter: Some(shutter),
-                            ..
-                        }) => Some(MovingMesh::of_scene(&scene, frame.time, *shutter)?),
-                        _ => None,
-                    };
-                    let motion_tracer = moving
-                        .as_ref()
-                        .map(|m| tracer_for_motion(instance.info.name, &instance.params, m))
-                        .transpose()?;
-                    let job = RenderJob {
-                        scene: &scene,
-                        frame: &frame,
-                        moving: moving.as_ref(),
-                        tracer: motion_tracer.as_deref().unwrap_or(tracer.as_ref()),
-                        exp,
-                        workload,
-                    };
-                    let timed: Vec<RenderTimings> = pools
-                        .iter()
-                        .map(|pool| {
-                            announce(&plan.renders[r], pool);
-                            let timing = job.time(pool);
-                            progress.inc(1);
-                            timing
-                        })
-                        .collect::<Result<_>>()?;
-                    let (counted, seconds) = job.count(widest)?;
-                    let rmse = job.rmse(&counted.image)?;
-                    let threads = widest.current_num_threads();
-                    let mut total = Counted {
-                        threads,
-                        seconds,
-                        ..Counted::default()
-                    };
-                    for (b, record) in counted.batches.iter().enumerate() {
-                        total.counters.merge(&record.counters);
-                        total.hits += record.hits;
-                        let traced = Traced::Render {
-                            render: r,
-                            batch: record.kind,
-                            depth: record.depth,
-                        };
-                        let timings = timed.iter().map(|t| t.batches[b]).collect();
-                        let counted = Counted {
-                            counters: record.counters.clone(),
-                            hits: record.hits,
-                            seconds: record.seconds,
-                            threads,
-                        };
-                        cases.push(case(traced, record.rays, counted, timings, None));
-                    }
-                    let rays = counted.batches.iter().map(|b| b.rays).sum();
-                    let timings = timed.iter().map(|t| t.frame).collect();
-                    cases.push(case(
-                        Traced::Frame { render: r },
-                        rays,
-                        total,
-                        timings,
-                        rmse,
-                    ));
+                    cases.extend(measure.render(r, &plan.renders[r], workload)?);
                 }
             }
         }
     }
     Ok(cases)
+}
+
+/// Measuring one tracer instance on one frame: the batches traced on their own, then the render
+/// workloads.
+struct Measure<'a> {
+    exp: &'a Experiment,
+    pools: &'a [ThreadPool],
+    /// Counting and ray generation are not timed: they run in the widest pool.
+    widest: &'a ThreadPool,
+    progress: &'a ProgressBar,
+    scene: &'a Scene,
+    scene_name: &'a str,
+    scene_index: usize,
+    frame: &'a Frame<'a>,
+    instance: usize,
+    tracer: &'a dyn Tracer,
+    build_seconds: f64,
+    built: bool,
+}
+
+impl Measure<'_> {
+    /// The progress line of one measurement at `pool`'s size.
+    fn announce(&self, what: &dyn std::fmt::Display, pool: &ThreadPool) {
+        self.progress.set_message(format!(
+            "{} frame {}/{}: {} {what} ×{}",
+            self.scene_name,
+            self.frame.index + 1,
+            self.exp.frames,
+            self.exp.instances[self.instance],
+            pool.current_num_threads()
+        ))
+    }
+
+    /// `f` at every thread count, one progress step each.
+    fn at_every_pool<T>(
+        &self,
+        what: &dyn std::fmt::Display,
+        f: impl Fn(&ThreadPool) -> T,
+    ) -> Vec<T> {
+        self.pools
+            .iter()
+            .map(|pool| {
+                self.announce(what, pool);
+                let out = f(pool);
+                self.progress.inc(1);
+                out
+            })
+            .collect()
+    }
+
+    fn case(&self, traced: Traced, rays: usize, counted: Counted, timings: Vec<Timing>) -> Case {
+        Case {
+            scene: self.scene_index,
+            triangles: self.frame.mesh.len(),
+            frame: self.frame.index,
+            instance: self.instance,
+            traced,
+            rays,
+            counted,
+            counts_internals: self.tracer.counts_internals(),
+            build_seconds: self.build_seconds,
+            built: self.built,
+            timings,
+            rmse: None,
+        }
+    }
+
+    /// One workload traced on its own: timed at every thread count, then counted once.
+    fn batch(&self, workload: &Workload) -> Case {
+        let (exp, tracer, work) = (self.exp, self.tracer, workload.work());
+        let kind = workload.kind();
+        let timings = self.at_every_pool(&kind.name(), |pool| {
+            time_passes(pool, tracer, work, exp.warmup, exp.repeats)
+        });
+        // After the timed passes, so it never acts as an extra warm-up for them.
+        let counted = count_pass(self.widest, tracer, work);
+        self.case(Traced::Batch(kind), work.rays(), counted, timings)
+    }
+
+    /// Render workload `r` (`label` in the plan): every frame timed at every thread count, one
+    /// counted render, and a case per traced batch plus one for the whole frame.
+    fn render(&self, r: usize, label: &str, workload: &RenderWorkload) -> Result<Vec<Case>> {
+        let instance = &self.exp.instances[self.instance];
+        // Motion blur traces over the moving geometry: its own structure (untimed).
+        let moving = match workload {
+            RenderWorkload::Distribution(DistributionWorkload {
+                shutter: Some(shutter),
+                ..
+            }) => Some(MovingMesh::of_scene(self.scene, self.frame.time, *shutter)?),
+            _ => None,
+        };
+        let motion_tracer = moving
+            .as_ref()
+            .map(|m| tracer_for_motion(instance.info.name, &instance.params, m))
+            .transpose()?;
+        let job = RenderJob {
+            scene: self.scene,
+            frame: self.frame,
+            moving: moving.as_ref(),
+            tracer: motion_tracer.as_deref().unwrap_or(self.tracer),
+            exp: self.exp,
+            workload,
+        };
+        let timed = self
+            .at_every_pool(&label, |pool| job.time(pool))
+            .into_iter()
+            .collect::<Result<Vec<_>>>()?;
+        let (counted, seconds) = job.count(self.widest)?;
+        let rmse = job.rmse(&counted.image)?;
+        let threads = self.widest.current_num_threads();
+        let mut total = Counted {
+            threads,
+            seconds,
+            ..Counted::default()
+        };
+        let mut cases = Vec::with_capacity(counted.batches.len() + 1);
+        for (b, record) in counted.batches.iter().enumerate() {
+            total.counters.merge(&record.counters);
+            total.hits += record.hits;
+            let traced = Traced::Render {
+                render: r,
+                batch: record.kind,
+                depth: record.depth,
+            };
+            let timings = timed.iter().map(|t| t.batches[b]).collect();
+            let counted = Counted {
+                counters: record.counters.clone(),
+                hits: record.hits,
+                seconds: record.seconds,
+                threads,
+            };
+            cases.push(self.case(traced, record.rays, counted, timings));
+        }
+        let rays = counted.batches.iter().map(|b| b.rays).sum();
+        let timings = timed.iter().map(|t| t.frame).collect();
+        cases.push(Case {
+            rmse,
+            ..self.case(Traced::Frame { render: r }, rays, total, timings)
+        });
+        Ok(cases)
+    }
 }
 
 /// The timings of one render workload at one thread count: each batch's trace, and the frame.
@@ -482,56 +528,100 @@ fn build_frame(
     })
 }
 
-/// The batches of the scene's ray kinds for one frame, in the plan's order. Secondary rays are
+/// What the runner measures on its own: a batch of rays, or the soft-shadow light-visibility
+/// query over the primary hits.
+enum Workload {
+    Rays(RayBatch),
+    SoftShadow {
+        points: ShadingPoints,
+        light: QuadLight,
+        samples: LightSamples,
+    },
+}
+
+impl Workload {
+    fn kind(&self) -> RayKind {
+        match self {
+            Workload::Rays(batch) => batch.kind(),
+            Workload::SoftShadow { .. } => RayKind::SoftShadow,
+        }
+    }
+
+    fn work(&self) -> Work<'_> {
+        match self {
+            Workload::Rays(batch) => Work::of_batch(batch),
+            Workload::SoftShadow {
+                points,
+                light,
+                samples,
+            } => Work::LightVisibility(VisibilityQuery {
+                points: &points.points,
+                packet_start: &points.packet_start,
+                light: *light,
+                samples,
+            }),
+        }
+    }
+}
+
+/// The workloads of the scene's ray kinds for one frame, in the plan's order. Secondary rays are
 /// seeded per frame and kind, so every run of the experiment traces the same rays.
-fn generate_batches(
+fn generate_workloads(
     exp: &Experiment,
     scene_plan: &ScenePlan,
     scene: &Scene,
     frame: &Frame,
     tracers: &FrameTracers,
     pool: &ThreadPool,
-) -> Vec<RayBatch> {
+) -> Result<Vec<Workload>> {
     let primary = primary_rays(&frame.camera, exp.width, exp.height);
     let hits = tracers
         .secondary
         .as_ref()
         .map(|t| pool.install(|| trace_hits(t.as_ref(), &primary)));
     let seed = |kind: RayKind| mix64(exp.seed ^ mix64(frame.index as u64) ^ mix64(kind as u64 + 1));
-    let mut batches: Vec<RayBatch> = Vec::with_capacity(scene_plan.ray_kinds.len());
+    let mut workloads = Vec::with_capacity(scene_plan.ray_kinds.len());
     for &kind in &scene_plan.ray_kinds {
         let hits = || {
             hits.as_deref()
                 .expect("the plan builds the secondary-ray tracer for secondary kinds")
         };
-        match kind {
+        let batch = match kind {
             // Placed below, once the secondary rays no longer need it.
-            RayKind::Primary => {}
-            RayKind::Shadow => batches.push(shadow_rays(
-                scene,
-                &frame.mesh,
-                &primary,
-                hits(),
-                seed(kind),
-            )),
-            RayKind::Diffuse => {
-                batches.push(diffuse_rays(&frame.mesh, &primary, hits(), seed(kind)))
+            RayKind::Primary => continue,
+            RayKind::Shadow => shadow_rays(scene, &frame.mesh, &primary, hits(), seed(kind)),
+            RayKind::Diffuse => diffuse_rays(&frame.mesh, &primary, hits(), seed(kind)),
+            RayKind::Reflection | RayKind::Refraction => {
+                specular_rays(kind, &frame.mesh, &scene.materials, &primary, hits())
             }
-            RayKind::Reflection | RayKind::Refraction => batches.push(specular_rays(
-                kind,
-                &frame.mesh,
-                &scene.materials,
-                &primary,
-                hits(),
-            )),
-        }
+            RayKind::SoftShadow => {
+                let light = scene
+                    .quad_light()
+                    .expect("the plan gives soft shadows only to scenes with a quad light");
+                let (points, samples) = soft_shadow_points(
+                    &frame.mesh,
+                    &primary,
+                    hits(),
+                    exp.width,
+                    exp.soft_shadow_samples,
+                    seed(kind),
+                )?;
+                workloads.push(Workload::SoftShadow {
+                    points,
+                    light: QuadLight::of(light),
+                    samples,
+                });
+                continue;
+            }
+        };
+        workloads.push(Workload::Rays(batch));
     }
     if let Some(at) = scene_plan
         .ray_kinds
         .iter()
         .position(|&k| k == RayKind::Primary)
     {
-        batches.insert(at, primary);
+        workloads.insert(at, Workload::Rays(primary));
     }
-    batches
+    Ok(workloads)
 }

@@ -45,15 +45,18 @@ pub enum RayKind {
     Reflection,
     /// Refraction through a dielectric (Whitted).
     Refraction,
+    /// Shadow rays from shading points to samples on an area light (`tracers::visibility`).
+    SoftShadow,
 }
 
 impl RayKind {
-    pub const ALL: [RayKind; 5] = [
+    pub const ALL: [RayKind; 6] = [
         RayKind::Primary,
         RayKind::Shadow,
         RayKind::Diffuse,
         RayKind::Reflection,
         RayKind::Refraction,
+        RayKind::SoftShadow,
     ];
 
     pub fn name(self) -> &'static str {
@@ -63,12 +66,13 @@ impl RayKind {
             RayKind::Diffuse => "diffuse",
             RayKind::Reflection => "reflection",
             RayKind::Refraction => "refraction",
+            RayKind::SoftShadow => "soft_shadow",
         }
     }
 
     /// Shadow rays ask "is anything in between" (occlusion); the others ask for the closest hit.
     pub fn is_occlusion(self) -> bool {
-        matches!(self, RayKind::Shadow)
+        matches!(self, RayKind::Shadow | RayKind::SoftShadow)
     }
 
     pub fn parse(name: &str) -> Option<RayKind> {
@@ -151,6 +155,26 @@ impl RayBatch {
 
     pub fn kind(&self) -> RayKind {
         self.kind.unwrap_or(RayKind::Primary)
+    }
+
+    /// Empty, of `kind`, keeping the allocations (a buffer refilled per chunk).
+    pub fn clear(&mut self, kind: RayKind) {
+        self.kind = Some(kind);
+        for v in [
+            &mut self.ox,
+            &mut self.oy,
+            &mut self.oz,
+            &mut self.dx,
+            &mut self.dy,
+            &mut self.dz,
+            &mut self.tmin,
+            &mut self.tmax,
+            &mut self.time,
+        ] {
+            v.clear();
+        }
+        self.pixel.clear();
+        self.packet_start.clear();
     }
 
     pub fn push(&mut self, ray: Ray, pixel: u32) {

@@ -6,8 +6,13 @@
 
 use glam::Vec3;
 
+use crate::error::Result;
+use crate::geometry::{Hit, RayBatch};
+use crate::render::interleaved::{SampleTable, K};
+use crate::render::rays::SurfacePoint;
 use crate::render::shading::point_irradiance;
-use crate::scene::Light;
+use crate::scene::{Light, Mesh};
+use crate::tracers::visibility::{LightSamples, ShadingPoint, ShadingPoints};
 
 /// Where to aim the shadow ray, and the irradiance-like factor it delivers if unoccluded.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -48,10 +53,43 @@ pub fn sample_light(light: &Light, p: Vec3, n: Vec3, s: f32, t: f32) -> Option<L
     Some(LightSample { point, incident })
 }
 
+/// The soft-shadow workload of Benthin & Wald 2009 (§4) over a frame's primary hits: one shading
+/// point per hit, each its own packet (its samples share an origin), with interleaved light
+/// sample sets (§4.5; Keller & Heidrich 2001): pixel `(x, y)` of a `width`-wide image uses the
+/// `samples` points of pattern `(x mod K, y mod K)` of the static sample table.
+pub fn soft_shadow_points(
+    mesh: &Mesh,
+    primary: &RayBatch,
+    hits: &[Hit],
+    width: u32,
+    samples: u32,
+    seed: u64,
+) -> Result<(ShadingPoints, LightSamples)> {
+    let table = SampleTable::new(samples, seed)?;
+    let mut uv = Vec::with_capacity((K * K * samples) as usize);
+    for pattern in 0..K * K {
+        let (x, y) = (pattern % K, pattern / K);
+        uv.extend((0..samples).map(|s| <[f32; 2]>::from(table.get(x, y, s, 0))));
+    }
+    let mut points = ShadingPoints::default();
+    for (i, hit) in hits.iter().enumerate().filter(|(_, h)| h.is_hit()) {
+        let surface = SurfacePoint::of_hit(mesh, &primary.ray(i), hit);
+        let pixel = primary.pixel[i];
+        let point = ShadingPoint {
+            position: surface.p,
+            normal: surface.n,
+            origin: surface.ray_origin(),
+            time: 0.0,
+            set: SampleTable::pattern_of(pixel % width, pixel / width) as u32,
+        };
+        points.push(point, true);
+    }
+    Ok((points, LightSamples::new(samples as usize, uv)?))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::render::interleaved::SampleTable;
 
     fn quad() -> Light {
         Light::Quad {

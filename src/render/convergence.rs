@@ -17,7 +17,7 @@ use crate::random::mix64;
 use crate::render::distribution::{render_distribution, DrtFrame, DrtSettings, FrameGeometry};
 use crate::render::image::Image;
 use crate::render::motion::MovingMesh;
-use crate::render::whitted::Tracing;
+use crate::render::wavefront::Tracing;
 use crate::scene::{Frame, Mesh, Scene};
 use crate::tracers::{Params, Tracer};
 

@@ -30,12 +30,13 @@ use crate::render::glossy::sample_phong_lobe;
 use crate::render::image::Image;
 use crate::render::interleaved::{SampleTable, DIMENSION_PAIRS};
 use crate::render::motion::{tracer_for_motion, MovingMesh};
-use crate::render::rays::{morton_decode, shadow_ray, CameraProjection, SurfacePoint, TILE};
+use crate::render::rays::{morton_decode, CameraProjection, SurfacePoint, TILE};
 use crate::render::shading::{specular_response, AMBIENT, BACKGROUND};
 use crate::render::specular::{reflect, reflection_ray};
-use crate::render::whitted::{trace, Answers, BatchRecord, Tracing};
+use crate::render::wavefront::{trace, Answers, BatchRecord, Tracing, Work};
 use crate::scene::{Camera, Frame, Scene};
-use crate::tracers::{Params, Tracer};
+use crate::tracers::visibility::{LightSamples, QuadLight, ShadingPoint, ShadingPoints};
+use crate::tracers::{Params, Tracer, VisibilityQuery};
 use crate::verify::tracer_for_mesh;
 
 /// A wave holds at least this many camera rays (whole tiles), so each traced batch spreads over
@@ -161,23 +162,39 @@ struct Records {
 }
 
 impl Records {
-    /// Traces `generation`'s batch at bounce `depth` and books it.
+    /// Traces `work`, a wavefront of `kind` at bounce `depth` in `packets` explicit packets, and
+    /// books it.
     fn trace(
+        &mut self,
+        tracer: &dyn Tracer,
+        work: Work<'_>,
+        kind: RayKind,
+        packets: usize,
+        depth: u32,
+        tracing: Tracing,
+    ) -> Answers {
+        let batch_kind = BatchKind::Rays(kind);
+        let (answers, traced) = trace(tracer, work, batch_kind, depth, tracing);
+        self.batches
+            .entry((depth, batch_kind))
+            .and_modify(|record| record.add(&traced))
+            .or_insert(traced);
+        self.packets[kind as usize] += packets as u64;
+        answers
+    }
+
+    /// Traces `generation`'s batch at bounce `depth` and books it.
+    fn trace_generation(
         &mut self,
         tracer: &dyn Tracer,
         generation: &Generation,
         depth: u32,
         tracing: Tracing,
     ) -> Answers {
-        let kind = BatchKind::Rays(generation.kind);
-        let (answers, traced) = trace(tracer, &generation.batch, kind, depth, tracing);
-        self.batches
-            .entry((depth, kind))
-            .and_modify(|record| record.add(&traced))
-            .or_insert(traced);
-        self.packets[generation.kind as usize] +=
-            generation.batch.packet_start.iter().filter(|s| **s).count() as u64;
-        answers
+        let batch = &generation.batch;
+        let packets = batch.packet_start.iter().filter(|s| **s).count();
+        let work = Work::of_batch(batch);
+        self.trace(tracer, work, generation.kind, packets, depth, tracing)
     }
 }
 
@@ -270,6 +287,41 @@ impl Generation {
     }
 }
 
+/// One light's shadow query under construction: a shading point per sample path that sees the
+/// light, each with its own light sample (`set` = its index), one packet per pixel.
+#[derive(Default)]
+struct LightQuery {
+    points: ShadingPoints,
+    samples: Vec<[f32; 2]>,
+    /// Per point: its path and the colour it adds when the light sample is visible.
+    served: Vec<(usize, Vec3)>,
+    last_pixel: Option<u32>,
+}
+
+impl LightQuery {
+    fn push(
+        &mut self,
+        surface: &SurfacePoint,
+        sample: [f32; 2],
+        path_index: usize,
+        path: &Path,
+        carries: Vec3,
+    ) {
+        let point = ShadingPoint {
+            position: surface.p,
+            normal: surface.n,
+            origin: surface.ray_origin(),
+            time: path.time,
+            set: self.samples.len() as u32,
+        };
+        let new_pixel = self.last_pixel != Some(path.pixel);
+        self.last_pixel = Some(path.pixel);
+        self.points.push(point, new_pixel);
+        self.samples.push(sample);
+        self.served.push((path_index, carries));
+    }
+}
+
 /// Renders `frame` of `scene` by distribution ray tracing with `tracer`, which must have been
 /// built over `geometry` (a moving mesh needs a tracer that honours ray times).
 pub fn render_distribution(
@@ -333,10 +385,12 @@ pub fn render_distribution(
             if current.batch.is_empty() {
                 break;
             }
-            let Answers::Hits(hits) = records.trace(tracer, &current, depth, tracing) else {
+            let Answers::Hits(hits) = records.trace_generation(tracer, &current, depth, tracing)
+            else {
                 unreachable!("camera and reflection rays are traced for closest hits")
             };
-            let mut shadows = Generation::new(RayKind::Shadow);
+            let mut shadows: Vec<LightQuery> =
+                scene.lights.iter().map(|_| LightQuery::default()).collect();
             let mut reflections = Generation::new(RayKind::Reflection);
             let pairs = PAIRS_BEFORE_BOUNCES + PAIRS_PER_BOUNCE * depth as usize;
             for (i, hit) in hits.iter().enumerate() {
@@ -353,16 +407,14 @@ pub fn render_distribution(
                 colour[path_index] += path.weight * (m.emission + m.diffuse * AMBIENT);
                 let sample = |pair: usize| table.get(path.x, path.y, path.sample, pair);
 
-                // Soft shadows: one ray per light to this sample's point on it.
+                // Soft shadows: per light, this sample's point on it, asked of the tracer as a
+                // light-visibility query (one sample per shading point).
                 if m.diffuse != Vec3::ZERO {
                     let (s, t) = sample(pairs);
-                    for light in &scene.lights {
-                        let Some(ls) = sample_light(light, surface.p, surface.n, s, t) else {
-                            continue;
-                        };
-                        if let Some(shadow) = shadow_ray(&surface, ls.point) {
+                    for (light, query) in scene.lights.iter().zip(&mut shadows) {
+                        if let Some(ls) = sample_light(light, surface.p, surface.n, s, t) {
                             let carries = path.weight * m.diffuse * ls.incident;
-                            shadows.push(shadow, path_index, &paths, carries);
+                            query.push(&surface, [s, t], path_index, &path, carries);
                         }
                     }
                 }
@@ -384,9 +436,23 @@ pub fn render_distribution(
                     reflections.push(next, path_index, &paths, Vec3::ZERO);
                 }
             }
-            if !shadows.batch.is_empty() {
-                let answers = records.trace(tracer, &shadows, depth + 1, tracing);
-                for (i, &(path, carries)) in shadows.served.iter().enumerate() {
+            for (light, query) in scene.lights.iter().zip(&mut shadows) {
+                if query.points.is_empty() {
+                    continue;
+                }
+                let samples = LightSamples::new(1, std::mem::take(&mut query.samples))?;
+                let work = VisibilityQuery::new(&query.points, QuadLight::of(light), &samples)?;
+                let packets = query.points.packet_start.iter().filter(|s| **s).count();
+                let answers = records.trace(
+                    tracer,
+                    Work::LightVisibility(work),
+                    RayKind::Shadow,
+                    packets,
+                    depth + 1,
+                    tracing,
+                );
+                for (i, &(path, carries)) in query.served.iter().enumerate() {
+                    // One sample per point: sample i is point i's.
                     if !answers.blocked(i) {
                         colour[path] += carries;
                     }

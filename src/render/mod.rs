@@ -14,4 +14,5 @@ pub mod rays;
 pub mod sampling;
 pub mod shading;
 pub mod specular;
+pub mod wavefront;
 pub mod whitted;

@@ -7,6 +7,7 @@ use crate::geometry::{Hit, Ray, RayBatch, RayKind, Triangle};
 use crate::render::offset::{coordinate_scale, offset_ray_origin};
 use crate::render::sampling::{concentric_disk, cosine_hemisphere, uniform};
 use crate::scene::{Camera, Light, Mesh, Scene};
+use crate::tracers::visibility;
 
 /// Side of the square screen tiles rays are ordered by.
 pub const TILE: u32 = 32;
@@ -141,19 +142,7 @@ impl SurfacePoint {
 /// A shadow ray from `surface` towards `target`, or `None` when the target is behind the surface
 /// (the renderer would not cast it: the point is in its own shadow).
 pub fn shadow_ray(surface: &SurfacePoint, target: Vec3) -> Option<Ray> {
-    if (target - surface.p).dot(surface.n) <= 0.0 {
-        return None;
-    }
-    let origin = surface.ray_origin();
-    let to_light = target - origin;
-    let distance = to_light.length();
-    // Stop just short of the light so a light sample lying on geometry does not shadow itself.
-    Some(Ray::new(
-        origin,
-        to_light / distance,
-        0.0,
-        distance * (1.0 - 1e-4),
-    ))
+    visibility::shadow_ray(surface.p, surface.n, surface.ray_origin(), target)
 }
 
 /// One shadow ray per primary hit per light (quad lights: one seeded sample point).

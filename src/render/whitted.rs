@@ -20,22 +20,20 @@
 
 use std::collections::BTreeMap;
 use std::ops::Range;
-use std::time::Instant;
 
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
 use crate::error::{Error, Result};
-use crate::geometry::{Hit, Ray, RayBatch, RayKind};
+use crate::geometry::{Ray, RayBatch, RayKind};
 use crate::render::assembly::{assemble, Assembly, BatchKind, Candidate, OutPackets};
 use crate::render::image::Image;
 use crate::render::rays::{primary_rays, shadow_ray};
 use crate::render::shading::{light_as_point, point_irradiance, AMBIENT, BACKGROUND};
 use crate::render::specular::{reflect, reflection_ray, refraction_ray, specular_at};
+use crate::render::wavefront::{trace, Answers, BatchRecord, Tracing, Work};
 use crate::scene::scene_file::Preset;
 use crate::scene::{Frame, Material, Scene};
-use crate::stats::Counters;
-use crate::tracers::batch::{counted_pass, trace_hits, trace_occlusion};
 use crate::tracers::Tracer;
 
 /// Default ray-tree attenuation threshold: 1/256, one step of an 8-bit pixel. A subtree whose
@@ -122,38 +120,6 @@ impl Default for WhittedSettings {
     }
 }
 
-/// Whether the tracer's plain (timed) or counting calls are used.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Tracing {
-    Timed,
-    Counted,
-}
-
-/// One traced batch of a frame.
-#[derive(Clone, Debug, PartialEq)]
-pub struct BatchRecord {
-    pub kind: BatchKind,
-    pub depth: u32,
-    pub rays: usize,
-    /// Closest-hit rays that hit something, shadow rays that were occluded (blind batches: rays
-    /// that hit something within their interval).
-    pub hits: usize,
-    /// Wall time of the tracer's pass over the batch.
-    pub seconds: f64,
-    /// The tracer's counters (`Tracing::Counted` only; zero otherwise).
-    pub counters: Counters,
-}
-
-impl BatchRecord {
-    /// Adds `other`'s rays, hits, time and counters: another wave of the same kind and depth.
-    pub(crate) fn add(&mut self, other: &BatchRecord) {
-        self.rays += other.rays;
-        self.hits += other.hits;
-        self.seconds += other.seconds;
-        self.counters.merge(&other.counters);
-    }
-}
-
 pub struct WhittedFrame {
     pub image: Image,
     /// In tracing order: by depth, then `BatchKind` order.
@@ -172,34 +138,6 @@ enum Role {
 struct Generation {
     batch: RayBatch,
     roles: Vec<Role>,
-}
-
-/// The tracer's answers for one batch.
-pub(crate) enum Answers {
-    Hits(Vec<Hit>),
-    Occluded(Vec<bool>),
-}
-
-impl Answers {
-    /// Whether ray `i` met anything: what a shadow ray asks.
-    pub(crate) fn blocked(&self, i: usize) -> bool {
-        match self {
-            Answers::Hits(h) => h[i].is_hit(),
-            Answers::Occluded(o) => o[i],
-        }
-    }
-
-    fn len(&self) -> usize {
-        match self {
-            Answers::Hits(h) => h.len(),
-            Answers::Occluded(o) => o.len(),
-        }
-    }
-
-    /// How many rays met anything (`BatchRecord::hits`).
-    fn blocked_count(&self) -> usize {
-        (0..self.len()).filter(|&i| self.blocked(i)).count()
-    }
 }
 
 /// A spawned ray: the ray, its pixel, what it carries.
@@ -324,52 +262,6 @@ impl Shader<'_> {
     }
 }
 
-/// Traces `batch` (bounce `depth`) as `kind` asks, timing the pass or counting it; returns the
-/// answers and the batch's record.
-pub(crate) fn trace(
-    tracer: &dyn Tracer,
-    batch: &RayBatch,
-    kind: BatchKind,
-    depth: u32,
-    tracing: Tracing,
-) -> (Answers, BatchRecord) {
-    let rays = batch.view();
-    let start = Instant::now();
-    let shadow = kind == BatchKind::Rays(RayKind::Shadow);
-    let (answers, counters) = match (shadow, tracing) {
-        (true, Tracing::Timed) => (
-            Answers::Occluded(trace_occlusion(tracer, batch)),
-            Counters::default(),
-        ),
-        (false, Tracing::Timed) => (
-            Answers::Hits(trace_hits(tracer, batch)),
-            Counters::default(),
-        ),
-        (true, Tracing::Counted) => {
-            let mut out = vec![false; batch.len()];
-            let counters =
-                counted_pass(rays, &mut out, &|r, o, c| tracer.occluded_counted(r, o, c));
-            (Answers::Occluded(out), counters)
-        }
-        (false, Tracing::Counted) => {
-            let mut out = vec![Hit::MISS; batch.len()];
-            let counters =
-                counted_pass(rays, &mut out, &|r, h, c| tracer.intersect_counted(r, h, c));
-            (Answers::Hits(out), counters)
-        }
-    };
-    let seconds = start.elapsed().as_secs_f64();
-    let record = BatchRecord {
-        kind,
-        depth,
-        rays: batch.len(),
-        hits: answers.blocked_count(),
-        seconds,
-        counters,
-    };
-    (answers, record)
-}
-
 /// Renders `frame` of `scene` with `tracer` in the current rayon pool.
 pub fn render_whitted(
     scene: &Scene,
@@ -409,7 +301,7 @@ pub fn render_whitted(
         }
         let mut next: BTreeMap<BatchKind, Generation> = BTreeMap::new();
         for (kind, gen) in generation {
-            let (answers, record) = trace(tracer, &gen.batch, kind, depth, tracing);
+            let (answers, record) = trace(tracer, Work::of_batch(&gen.batch), kind, depth, tracing);
             records.push(record);
             let ranges: Vec<Range<usize>> = gen.batch.view().packets(packet_rays).collect();
             let outputs: Vec<PacketOutput> = ranges

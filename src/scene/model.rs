@@ -156,6 +156,11 @@ impl Scene {
         self.mesh.len()
     }
 
+    /// The first quad (area) light: the light of the soft-shadow workload.
+    pub fn quad_light(&self) -> Option<&Light> {
+        self.lights.iter().find(|l| matches!(l, Light::Quad { .. }))
+    }
+
     pub fn is_animated(&self) -> bool {
         self.animation.is_some()
     }

@@ -8,7 +8,7 @@ use rayon::prelude::*;
 
 use crate::geometry::{Hit, RayBatch, Rays};
 use crate::stats::Counters;
-use crate::tracers::Tracer;
+use crate::tracers::{Tracer, VisibilityQuery};
 
 /// Rays per work chunk (at least; see `chunk_ranges`). 4096 = four whole 32×32 camera tiles: a multiple of 16 (and of every
 /// aligned n×n block, n ≤ 32), so no packet or Morton block of primary rays straddles two chunks
@@ -21,16 +21,20 @@ pub const CHUNK_RAYS: usize = 4096;
 /// whole packets each ending at the first packet start at or past `CHUNK_RAYS` rays, so that no
 /// packet is split between two chunks.
 fn chunk_ranges(rays: Rays<'_>) -> Vec<Range<usize>> {
-    let mut chunks = Vec::with_capacity(rays.len() / CHUNK_RAYS + 1);
+    packet_chunks(rays.len(), rays.packet_start, CHUNK_RAYS)
+}
+
+/// Runs of `len` items, at least `at_least` long (but the last), each ending at a packet start
+/// (`packet_start`: empty, or one flag per item).
+fn packet_chunks(len: usize, packet_start: &[bool], at_least: usize) -> Vec<Range<usize>> {
+    let mut chunks = Vec::with_capacity(len / at_least + 1);
     let mut begin = 0;
-    while begin < rays.len() {
-        let at_least = (begin + CHUNK_RAYS).min(rays.len());
-        let end = if rays.has_explicit_packets() {
-            (at_least..rays.len())
-                .find(|&i| rays.packet_start[i])
-                .unwrap_or(rays.len())
-        } else {
+    while begin < len {
+        let at_least = (begin + at_least).min(len);
+        let end = if packet_start.is_empty() {
             at_least
+        } else {
+            (at_least..len).find(|&i| packet_start[i]).unwrap_or(len)
         };
         chunks.push(begin..end);
         begin = end;
@@ -70,10 +74,53 @@ pub fn counted_pass<T: Send>(
             trace(rays, chunk, &mut counters);
             counters
         })
-        .reduce(Counters::default, |mut a, b| {
-            a.merge(&b);
-            a
+        .reduce(Counters::default, merge)
+}
+
+/// The chunks of a light-visibility query: whole packets of points, about `CHUNK_RAYS` rays each.
+fn visibility_chunks<'a, 'q>(
+    query: VisibilityQuery<'q>,
+    mut out: &'a mut [u64],
+) -> Vec<(VisibilityQuery<'q>, &'a mut [u64])> {
+    let words = query.samples.words_per_point();
+    let points = CHUNK_RAYS.div_ceil(query.samples.per_point());
+    packet_chunks(query.len(), query.packet_start, points)
+        .into_iter()
+        .map(|range| {
+            let (chunk, rest) = std::mem::take(&mut out).split_at_mut(range.len() * words);
+            out = rest;
+            (query.slice(range), chunk)
         })
+        .collect()
+}
+
+/// One light-visibility pass, chunk by chunk, in the current pool; with `counters`, the counting
+/// kernel, its per-chunk counters merged into them.
+pub fn visibility_pass(
+    tracer: &dyn Tracer,
+    query: VisibilityQuery<'_>,
+    out: &mut [u64],
+    counters: Option<&mut Counters>,
+) {
+    let chunks = visibility_chunks(query, out).into_par_iter();
+    match counters {
+        None => chunks.for_each(|(q, o)| tracer.light_visibility(q, o)),
+        Some(total) => {
+            let merged = chunks
+                .map(|(q, o)| {
+                    let mut counters = Counters::default();
+                    tracer.light_visibility_counted(q, o, &mut counters);
+                    counters
+                })
+                .reduce(Counters::default, merge);
+            total.merge(&merged);
+        }
+    }
+}
+
+fn merge(mut a: Counters, b: Counters) -> Counters {
+    a.merge(&b);
+    a
 }
 
 /// Closest hits of a whole batch.

@@ -10,12 +10,14 @@ pub mod packet;
 pub mod params;
 pub mod reference;
 pub mod registry;
+pub mod visibility;
 
 use crate::geometry::{Hit, Ray, Rays};
 use crate::stats::{Counters, NoStats, Stats};
 
 pub use params::Params;
 pub use registry::{build_tracer, TracerInfo, TRACERS};
+pub use visibility::VisibilityQuery;
 
 /// What an algorithm implements: closest hit and occlusion over a chunk of rays, generic over the
 /// counters so counting compiles away in timing runs.
@@ -28,6 +30,18 @@ pub trait Kernel: Send + Sync {
 
     /// `occluded[i]` becomes whether anything lies on ray `i` within `[tmin, tmax]`.
     fn occluded_with<S: Stats>(&self, rays: Rays<'_>, occluded: &mut [bool], stats: &mut S);
+
+    /// `occluded` becomes the query's occlusion bits (`visibility::Visibility`'s layout). The
+    /// default traces the query's shadow rays with `occluded_with`; a tracer answering natively
+    /// must give the same bits.
+    fn light_visibility_with<S: Stats>(
+        &self,
+        query: VisibilityQuery<'_>,
+        occluded: &mut [u64],
+        stats: &mut S,
+    ) {
+        visibility::occluded_by_rays(self, query, occluded, stats)
+    }
 }
 
 /// A tracer that answers one ray at a time (reference, obvhs, grid-dda): its `Kernel` is the loop
@@ -58,6 +72,13 @@ pub trait Tracer: Send + Sync {
     fn occluded(&self, rays: Rays<'_>, occluded: &mut [bool]);
     fn intersect_counted(&self, rays: Rays<'_>, hits: &mut [Hit], counters: &mut Counters);
     fn occluded_counted(&self, rays: Rays<'_>, occluded: &mut [bool], counters: &mut Counters);
+    fn light_visibility(&self, query: VisibilityQuery<'_>, occluded: &mut [u64]);
+    fn light_visibility_counted(
+        &self,
+        query: VisibilityQuery<'_>,
+        occluded: &mut [u64],
+        counters: &mut Counters,
+    );
 }
 
 impl<K: Kernel> Tracer for K {
@@ -75,5 +96,16 @@ impl<K: Kernel> Tracer for K {
     }
     fn occluded_counted(&self, rays: Rays<'_>, occluded: &mut [bool], counters: &mut Counters) {
         self.occluded_with(rays, occluded, counters)
+    }
+    fn light_visibility(&self, query: VisibilityQuery<'_>, occluded: &mut [u64]) {
+        self.light_visibility_with(query, occluded, &mut NoStats)
+    }
+    fn light_visibility_counted(
+        &self,
+        query: VisibilityQuery<'_>,
+        occluded: &mut [u64],
+        counters: &mut Counters,
+    ) {
+        self.light_visibility_with(query, occluded, counters)
     }
 }
