@@ -252,11 +252,11 @@ fn execute(command: Command) -> Result<bool> {
             let params = params_of(params);
             let image = match renderer {
                 Renderer::Raycast => {
-                    let tracer = verify::tracer_for_frame(&tracer, &params, &frame)?;
+                    let tracer = raylab::tracers::tracer_for_frame(&tracer, &params, &frame)?;
                     render_raycast(&scene, &frame, tracer.as_ref(), width, height)
                 }
                 Renderer::Whitted => {
-                    let tracer = verify::tracer_for_frame(&tracer, &params, &frame)?;
+                    let tracer = raylab::tracers::tracer_for_frame(&tracer, &params, &frame)?;
                     let depth = max_depth.unwrap_or(WhittedSettings::default().max_depth);
                     render_whitted_cli(
                         &scene,
@@ -321,7 +321,7 @@ fn execute(command: Command) -> Result<bool> {
             };
             println!(
                 "{tracer} vs {} on {scene}, frame {}, {resolution}²:",
-                verify::ORACLE,
+                raylab::tracers::ORACLE,
                 frame.index
             );
             print!("{}", format_table(&reports, &tol));

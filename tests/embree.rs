@@ -5,11 +5,12 @@
 use std::sync::Arc;
 
 use glam::Vec3;
+use raylab::accel::embree::{BuildQuality, Device, EmbreeConfig, EmbreeScene};
 use raylab::accel::{Accel, AccelKind};
 use raylab::geometry::{Hit, Ray, RayBatch, RayKind, Triangle};
 use raylab::scene::Mesh;
 use raylab::stats::Counters;
-use raylab::tracers::embree::{BuildQuality, Device, EmbreeConfig, EmbreeScene, STREAM_LENGTH};
+use raylab::tracers::embree::STREAM_LENGTH;
 use raylab::tracers::{build_tracer, Params, Tracer, TracerInfo};
 
 const EMBREE_TRACERS: [&str; 5] = ["embree1", "embree4", "embree8", "embree16", "embree-stream"];

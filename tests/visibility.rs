@@ -11,8 +11,7 @@ use raylab::scene::library::load_scene;
 use raylab::scene::{Light, Scene};
 use raylab::tracers::batch::trace_hits;
 use raylab::tracers::visibility::{QuadLight, Visibility};
-use raylab::tracers::{Params, VisibilityQuery};
-use raylab::verify::{oracle_params, tracer_for_frame};
+use raylab::tracers::{oracle_params, tracer_for_frame, Params, VisibilityQuery};
 
 const RESOLUTION: u32 = 128;
 const SAMPLES: u32 = 16;

@@ -17,8 +17,7 @@ use raylab::render::wavefront::Tracing;
 use raylab::render::whitted::{render_whitted, WhittedSettings};
 use raylab::scene::library::load_scene;
 use raylab::scene::Scene;
-use raylab::tracers::Params;
-use raylab::verify::tracer_for_frame;
+use raylab::tracers::{tracer_for_frame, Params};
 
 const WIDTH: u32 = 160;
 const HEIGHT: u32 = 120;

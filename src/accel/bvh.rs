@@ -14,7 +14,7 @@ use super::child_pairs::{child_pairs, ChildPair};
 use super::presplit::{split_references, Reference};
 use crate::error::{Error, Result};
 use crate::geometry::{Aabb, Triangle};
-use crate::tracers::Params;
+use crate::params::Params;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BvhConfig {

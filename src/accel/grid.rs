@@ -22,7 +22,7 @@ use glam::{DVec3, Vec3};
 
 use crate::error::{Error, Result};
 use crate::geometry::{Aabb, Triangle};
-use crate::tracers::Params;
+use crate::params::Params;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct GridConfig {

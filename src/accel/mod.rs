@@ -3,6 +3,7 @@
 
 pub mod bvh;
 pub mod child_pairs;
+pub mod embree;
 pub mod grid;
 pub mod obvhs;
 pub mod presplit;
@@ -10,9 +11,9 @@ pub mod presplit;
 use std::sync::Arc;
 
 use crate::error::{Error, Result};
+use crate::params::Params;
 use crate::scene::Mesh;
-use crate::tracers::embree::{BuildQuality, Device, EmbreeConfig, EmbreeScene};
-use crate::tracers::Params;
+use embree::{BuildQuality, Device, EmbreeConfig, EmbreeScene};
 
 pub use self::obvhs::{ObvhsBvh, ObvhsQuality};
 pub use bvh::{Bvh, BvhConfig, BvhNode};
@@ -136,6 +137,61 @@ pub enum Accel {
 }
 
 impl Accel {
+    /// Whether it holds geometry moving over the shutter interval (motion blur).
+    pub fn is_moving(&self) -> bool {
+        match self {
+            Accel::Bvh(b) => b.motion_end.is_some(),
+            Accel::Embree(s) => s.is_moving(),
+            Accel::Obvhs(_) | Accel::Grid(_) => false,
+        }
+    }
+
+    pub fn bvh(&self) -> Result<&Arc<Bvh>> {
+        match self {
+            Accel::Bvh(b) => Ok(b),
+            other => Err(other.not(AccelKind::Bvh)),
+        }
+    }
+
+    pub fn embree(&self) -> Result<&Arc<EmbreeScene>> {
+        match self {
+            Accel::Embree(s) => Ok(s),
+            other => Err(other.not(AccelKind::Embree)),
+        }
+    }
+
+    pub fn obvhs(&self) -> Result<&Arc<ObvhsBvh>> {
+        match self {
+            Accel::Obvhs(b) => Ok(b),
+            other => Err(other.not(AccelKind::Obvhs)),
+        }
+    }
+
+    pub fn grid(&self) -> Result<&Arc<Grid>> {
+        match self {
+            Accel::Grid(g) => Ok(g),
+            other => Err(other.not(AccelKind::Grid)),
+        }
+    }
+
+    pub fn kind(&self) -> AccelKind {
+        match self {
+            Accel::Bvh(_) => AccelKind::Bvh,
+            Accel::Embree(_) => AccelKind::Embree,
+            Accel::Obvhs(_) => AccelKind::Obvhs,
+            Accel::Grid(_) => AccelKind::Grid,
+        }
+    }
+
+    /// The error of a tracer handed this structure when it traverses `wanted`.
+    fn not(&self, wanted: AccelKind) -> Error {
+        Error::runtime(format!(
+            "a tracer over {} was given the {} structure",
+            wanted.name(),
+            self.kind().name()
+        ))
+    }
+
     pub fn build_seconds(&self) -> f64 {
         match self {
             Accel::Bvh(b) => b.build_seconds,

@@ -17,7 +17,7 @@ use glam::Vec3A;
 
 use crate::error::{Error, Result};
 use crate::geometry::Triangle;
-use crate::tracers::Params;
+use crate::params::Params;
 
 /// obvhs's `BvhBuildParams` presets, from cheapest build to best tree.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]

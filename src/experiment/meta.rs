@@ -186,7 +186,7 @@ fn versions() -> BTreeMap<&'static str, String> {
     let mut v = BTreeMap::new();
     // The library actually loaded, asked at run time; a run without Embree tracers still records
     // why it is missing.
-    let embree = crate::tracers::embree::version().unwrap_or_else(|e| format!("unavailable: {e}"));
+    let embree = crate::accel::embree::version().unwrap_or_else(|e| format!("unavailable: {e}"));
     v.insert("embree", embree);
     v.insert("raylab", env!("CARGO_PKG_VERSION").to_string());
     v.insert(

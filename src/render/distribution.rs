@@ -36,8 +36,7 @@ use crate::render::specular::{reflect, reflection_ray};
 use crate::render::wavefront::{trace, Answers, BatchRecord, Tracing, Work};
 use crate::scene::{Camera, Frame, Scene};
 use crate::tracers::visibility::{LightSamples, QuadLight, ShadingPoint, ShadingPoints};
-use crate::tracers::{Params, Tracer, VisibilityQuery};
-use crate::verify::tracer_for_mesh;
+use crate::tracers::{tracer_for_mesh, Params, Tracer, VisibilityQuery};
 
 /// A wave holds at least this many camera rays (whole tiles), so each traced batch spreads over
 /// many `tracers::batch` chunks and every core has work even at 1 sample per pixel.
@@ -496,8 +495,8 @@ mod tests {
     use super::*;
     use crate::scene::builtin::room::EXTENT;
     use crate::scene::{library::load_scene, Light};
+    use crate::tracers::tracer_for_frame;
     use crate::tracers::Params;
-    use crate::verify::tracer_for_frame;
 
     fn lens_camera(aperture: f32) -> Camera {
         Camera {

@@ -100,20 +100,21 @@ pub fn answer(
     answers: &mut Answers,
     counters: Option<&mut Counters>,
 ) {
+    let chunk = tracer.chunk_rays();
     match (work, answers, counters) {
         (Work::Closest(batch), Answers::Hits(out), None) => {
-            pass(batch.view(), out, &|r, h| tracer.intersect(r, h))
+            pass(batch.view(), out, chunk, &|r, h| tracer.intersect(r, h))
         }
         (Work::Closest(batch), Answers::Hits(out), Some(c)) => {
-            c.merge(&counted_pass(batch.view(), out, &|r, h, c| {
+            c.merge(&counted_pass(batch.view(), out, chunk, &|r, h, c| {
                 tracer.intersect_counted(r, h, c)
             }))
         }
         (Work::Occlusion(batch), Answers::Occluded(out), None) => {
-            pass(batch.view(), out, &|r, o| tracer.occluded(r, o))
+            pass(batch.view(), out, chunk, &|r, o| tracer.occluded(r, o))
         }
         (Work::Occlusion(batch), Answers::Occluded(out), Some(c)) => {
-            c.merge(&counted_pass(batch.view(), out, &|r, o, c| {
+            c.merge(&counted_pass(batch.view(), out, chunk, &|r, o, c| {
                 tracer.occluded_counted(r, o, c)
             }))
         }

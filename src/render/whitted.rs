@@ -352,8 +352,8 @@ mod tests {
     use super::*;
     use crate::geometry::Triangle;
     use crate::scene::{Camera, Mesh};
+    use crate::tracers::tracer_for_frame;
     use crate::tracers::Params;
-    use crate::verify::tracer_for_frame;
 
     /// Two facing mirrors (reflectance 0.5, diffuse 0.2, no lights) at z = −1 and z = +1, 200
     /// units wide, with the camera between them looking down −z: every camera ray bounces

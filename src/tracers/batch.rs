@@ -1,6 +1,7 @@
-//! Tracing a whole batch: contiguous chunks of the batch spread over the current rayon pool. The
-//! runner's timed and counted passes, verification and secondary-ray generation all go through
-//! here, so every caller splits a batch the same way.
+//! Tracing a whole batch: contiguous chunks of the batch spread over the current rayon pool, each
+//! as long as the tracer asks (`Tracer::chunk_rays`). The runner's timed and counted passes,
+//! verification and secondary-ray generation all go through here, so every caller splits a batch
+//! the same way.
 
 use std::ops::Range;
 
@@ -10,18 +11,18 @@ use crate::geometry::{Hit, RayBatch, Rays};
 use crate::stats::Counters;
 use crate::tracers::{Tracer, VisibilityQuery};
 
-/// Rays per work chunk (at least; see `chunk_ranges`). 4096 = four whole 32×32 camera tiles: a multiple of 16 (and of every
+/// Rays per work chunk of most tracers (at least; see `chunk_ranges`). 4096 = four whole 32×32 camera tiles: a multiple of 16 (and of every
 /// aligned n×n block, n ≤ 32), so no packet or Morton block of primary rays straddles two chunks
 /// and packet and stream tracers see the same coherent groups whatever the thread count; large
 /// enough that rayon's per-chunk cost (~1 µs) is noise next to tracing 4096 rays, small enough
 /// that a 1024² batch gives 256 chunks for load balancing.
 pub const CHUNK_RAYS: usize = 4096;
 
-/// The chunks of `rays`: runs of `CHUNK_RAYS`, or, when the batch has explicit packets, runs of
-/// whole packets each ending at the first packet start at or past `CHUNK_RAYS` rays, so that no
+/// The chunks of `rays`: runs of `chunk_rays`, or, when the batch has explicit packets, runs of
+/// whole packets each ending at the first packet start at or past `chunk_rays` rays, so that no
 /// packet is split between two chunks.
-fn chunk_ranges(rays: Rays<'_>) -> Vec<Range<usize>> {
-    packet_chunks(rays.len(), rays.packet_start, CHUNK_RAYS)
+fn chunk_ranges(rays: Rays<'_>, chunk_rays: usize) -> Vec<Range<usize>> {
+    packet_chunks(rays.len(), rays.packet_start, chunk_rays)
 }
 
 /// Runs of `len` items, at least `at_least` long (but the last), each ending at a packet start
@@ -42,9 +43,13 @@ fn packet_chunks(len: usize, packet_start: &[bool], at_least: usize) -> Vec<Rang
     chunks
 }
 
-/// `out` cut along `chunk_ranges(rays)`, each part with its rays.
-fn chunks<'a, 'r, T>(rays: Rays<'r>, mut out: &'a mut [T]) -> Vec<(Rays<'r>, &'a mut [T])> {
-    chunk_ranges(rays)
+/// `out` cut along `chunk_ranges(rays, chunk_rays)`, each part with its rays.
+fn chunks<'a, 'r, T>(
+    rays: Rays<'r>,
+    mut out: &'a mut [T],
+    chunk_rays: usize,
+) -> Vec<(Rays<'r>, &'a mut [T])> {
+    chunk_ranges(rays, chunk_rays)
         .into_iter()
         .map(|range| {
             let (chunk, rest) = std::mem::take(&mut out).split_at_mut(range.len());
@@ -54,9 +59,14 @@ fn chunks<'a, 'r, T>(rays: Rays<'r>, mut out: &'a mut [T]) -> Vec<(Rays<'r>, &'a
         .collect()
 }
 
-/// One pass of `trace` over `rays`, chunk by chunk, in the current pool.
-pub fn pass<T: Send>(rays: Rays<'_>, out: &mut [T], trace: &(dyn Fn(Rays<'_>, &mut [T]) + Sync)) {
-    chunks(rays, out)
+/// One pass of `trace` over `rays`, `chunk_rays` at a time, in the current pool.
+pub fn pass<T: Send>(
+    rays: Rays<'_>,
+    out: &mut [T],
+    chunk_rays: usize,
+    trace: &(dyn Fn(Rays<'_>, &mut [T]) + Sync),
+) {
+    chunks(rays, out, chunk_rays)
         .into_par_iter()
         .for_each(|(rays, chunk)| trace(rays, chunk));
 }
@@ -65,9 +75,10 @@ pub fn pass<T: Send>(rays: Rays<'_>, out: &mut [T], trace: &(dyn Fn(Rays<'_>, &m
 pub fn counted_pass<T: Send>(
     rays: Rays<'_>,
     out: &mut [T],
+    chunk_rays: usize,
     trace: &(dyn Fn(Rays<'_>, &mut [T], &mut Counters) + Sync),
 ) -> Counters {
-    chunks(rays, out)
+    chunks(rays, out, chunk_rays)
         .into_par_iter()
         .map(|(rays, chunk)| {
             let mut counters = Counters::default();
@@ -77,13 +88,14 @@ pub fn counted_pass<T: Send>(
         .reduce(Counters::default, merge)
 }
 
-/// The chunks of a light-visibility query: whole packets of points, about `CHUNK_RAYS` rays each.
+/// The chunks of a light-visibility query: whole packets of points, about `chunk_rays` rays each.
 fn visibility_chunks<'a, 'q>(
     query: VisibilityQuery<'q>,
     mut out: &'a mut [u64],
+    chunk_rays: usize,
 ) -> Vec<(VisibilityQuery<'q>, &'a mut [u64])> {
     let words = query.samples.words_per_point();
-    let points = CHUNK_RAYS.div_ceil(query.samples.per_point());
+    let points = chunk_rays.div_ceil(query.samples.per_point());
     packet_chunks(query.len(), query.packet_start, points)
         .into_iter()
         .map(|range| {
@@ -102,7 +114,7 @@ pub fn visibility_pass(
     out: &mut [u64],
     counters: Option<&mut Counters>,
 ) {
-    let chunks = visibility_chunks(query, out).into_par_iter();
+    let chunks = visibility_chunks(query, out, tracer.chunk_rays()).into_par_iter();
     match counters {
         None => chunks.for_each(|(q, o)| tracer.light_visibility(q, o)),
         Some(total) => {
@@ -126,14 +138,18 @@ fn merge(mut a: Counters, b: Counters) -> Counters {
 /// Closest hits of a whole batch.
 pub fn trace_hits(tracer: &dyn Tracer, batch: &RayBatch) -> Vec<Hit> {
     let mut hits = vec![Hit::MISS; batch.len()];
-    pass(batch.view(), &mut hits, &|r, h| tracer.intersect(r, h));
+    pass(batch.view(), &mut hits, tracer.chunk_rays(), &|r, h| {
+        tracer.intersect(r, h)
+    });
     hits
 }
 
 /// Occlusion flags of a whole batch.
 pub fn trace_occlusion(tracer: &dyn Tracer, batch: &RayBatch) -> Vec<bool> {
     let mut flags = vec![false; batch.len()];
-    pass(batch.view(), &mut flags, &|r, o| tracer.occluded(r, o));
+    pass(batch.view(), &mut flags, tracer.chunk_rays(), &|r, o| {
+        tracer.occluded(r, o)
+    });
     flags
 }
 
@@ -158,7 +174,10 @@ mod tests {
     #[test]
     fn uniform_chunks_are_chunk_rays_long() {
         let b = batch(2 * CHUNK_RAYS + 5, None);
-        let lens: Vec<usize> = chunk_ranges(b.view()).iter().map(|r| r.len()).collect();
+        let lens: Vec<usize> = chunk_ranges(b.view(), CHUNK_RAYS)
+            .iter()
+            .map(|r| r.len())
+            .collect();
         assert_eq!(lens, vec![CHUNK_RAYS, CHUNK_RAYS, 5]);
     }
 
@@ -166,11 +185,11 @@ mod tests {
     fn chunks_never_split_an_explicit_packet() {
         // Packets of 1000 rays: a chunk ends at the first packet start at or past 4096 rays.
         let b = batch(10_000, Some(1000));
-        let ranges = chunk_ranges(b.view());
+        let ranges = chunk_ranges(b.view(), CHUNK_RAYS);
         assert_eq!(ranges, vec![0..5000, 5000..10_000]);
         // Every ray is traced exactly once, in its own slot.
         let mut out = vec![0.0f32; b.len()];
-        pass(b.view(), &mut out, &|r, o| {
+        pass(b.view(), &mut out, CHUNK_RAYS, &|r, o| {
             for (i, x) in o.iter_mut().enumerate() {
                 *x = r.tmax[i];
             }

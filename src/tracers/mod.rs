@@ -7,7 +7,6 @@ pub mod dda;
 pub mod embree;
 pub mod obvhs;
 pub mod packet;
-pub mod params;
 pub mod reference;
 pub mod registry;
 pub mod visibility;
@@ -15,8 +14,10 @@ pub mod visibility;
 use crate::geometry::{Hit, Ray, Rays};
 use crate::stats::{Counters, NoStats, Stats};
 
-pub use params::Params;
-pub use registry::{build_tracer, TracerInfo, TRACERS};
+pub use crate::params::Params;
+pub use registry::{
+    build_tracer, oracle_params, tracer_for_frame, tracer_for_mesh, TracerInfo, ORACLE, TRACERS,
+};
 pub use visibility::VisibilityQuery;
 
 /// What an algorithm implements: closest hit and occlusion over a chunk of rays, generic over the
@@ -68,6 +69,8 @@ impl<T: SingleRayKernel> Kernel for T {
 /// The object-safe face of a `Kernel`: the runner holds `Box<dyn Tracer>`.
 pub trait Tracer: Send + Sync {
     fn counts_internals(&self) -> bool;
+    /// Rays per work chunk of a batch pass (`TracerInfo::chunk_rays`).
+    fn chunk_rays(&self) -> usize;
     fn intersect(&self, rays: Rays<'_>, hits: &mut [Hit]);
     fn occluded(&self, rays: Rays<'_>, occluded: &mut [bool]);
     fn intersect_counted(&self, rays: Rays<'_>, hits: &mut [Hit], counters: &mut Counters);
@@ -84,6 +87,9 @@ pub trait Tracer: Send + Sync {
 impl<K: Kernel> Tracer for K {
     fn counts_internals(&self) -> bool {
         K::COUNTS_INTERNALS
+    }
+    fn chunk_rays(&self) -> usize {
+        batch::CHUNK_RAYS
     }
     fn intersect(&self, rays: Rays<'_>, hits: &mut [Hit]) {
         self.intersect_with(rays, hits, &mut NoStats)

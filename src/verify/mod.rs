@@ -14,33 +14,12 @@ use crate::error::Result;
 use crate::geometry::{RayBatch, RayKind};
 use crate::render::rays::{diffuse_rays, primary_rays, shadow_rays};
 use crate::render::specular::specular_rays;
-use crate::scene::{Frame, Mesh, Scene};
+use crate::scene::{Frame, Scene};
 use crate::tracers::batch::{trace_hits, trace_occlusion};
-use crate::tracers::{build_tracer, Params, Tracer, TracerInfo};
+use crate::tracers::{oracle_params, tracer_for_frame, Params, Tracer, ORACLE};
 
 pub use compare::{Agreement, Mismatch, Tie};
 pub use report::{format_table, write_csv, KindReport, Tolerance};
-
-/// The tracer verification compares against: Embree's single-ray call on a robust, high-quality scene.
-pub const ORACLE: &str = "embree1";
-
-pub fn oracle_params() -> Params {
-    Params::new().with("robust", "true").with("quality", "high")
-}
-
-/// Builds `name` with `params` over `frame`'s geometry (its own structure, built here).
-pub fn tracer_for_frame(name: &str, params: &Params, frame: &Frame) -> Result<Box<dyn Tracer>> {
-    tracer_for_mesh(name, params, &frame.mesh)
-}
-
-/// Builds `name` with `params` over `mesh` (its own structure, built here).
-pub fn tracer_for_mesh(name: &str, params: &Params, mesh: &Mesh) -> Result<Box<dyn Tracer>> {
-    let info = TracerInfo::find(name)?;
-    let accel = info
-        .accel
-        .build(mesh, &params.subset(info.accel.params()))?;
-    build_tracer(info, params, &accel)
-}
 
 /// The verification batches of one frame: camera rays, and the shadow, diffuse, reflection and
 /// refraction rays leaving the oracle's primary hits (so the rays do not depend on the tracer

@@ -4,7 +4,7 @@
 //! back, tfar is the hit distance, primID our triangle index, and (u, v) already our convention
 //! (`Triangle::point(u, v)`).
 
-use super::ffi::{RTCHit, RTCRay, RTCRayHit, RTC_INVALID_GEOMETRY_ID};
+use crate::accel::embree::ffi::{RTCHit, RTCRay, RTCRayHit, RTC_INVALID_GEOMETRY_ID};
 use crate::geometry::{Hit, Rays};
 
 /// Every ray sees every geometry.

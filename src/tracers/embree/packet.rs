@@ -5,8 +5,11 @@
 
 use std::marker::PhantomData;
 
-use super::ffi::{self, RTCIntersectContext, RTCRay, RTCScene, RTC_INVALID_GEOMETRY_ID};
-use super::{convert, EmbreeScene, Submission};
+use super::{convert, Submission};
+use crate::accel::embree::ffi::{
+    self, RTCIntersectContext, RTCRay, RTCScene, RTC_INVALID_GEOMETRY_ID,
+};
+use crate::accel::embree::EmbreeScene;
 use crate::geometry::{Hit, Rays};
 
 /// An Embree ray packet (`RTCRayN`): N lanes of rays, traced by `rtcOccludedN`.

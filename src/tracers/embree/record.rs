@@ -4,7 +4,7 @@
 use std::mem::size_of;
 
 use super::convert;
-use super::ffi::{self, RTCIntersectContext, RTCRay, RTCRayHit, RTCScene};
+use crate::accel::embree::ffi::{self, RTCIntersectContext, RTCRay, RTCRayHit, RTCScene};
 use crate::geometry::{Hit, Rays};
 
 /// A single-ray Embree record, the calls that trace it and what it answers.

@@ -1,8 +1,9 @@
 //! `embree1`: one `rtcIntersect1` / `rtcOccluded1` call per ray.
 
-use super::ffi::{RTCIntersectContext, RTCRay, RTCRayHit};
 use super::record::RayRecord;
-use super::{EmbreeScene, Submission};
+use super::Submission;
+use crate::accel::embree::ffi::{RTCIntersectContext, RTCRay, RTCRayHit};
+use crate::accel::embree::EmbreeScene;
 use crate::geometry::{Hit, Rays};
 
 pub struct Single;

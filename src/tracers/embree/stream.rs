@@ -9,9 +9,10 @@
 use std::cell::RefCell;
 use std::thread::LocalKey;
 
-use super::ffi::{RTCIntersectContext, RTCRay, RTCRayHit};
 use super::record::RayRecord;
-use super::{EmbreeScene, Submission};
+use super::Submission;
+use crate::accel::embree::ffi::{RTCIntersectContext, RTCRay, RTCRayHit};
+use crate::accel::embree::EmbreeScene;
 use crate::geometry::{Hit, Rays};
 
 /// Rays per stream call: 4096 × 80 bytes of RTCRayHit = 320 KiB, within L2.

@@ -7,12 +7,13 @@ use std::str::FromStr;
 use std::sync::Arc;
 
 use super::denormals::FlushDenormals;
-use super::ffi::{self, RTCIntersectContext, RTCIntersectContextFlags};
-use super::EmbreeScene;
+use crate::accel::embree::ffi::{self, RTCIntersectContext, RTCIntersectContextFlags};
+use crate::accel::embree::EmbreeScene;
 use crate::error::Result;
 use crate::geometry::{Hit, Rays};
+use crate::params::Params;
 use crate::stats::Stats;
-use crate::tracers::{Kernel, Params};
+use crate::tracers::Kernel;
 
 /// One way of calling Embree's intersect/occluded functions on a chunk of rays.
 pub trait Submission: 'static {

@@ -5,7 +5,7 @@ use std::str::FromStr;
 
 use super::ffi::{RTCBuildQuality, RTCSceneFlags};
 use crate::error::Result;
-use crate::tracers::Params;
+use crate::params::Params;
 
 /// Embree's build qualities. `Refit` keeps the tree's topology and only refits its boxes when
 /// the vertices move (`EmbreeScene::refit`), for per-frame animation.

@@ -219,8 +219,13 @@ impl EmbreeScene {
         self.triangle_count
     }
 
+    /// Whether it has two time steps (`build_moving`).
+    pub fn is_moving(&self) -> bool {
+        self.moving
+    }
+
     /// The committed scene handle, for the tracers.
-    pub(super) fn raw(&self) -> ffi::RTCScene {
+    pub(crate) fn raw(&self) -> ffi::RTCScene {
         self.raw
     }
 }
