@@ -12,6 +12,8 @@ pub mod random;
 pub mod render;
 pub mod scene;
 pub mod stats;
+#[doc(hidden)]
+pub mod test_util;
 pub mod tracers;
 pub mod verify;
 

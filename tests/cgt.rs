@@ -16,6 +16,7 @@ use raylab::render::sampling::uniform;
 use raylab::scene::library::load_scene;
 use raylab::scene::Camera;
 use raylab::stats::{Counters, Event};
+use raylab::test_util::Soup;
 use raylab::tracers::cgt::{CgtConfig, CgtTracer};
 use raylab::tracers::reference::ReferenceTracer;
 use raylab::tracers::{Kernel, Params, Tracer};
@@ -78,16 +79,15 @@ fn agrees_with_embree_on_builtin_scenes() {
 }
 
 /// A random soup in [0, 10]³: small triangles, plus long thin ones spanning many cells.
-fn soup(n: u64, seed: u64) -> Vec<Triangle> {
-    let r = |i: u64, d: u32| uniform(seed, i, d);
-    (0..n)
-        .map(|i| {
-            let c = Vec3::new(r(i, 0), r(i, 1), r(i, 2)) * 10.0;
-            let size = if i % 10 == 0 { 6.0 } else { 0.8 };
-            let corner = |k: u32| c + (Vec3::new(r(i, k), r(i, k + 1), r(i, k + 2)) - 0.5) * size;
-            Triangle::new(corner(3), corner(6), corner(9))
-        })
-        .collect()
+fn soup(n: usize, seed: u64) -> Vec<Triangle> {
+    let soup = Soup {
+        lo: 0.0,
+        hi: 10.0,
+        size: 0.4,
+        long: Some((10, 7.5)),
+        collinear_every: None,
+    };
+    soup.triangles(n, seed)
 }
 
 fn random_dir(seed: u64, i: u64) -> Vec3 {

@@ -10,6 +10,7 @@ use raylab::accel::{Accel, AccelKind};
 use raylab::geometry::{Hit, Ray, RayBatch, RayKind, Triangle};
 use raylab::scene::Mesh;
 use raylab::stats::Counters;
+use raylab::test_util::Soup;
 use raylab::tracers::embree::STREAM_LENGTH;
 use raylab::tracers::{build_tracer, Params, Tracer, TracerInfo};
 
@@ -233,15 +234,15 @@ impl Lcg {
     }
 }
 
-fn triangle_soup(n: usize, rng: &mut Lcg) -> Mesh {
-    mesh_of(
-        (0..n)
-            .map(|_| {
-                let p = rng.vec3() * 10.0;
-                Triangle::new(p, p + (rng.vec3() - 0.5), p + (rng.vec3() - 0.5))
-            })
-            .collect(),
-    )
+fn triangle_soup(n: usize, seed: u64) -> Mesh {
+    let soup = Soup {
+        lo: 0.0,
+        hi: 10.0,
+        size: 0.5,
+        long: None,
+        collinear_every: None,
+    };
+    mesh_of(soup.triangles(n, seed))
 }
 
 /// Rays from around the soup's box through points inside it, with a random tmax on a third of
@@ -266,7 +267,7 @@ fn relative_gap(a: f32, b: f32) -> f32 {
 #[test]
 fn random_soup_matches_the_reference_tracer() {
     let mut rng = Lcg(2024);
-    let mesh = triangle_soup(3000, &mut rng);
+    let mesh = triangle_soup(3000, 2024);
     // 3001 = 187·16 + 9: the last packet is partial for every width.
     let rays = soup_rays(3001, &mut rng);
     let reference = accel(AccelKind::Bvh, &mesh, &Params::new());
@@ -343,7 +344,7 @@ fn random_soup_matches_the_reference_tracer() {
 fn threads_trace_one_committed_scene_concurrently() {
     use rayon::prelude::*;
     let mut rng = Lcg(77);
-    let mesh = triangle_soup(2000, &mut rng);
+    let mesh = triangle_soup(2000, 77);
     let rays = soup_rays(4000, &mut rng);
     let scene = accel(
         AccelKind::Embree,

@@ -12,7 +12,7 @@ const LAYERS: &[&[&str]] = &[
     &["tracers"],
     &["accel"],
     &["scene"],
-    &["lanes", "geometry", "stats"],
+    &["lanes", "geometry", "stats", "test_util"],
 ];
 
 /// Modules every layer may use: errors, seeded randomness, the parameter map.

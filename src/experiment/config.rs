@@ -81,10 +81,9 @@ use toml::Spanned;
 use crate::accel::AccelKind;
 use crate::error::{Error, Result};
 use crate::geometry::RayKind;
-use crate::render::assembly::Assembly;
 use crate::render::distribution::DrtSettings;
 use crate::render::interleaved::SampleTable;
-use crate::render::whitted::{parse_materials, WhittedSettings, DEFAULT_PRUNING_THRESHOLD};
+use crate::render::whitted::WhittedSettings;
 use crate::tracers::visibility::LightSamples;
 use crate::tracers::{Params, TracerInfo};
 
@@ -191,99 +190,25 @@ impl fmt::Display for RenderWorkload {
     }
 }
 
-/// The keys of the `render` table besides `renderer`.
-const RENDER_KEYS: [&str; 8] = [
-    "max_depth",
-    "max_reflection_depth",
-    "max_refraction_depth",
-    "shadows",
-    "pruning",
-    "assembly",
-    "packet",
-    "materials",
-];
-
-/// The keys of a distribution `render` table besides `renderer`.
-const DISTRIBUTION_KEYS: [&str; 5] = ["spp", "aperture", "focus", "shutter", "max_depth"];
-
-/// One combination of a distribution `render` grid, or what is wrong with it.
-fn distribution_workload(params: &Params) -> std::result::Result<DistributionWorkload, String> {
-    let mut w = DistributionWorkload {
-        settings: DrtSettings::default(),
-        shutter: None,
+/// One combination of a distribution `render` grid: the renderer's settings and the workload's
+/// shutter interval (motion blur), or what is wrong with them.
+fn distribution_workload(params: &Params) -> Result<DistributionWorkload> {
+    let mut settings = params.clone();
+    let shutter = match settings.0.remove("shutter") {
+        None => None,
+        Some(value) => match value.parse::<f32>() {
+            Ok(s) if s > 0.0 && s.is_finite() => Some(s),
+            _ => {
+                return Err(Error::usage(format!(
+                    "render shutter = {value:?} is not valid (a shutter interval > 0 s)"
+                )))
+            }
+        },
     };
-    for (key, value) in &params.0 {
-        let bad = || format!("render {key} = {value:?} is not valid");
-        let number = || value.parse::<f32>().map_err(|_| bad());
-        match key.as_str() {
-            "spp" => w.settings.spp = value.parse().map_err(|_| bad())?,
-            "aperture" => w.settings.aperture = Some(number()?),
-            "focus" => w.settings.focus_distance = Some(number()?),
-            "max_depth" => w.settings.max_depth = value.parse().map_err(|_| bad())?,
-            "shutter" => match number()? {
-                s if s > 0.0 && s.is_finite() => w.shutter = Some(s),
-                _ => return Err(format!("{} (a shutter interval > 0 s)", bad())),
-            },
-            _ => {
-                return Err(format!(
-                    "unknown distribution render key {key:?} (known: renderer, {})",
-                    DISTRIBUTION_KEYS.join(", ")
-                ))
-            }
-        }
-    }
-    w.settings.check().map_err(|e| e.to_string())?;
-    SampleTable::new(w.settings.spp, w.settings.seed)
-        .map_err(|e| format!("render spp = {}: {e}", w.settings.spp))?;
-    Ok(w)
-}
-
-/// One combination of the `render` grid as settings, or what is wrong with it.
-fn whitted_settings(params: &Params) -> std::result::Result<WhittedSettings, String> {
-    let mut s = WhittedSettings::default();
-    for (key, value) in &params.0 {
-        let bad = || format!("render {key} = {value:?} is not valid");
-        match key.as_str() {
-            "max_depth" => s.max_depth = value.parse().map_err(|_| bad())?,
-            "max_reflection_depth" => {
-                s.max_reflection_depth = Some(value.parse().map_err(|_| bad())?)
-            }
-            "max_refraction_depth" => {
-                s.max_refraction_depth = Some(value.parse().map_err(|_| bad())?)
-            }
-            "shadows" => s.shadows = value.parse().map_err(|_| bad())?,
-            "pruning" => {
-                s.pruning = match value.as_str() {
-                    "true" => Some(DEFAULT_PRUNING_THRESHOLD),
-                    "false" => None,
-                    v => match v.parse::<f32>() {
-                        Ok(t) => Some(t),
-                        _ => return Err(format!("{} (true, false or a threshold > 0)", bad())),
-                    },
-                }
-            }
-            "assembly" => {
-                s.assembly = Assembly::parse(value)
-                    .ok_or_else(|| format!("{} (known: {})", bad(), Assembly::names()))?
-            }
-            "packet" => {
-                s.packet = value
-                    .parse()
-                    .map_err(|_| format!("{} (a packet side ≥ 1)", bad()))?
-            }
-            "materials" => {
-                s.materials = parse_materials(value).map_err(|e| format!("render: {e}"))?
-            }
-            _ => {
-                return Err(format!(
-                    "unknown render key {key:?} (known: renderer, {})",
-                    RENDER_KEYS.join(", ")
-                ))
-            }
-        }
-    }
-    s.check().map_err(|e| format!("render: {e}"))?;
-    Ok(s)
+    Ok(DistributionWorkload {
+        settings: DrtSettings::from_params(&settings, &["shutter"])?,
+        shutter,
+    })
 }
 
 /// One tracer with one combination of parameters: one column of every comparison.
@@ -759,21 +684,20 @@ fn expand_render_grid(
     table: &Spanned<BTreeMap<String, toml::Value>>,
 ) -> Result<Vec<RenderWorkload>> {
     let mut axes = src.param_axes(table)?;
-    let workload: fn(&Params) -> std::result::Result<RenderWorkload, String> =
-        match axes.remove("renderer").as_deref() {
-            Some([name]) if name == "whitted" => {
-                |params| whitted_settings(params).map(RenderWorkload::Whitted)
-            }
-            Some([name]) if name == "distribution" => {
-                |params| distribution_workload(params).map(RenderWorkload::Distribution)
-            }
-            _ => {
-                return Err(src.usage_error(
-                    &table.span(),
-                    "render needs renderer = \"whitted\" or \"distribution\"",
-                ))
-            }
-        };
+    let workload: fn(&Params) -> Result<RenderWorkload> = match axes.remove("renderer").as_deref() {
+        Some([name]) if name == "whitted" => {
+            |params| WhittedSettings::from_params(params).map(RenderWorkload::Whitted)
+        }
+        Some([name]) if name == "distribution" => {
+            |params| distribution_workload(params).map(RenderWorkload::Distribution)
+        }
+        _ => {
+            return Err(src.usage_error(
+                &table.span(),
+                "render needs renderer = \"whitted\" or \"distribution\"",
+            ))
+        }
+    };
     cartesian(&axes)
         .iter()
         .map(|params| workload(params).map_err(|e| src.usage_error(&table.span(), e)))
@@ -794,6 +718,7 @@ fn cartesian(axes: &BTreeMap<String, Vec<String>>) -> Vec<Params> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::render::assembly::Assembly;
     use crate::scene::scene_file::Preset;
 
     fn parse(text: &str) -> Result<Experiment> {

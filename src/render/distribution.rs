@@ -83,6 +83,37 @@ impl Default for DrtSettings {
 }
 
 impl DrtSettings {
+    /// The keys of an experiment's distribution `render` table besides `renderer`.
+    pub const KEYS: [&str; 4] = ["spp", "aperture", "focus", "max_depth"];
+
+    /// Settings from one combination of an experiment's `render` grid (defaults for the keys it
+    /// does not give), checked; `also` names the workload's own keys, for the message on an
+    /// unknown one.
+    pub fn from_params(params: &Params, also: &[&str]) -> Result<Self> {
+        let mut s = DrtSettings::default();
+        for (key, value) in &params.0 {
+            let bad = || Error::usage(format!("render {key} = {value:?} is not valid"));
+            let number = || value.parse::<f32>().map_err(|_| bad());
+            match key.as_str() {
+                "spp" => s.spp = value.parse().map_err(|_| bad())?,
+                "aperture" => s.aperture = Some(number()?),
+                "focus" => s.focus_distance = Some(number()?),
+                "max_depth" => s.max_depth = value.parse().map_err(|_| bad())?,
+                _ => {
+                    let known: Vec<&str> = Self::KEYS.iter().chain(also).copied().collect();
+                    return Err(Error::usage(format!(
+                        "unknown distribution render key {key:?} (known: renderer, {})",
+                        known.join(", ")
+                    )));
+                }
+            }
+        }
+        s.check()?;
+        SampleTable::new(s.spp, s.seed)
+            .map_err(|e| Error::usage(format!("render spp = {}: {e}", s.spp)))?;
+        Ok(s)
+    }
+
     pub fn check(&self) -> Result<()> {
         let lens_ok = self.aperture.is_none_or(|a| a.is_finite() && a >= 0.0)
             && self.focus_distance.is_none_or(|f| f.is_finite() && f > 0.0);

@@ -34,7 +34,7 @@ use crate::render::specular::{reflect, reflection_ray, refraction_ray, specular_
 use crate::render::wavefront::{trace, Answers, BatchRecord, Tracing, Work};
 use crate::scene::scene_file::Preset;
 use crate::scene::{Frame, Material, Scene};
-use crate::tracers::Tracer;
+use crate::tracers::{Params, Tracer};
 
 /// Default ray-tree attenuation threshold: 1/256, one step of an 8-bit pixel. A subtree whose
 /// weight is below it changes the pixel by less than one display step as long as its radiance
@@ -102,6 +102,69 @@ pub fn parse_materials(name: &str) -> Result<Option<Preset>> {
                 presets.join(", ")
             ))
         }),
+    }
+}
+
+impl WhittedSettings {
+    /// The keys of an experiment's whitted `render` table besides `renderer`.
+    pub const KEYS: [&str; 8] = [
+        "max_depth",
+        "max_reflection_depth",
+        "max_refraction_depth",
+        "shadows",
+        "pruning",
+        "assembly",
+        "packet",
+        "materials",
+    ];
+
+    /// Settings from one combination of an experiment's `render` grid (defaults for the keys it
+    /// does not give), checked.
+    pub fn from_params(params: &Params) -> Result<Self> {
+        let mut s = WhittedSettings::default();
+        for (key, value) in &params.0 {
+            let bad =
+                |what: &str| Error::usage(format!("render {key} = {value:?} is not valid{what}"));
+            match key.as_str() {
+                "max_depth" => s.max_depth = value.parse().map_err(|_| bad(""))?,
+                "max_reflection_depth" => {
+                    s.max_reflection_depth = Some(value.parse().map_err(|_| bad(""))?)
+                }
+                "max_refraction_depth" => {
+                    s.max_refraction_depth = Some(value.parse().map_err(|_| bad(""))?)
+                }
+                "shadows" => s.shadows = value.parse().map_err(|_| bad(""))?,
+                "pruning" => {
+                    s.pruning = match value.as_str() {
+                        "true" => Some(DEFAULT_PRUNING_THRESHOLD),
+                        "false" => None,
+                        _ => Some(
+                            value
+                                .parse()
+                                .map_err(|_| bad(" (true, false or a threshold > 0)"))?,
+                        ),
+                    }
+                }
+                "assembly" => {
+                    s.assembly = Assembly::parse(value)
+                        .ok_or_else(|| bad(&format!(" (known: {})", Assembly::names())))?
+                }
+                "packet" => s.packet = value.parse().map_err(|_| bad(" (a packet side ≥ 1)"))?,
+                "materials" => {
+                    s.materials =
+                        parse_materials(value).map_err(|e| Error::usage(format!("render: {e}")))?
+                }
+                _ => {
+                    return Err(Error::usage(format!(
+                        "unknown render key {key:?} (known: renderer, {})",
+                        Self::KEYS.join(", ")
+                    )))
+                }
+            }
+        }
+        s.check()
+            .map_err(|e| Error::usage(format!("render: {e}")))?;
+        Ok(s)
     }
 }
 

@@ -311,23 +311,17 @@ mod tests {
     use crate::geometry::{RayBatch, RayKind, Triangle};
     use crate::random::SplitMix64;
     use crate::stats::{Counters, NoStats};
+    use crate::test_util::Soup;
     use crate::tracers::reference::ReferenceTracer;
     use crate::tracers::Kernel;
 
-    /// `n` triangles with centres in [-1, 1]³ and edges up to `size` long, every 20th degenerate.
+    /// `n` triangles in [-1, 1]³ of spread `size`, every 20th degenerate.
     fn soup(n: usize, size: f32, seed: u64) -> Vec<Triangle> {
-        let mut rng = SplitMix64::new(seed);
-        (0..n)
-            .map(|i| {
-                let c = rng.vec3(-1.0, 1.0);
-                let d = rng.vec3(-size, size);
-                if i % 20 == 0 {
-                    Triangle::new(c, c + d, c + 2.0 * d)
-                } else {
-                    Triangle::new(c, c + d, c + rng.vec3(-size, size))
-                }
-            })
-            .collect()
+        let soup = Soup {
+            collinear_every: Some(20),
+            ..Soup::unit(size)
+        };
+        soup.triangles(n, seed)
     }
 
     /// Rays of five families in turn: from outside towards the soup, from inside in a random

@@ -192,23 +192,13 @@ mod tests {
     use crate::random::SplitMix64;
     use crate::scene::Mesh;
     use crate::stats::{Counters, NoStats};
+    use crate::test_util::Soup;
     use crate::tracers::reference::ReferenceTracer;
     use crate::tracers::Kernel;
     use crate::tracers::{build_tracer, Params, TracerInfo};
 
-    /// `n` triangles with centres in [-1, 1]³ and edges up to `size` long.
     fn soup(n: usize, size: f32, seed: u64) -> Vec<Triangle> {
-        let mut rng = SplitMix64::new(seed);
-        (0..n)
-            .map(|_| {
-                let c = rng.vec3(-1.0, 1.0);
-                Triangle::new(
-                    c + rng.vec3(-size, size),
-                    c + rng.vec3(-size, size),
-                    c + rng.vec3(-size, size),
-                )
-            })
-            .collect()
+        Soup::unit(size).triangles(n, seed)
     }
 
     /// How a ray of the mixed test batch was made, so each family can be checked to be exercised.

@@ -1,0 +1,80 @@
+//! Fixtures shared by the unit tests and the integration tests in `tests/`: seeded triangle
+//! soups. Not part of the testbed's interface (hidden from the docs).
+
+use crate::geometry::Triangle;
+use crate::random::SplitMix64;
+
+/// A seeded triangle soup: triangles with centres uniform in the cube `[lo, hi]³`, each corner
+/// up to `size` away from the centre along every axis.
+#[derive(Clone, Copy, Debug)]
+pub struct Soup {
+    pub lo: f32,
+    pub hi: f32,
+    pub size: f32,
+    /// Every `n`-th triangle is this many times larger: long thin triangles across many cells.
+    pub long: Option<(usize, f32)>,
+    /// Every `n`-th triangle is degenerate: three collinear corners (zero area).
+    pub collinear_every: Option<usize>,
+}
+
+impl Soup {
+    /// Triangles in `[-1, 1]³` of corner spread `size`, none long or degenerate.
+    pub fn unit(size: f32) -> Soup {
+        Soup {
+            lo: -1.0,
+            hi: 1.0,
+            size,
+            long: None,
+            collinear_every: None,
+        }
+    }
+
+    pub fn triangles(&self, n: usize, seed: u64) -> Vec<Triangle> {
+        let mut rng = SplitMix64::new(seed);
+        (0..n)
+            .map(|i| {
+                let c = rng.vec3(self.lo, self.hi);
+                let size = match self.long {
+                    Some((every, factor)) if i % every == 0 => self.size * factor,
+                    _ => self.size,
+                };
+                let d = rng.vec3(-size, size);
+                match self.collinear_every {
+                    Some(every) if i % every == 0 => Triangle::new(c, c + d, c + 2.0 * d),
+                    _ => Triangle::new(c + d, c + rng.vec3(-size, size), c + rng.vec3(-size, size)),
+                }
+            })
+            .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn soups_are_seeded_bounded_and_have_their_slivers() {
+        let soup = Soup {
+            lo: 0.0,
+            hi: 10.0,
+            size: 0.5,
+            long: Some((10, 4.0)),
+            collinear_every: Some(5),
+        };
+        let a = soup.triangles(100, 7);
+        assert_eq!(a, soup.triangles(100, 7));
+        assert_ne!(a, soup.triangles(100, 8));
+        for (i, t) in a.iter().enumerate() {
+            let reach = if i % 10 == 0 {
+                2.0 * 4.0 * 0.5
+            } else {
+                2.0 * 0.5
+            };
+            let b = t.bounds();
+            assert!(b.min.min_element() >= -reach && b.max.max_element() <= 10.0 + reach);
+            // Collinear up to rounding: the cross product of the edges all but vanishes.
+            let sliver = t.normal().length() < 1e-4;
+            assert_eq!(sliver, i % 5 == 0, "triangle {i}: {t:?}");
+        }
+    }
+}
