@@ -7,6 +7,7 @@ pub mod accel;
 pub mod error;
 pub mod experiment;
 pub mod geometry;
+pub mod lanes;
 pub mod params;
 pub mod random;
 pub mod render;

@@ -11,6 +11,7 @@ use std::sync::Arc;
 use glam::{DVec3, Vec3};
 use raylab::accel::{Bvh, BvhConfig, Grid, GridConfig};
 use raylab::geometry::{Hit, Ray, RayBatch, RayKind, Triangle};
+use raylab::lanes::WIDTHS;
 use raylab::render::rays::primary_rays;
 use raylab::render::sampling::uniform;
 use raylab::scene::library::load_scene;
@@ -22,13 +23,15 @@ use raylab::tracers::reference::ReferenceTracer;
 use raylab::tracers::{Kernel, Params, Tracer};
 use raylab::verify::{format_table, verify_frame, Tolerance};
 
-/// Every configuration: each packet side with each of the 8 on/off combinations.
+/// Every configuration: each packet side with each of the 8 on/off combinations, the lane widths
+/// taking turns.
 fn configs() -> Vec<CgtConfig> {
     let mut all = vec![];
     for packet in CgtConfig::PACKET_SIDES {
         for bits in 0..8 {
             all.push(CgtConfig {
                 packet,
+                lanes: WIDTHS[(packet as usize + bits) % WIDTHS.len()],
                 mailbox: bits & 1 != 0,
                 cull: bits & 2 != 0,
                 macrocells: bits & 4 != 0,
@@ -41,6 +44,7 @@ fn configs() -> Vec<CgtConfig> {
 fn params_of(c: &CgtConfig) -> Params {
     Params::new()
         .with("packet", c.packet)
+        .with("lanes", c.lanes)
         .with("mailbox", c.mailbox)
         .with("cull", c.cull)
         .with("macrocells", c.macrocells)
@@ -429,9 +433,10 @@ fn hand_worked_counts_of_a_packet_down_one_column() {
     let batch = column_packet();
     for macro_size in [2, 6] {
         let (grid, big) = counting_scene(macro_size);
-        for bits in 0..8 {
+        for (bits, lanes) in (0..8).flat_map(|b| WIDTHS.map(|l| (b, l))) {
             let config = CgtConfig {
                 packet: 4,
+                lanes,
                 mailbox: bits & 1 != 0,
                 cull: bits & 2 != 0,
                 macrocells: bits & 4 != 0,

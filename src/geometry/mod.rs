@@ -3,7 +3,6 @@
 pub mod aabb;
 pub mod ray;
 pub mod triangle;
-pub mod watertight_lanes;
 
 pub use aabb::{Aabb, RayBoxTest};
 pub use ray::{Hit, Ray, RayBatch, RayKind, Rays};

@@ -33,6 +33,8 @@
 
 use glam::Vec3;
 
+use crate::lanes::min_max;
+
 /// Relative width of the safety margin (module doc): 2⁻¹⁵, ~250× the rounding it covers.
 const MARGIN: f32 = 1.0 / 32768.0;
 
@@ -185,35 +187,6 @@ pub struct Frustum {
 }
 
 /// `[min, max]` of each of the `Q` quantities `value(i)` over `i < n`, NaNs ignored, in one pass.
-/// Sixteen running bounds per quantity side by side (selects, not `f32::min`), so the loop runs in
-/// SIMD lanes.
-#[inline(always)]
-fn min_max<const Q: usize>(n: usize, value: impl Fn(usize) -> [f32; Q]) -> [[f32; 2]; Q] {
-    const W: usize = 16;
-    let (mut lo, mut hi) = ([[f32::INFINITY; W]; Q], [[f32::NEG_INFINITY; W]; Q]);
-    let mut bound = |l: usize, x: [f32; Q]| {
-        for q in 0..Q {
-            lo[q][l] = if x[q] < lo[q][l] { x[q] } else { lo[q][l] };
-            hi[q][l] = if x[q] > hi[q][l] { x[q] } else { hi[q][l] };
-        }
-    };
-    let whole = n / W * W;
-    for base in (0..whole).step_by(W) {
-        for l in 0..W {
-            bound(l, value(base + l));
-        }
-    }
-    for (l, i) in (whole..n).enumerate() {
-        bound(l, value(i));
-    }
-    std::array::from_fn(|q| {
-        [
-            lo[q].into_iter().fold(f32::INFINITY, f32::min),
-            hi[q].into_iter().fold(f32::NEG_INFINITY, f32::max),
-        ]
-    })
-}
-
 /// `|x|`, or 0 when `x` is not finite.
 #[inline(always)]
 fn finite_abs(x: f32) -> f32 {
@@ -253,12 +226,13 @@ impl Frustum {
     /// when every ray starts there with `tmin ≥ 0` (enables corner-ray culling). `scale`: the
     /// largest of the grid's resolution and its world coordinate magnitudes × cells per unit, the
     /// scale of the rounding of the world → grid transform.
-    pub fn new(rays: &MarchRays, apex: Option<[f32; 3]>, scale: f32) -> Frustum {
+    /// Extremes are taken `L` rays at a time (`lanes::min_max`), `L` the tracer's lane width.
+    pub fn new<const L: usize>(rays: &MarchRays, apex: Option<[f32; 3]>, scale: f32) -> Frustum {
         let n = rays.len;
         let (o_s, o_u, o_v) = (&rays.o_s[..n], &rays.o_u[..n], &rays.o_v[..n]);
         let (a, b) = (&rays.a[..n], &rays.b[..n]);
         let (s_start, s_end) = (&rays.s_start[..n], &rays.s_end[..n]);
-        let [starts, ends, du, dv, os, ou, ov] = min_max(n, |i| {
+        let [starts, ends, du, dv, os, ou, ov] = min_max::<L, 7>(n, |i| {
             [s_start[i], s_end[i], a[i], b[i], o_s[i], o_u[i], o_v[i]]
         });
         let (s_first, s_last) = (starts[0], ends[1]);
@@ -268,7 +242,7 @@ impl Frustum {
             None => {
                 // Lines extended back to the first s any ray reaches (§2.2, general packets),
                 // and forward to the last.
-                let [u0, v0, u1, v1] = min_max(n, |i| {
+                let [u0, v0, u1, v1] = min_max::<L, 4>(n, |i| {
                     let (to_first, to_last) = (s_first - o_s[i], s_last - o_s[i]);
                     [
                         o_u[i] + to_first * a[i],
@@ -582,30 +556,10 @@ mod tests {
         }
     }
 
-    fn slice_min_max(x: &[f32]) -> [f32; 2] {
-        min_max(x.len(), |i| [x[i]])[0]
-    }
-
-    #[test]
-    fn min_max_ignores_nans_over_whole_lane_groups_and_the_rest() {
-        // 37 values: two groups of 16 and a rest of 5, extremes in the group part and the rest.
-        let mut x: Vec<f32> = (0..37).map(|i| (i as f32 * 7.0) % 37.0 - 18.0).collect();
-        x[3] = f32::NAN;
-        x[20] = -40.0;
-        x[35] = 50.0;
-        x[36] = f32::NAN;
-        assert_eq!(slice_min_max(&x), [-40.0, 50.0]);
-        assert_eq!(slice_min_max(&x[..3]), [-18.0, -4.0]);
-        assert_eq!(
-            slice_min_max(&[f32::NAN]),
-            [f32::INFINITY, f32::NEG_INFINITY]
-        );
-    }
-
     #[test]
     fn overlap_of_a_single_ray_follows_its_line() {
         let rays = one_ray_packet([0.5, 1.25, 2.5], [1.0, 0.5, -0.25], 8.0);
-        let f = Frustum::new(&rays, None, 10.0);
+        let f = Frustum::new::<16>(&rays, None, 10.0);
         let e = f.eps();
         let b = f.overlap(2.0, 3.0).unwrap();
         // At s = 2 the ray is at u = 1.25 + 1.5·0.5 = 2.0, at s = 3: 2.5; v from 2.125 to 1.875.
@@ -630,7 +584,7 @@ mod tests {
             s_end: vec![8.0; 2],
             len: 2,
         };
-        let f = Frustum::new(&rays, None, 16.0);
+        let f = Frustum::new::<16>(&rays, None, 16.0);
         let e = 8.0 * f.eps();
         // The last slab: the rays are within u ∈ [3.5, 4.5]; the start-anchored lines alone
         // give [−3.5, 11.5].
@@ -661,7 +615,7 @@ mod tests {
             s_end: vec![100.0; 2],
             len: 2,
         };
-        let f = Frustum::new(&rays, Some([0.0; 3]), 1.0);
+        let f = Frustum::new::<16>(&rays, Some([0.0; 3]), 1.0);
         // Inside: spans the axis at s = 10.
         let inside = [[10.0, -1.0, -1.0], [10.0, 1.0, -1.0], [10.0, 0.0, 1.0]];
         assert!(!f.culls(&inside));
@@ -669,7 +623,7 @@ mod tests {
         // u + v = 3.5 separates it, but no single side plane has all three vertices beyond it.
         let beside = [[10.0, 0.5, 3.0], [10.0, 3.0, 0.5], [10.0, 3.0, 3.0]];
         assert!(f.culls(&beside));
-        let general = Frustum::new(&rays, None, 1.0);
+        let general = Frustum::new::<16>(&rays, None, 1.0);
         assert!(!general.culls(&beside), "no plane separates it");
         // Wholly beyond the u_max plane: both frustum kinds cull it.
         let far = [[10.0, 3.0, 0.0], [12.0, 4.0, 0.0], [11.0, 3.5, 1.0]];

@@ -1,6 +1,11 @@
 //! The active rays of a packet in SoA lanes, and the watertight ray–triangle test (Woop et al.
 //! 2013) over `L` of them at a time: the packet's SIMD triangle test (Wald et al. 2006, §2.3),
-//! on the lane kernel the packet tracer shares (`geometry::watertight_lanes`).
+//! on the lane layer's kernel (`lanes::watertight`).
+//!
+//! A specialisation of the lane layer's ray stream for this tracer: the origins are stored in
+//! each lane's watertight frame (`kx, ky, kz`), since a packet tests many triangles per load and
+//! picking a vertex per lane then subtracting once beats `SimdRay`'s subtract-then-reorder here
+//! (see `candidates`); finished rays are dropped with `lanes::stream::compact`.
 //!
 //! Exactness: each lane reads the triangle's coordinates along its own axes `kx, ky, kz` (rays of
 //! one packet may differ in their dominant axis) and runs the scalar test's f32 stage. The lanes
@@ -9,11 +14,13 @@
 //! the scalar `WatertightRay::intersect`, which gives the hit. So every hit is bit for bit the
 //! scalar test's, and the scalar test runs about once per hit.
 
-use crate::geometry::watertight_lanes::{accept, edge_functions, edges_have_zero, Permuted};
 use glam::Vec3;
 
 use crate::geometry::triangle::axis_component;
 use crate::geometry::{Triangle, WatertightRay};
+use crate::lanes::stream::{compact, SoaRays};
+use crate::lanes::watertight::{accept, edge_functions, edges_have_zero, Permuted};
+use crate::lanes::LaneMask;
 
 /// A packet's active rays, one lane slot each; the vectors' length is a multiple of `L`, and the
 /// slots from `len` on are padding, masked off.
@@ -37,10 +44,6 @@ pub struct LaneRays<const L: usize> {
 
 impl<const L: usize> Default for LaneRays<L> {
     fn default() -> Self {
-        assert!(
-            (1..=32).contains(&L),
-            "lane masks are u32: 1 ≤ L ≤ 32 (got {L})"
-        );
         LaneRays {
             ray: vec![],
             origin: Default::default(),
@@ -105,18 +108,9 @@ impl<const L: usize> LaneRays<L> {
             .fold(false, |any, &limit| any | (limit < s))
     }
 
-    /// Keeps the rays whose `s_limit` passes `keep` (in any order).
+    /// Keeps the rays whose `s_limit` passes `keep`, in their order.
     pub fn retain(&mut self, keep: impl Fn(f32) -> bool) {
-        let mut kept = 0;
-        for i in 0..self.len {
-            if keep(self.s_limit[i]) {
-                if kept != i {
-                    self.move_slot(i, kept);
-                }
-                kept += 1;
-            }
-        }
-        self.len = kept;
+        self.len = compact(self, self.len, |lanes, i| keep(lanes.s_limit[i]));
     }
 
     /// Tests `tri` against every active ray; for each hit in the ray's `[tmin, tmax]`, sets its
@@ -129,14 +123,9 @@ impl<const L: usize> LaneRays<L> {
     ) {
         let v = tri.v.map(|p| p.to_array());
         for base in (0..self.len).step_by(L) {
-            let mut candidates = self.candidates(base, &v);
-            let live = self.len - base;
-            if live < L {
-                candidates &= (1u32 << live) - 1;
-            }
-            while candidates != 0 {
-                let slot = base + candidates.trailing_zeros() as usize;
-                candidates &= candidates - 1;
+            let live = LaneMask::first((self.len - base).min(L));
+            for lane in (self.candidates(base, &v) & live).iter() {
+                let slot = base + lane;
                 let test = &self.tests[self.ray[slot] as usize];
                 if let Some((t, u, w)) = test.intersect(tri, self.tmin[slot], self.tmax[slot]) {
                     self.tmax[slot] = t;
@@ -150,7 +139,7 @@ impl<const L: usize> LaneRays<L> {
     /// `l` for slot `base + l`): the watertight test's f32 stage (`watertight_lanes`), plus the
     /// lanes with an exactly zero edge function, which the scalar test settles in f64.
     #[inline(always)]
-    fn candidates(&self, base: usize, v: &[[f32; 3]; 3]) -> u32 {
+    fn candidates(&self, base: usize, v: &[[f32; 3]; 3]) -> LaneMask<L> {
         let lanes = |x: &Vec<f32>| -> [f32; L] { x[base..base + L].try_into().unwrap() };
         let origin = [0, 1, 2].map(|a| lanes(&self.origin[a]));
         let shear = [0, 1, 2].map(|a| lanes(&self.shear[a]));
@@ -175,8 +164,7 @@ impl<const L: usize> LaneRays<L> {
         let e = edge_functions(&shear, &a, &b, &c);
         let (tmin, tmax) = (lanes(&self.tmin), lanes(&self.tmax));
         let (hit, _, _) = accept(&e, &shear[2], [&a[2], &b[2], &c[2]], &tmin, &tmax);
-        let accepted = (0..L).fold(0u32, |m, l| m | (hit[l] as u32) << l);
-        accepted | edges_have_zero(&e)
+        LaneMask::from_bools(&hit) | edges_have_zero(&e)
     }
 
     fn resize(&mut self, n: usize) {
@@ -199,8 +187,10 @@ impl<const L: usize> LaneRays<L> {
             self.resize(slots);
         }
     }
+}
 
-    fn move_slot(&mut self, from: usize, to: usize) {
+impl<const L: usize> SoaRays for LaneRays<L> {
+    fn move_ray(&mut self, from: usize, to: usize) {
         self.ray[to] = self.ray[from];
         for a in 0..3 {
             self.origin[a][to] = self.origin[a][from];
@@ -210,6 +200,18 @@ impl<const L: usize> LaneRays<L> {
         self.tmin[to] = self.tmin[from];
         self.tmax[to] = self.tmax[from];
         self.s_limit[to] = self.s_limit[from];
+    }
+
+    fn swap_rays(&mut self, a: usize, b: usize) {
+        self.ray.swap(a, b);
+        for axis in 0..3 {
+            self.origin[axis].swap(a, b);
+            self.axes[axis].swap(a, b);
+            self.shear[axis].swap(a, b);
+        }
+        self.tmin.swap(a, b);
+        self.tmax.swap(a, b);
+        self.s_limit.swap(a, b);
     }
 }
 

@@ -105,8 +105,9 @@ fn max_abs(v: Vec3) -> f32 {
 
 impl Frustum {
     /// The frustum of `rays` (one packet) in a scene bounded by `scene`, or `None` when the
-    /// packet cannot be bounded (module doc).
-    pub fn build(rays: Rays<'_>, scene: &Aabb) -> Option<Frustum> {
+    /// packet cannot be bounded (module doc). `L`: the tracer's lane width, the width of the
+    /// running extremes.
+    pub fn build<const L: usize>(rays: Rays<'_>, scene: &Aabb) -> Option<Frustum> {
         let n = rays.len();
         if n == 0 || scene.is_empty() {
             return None;
@@ -121,7 +122,7 @@ impl Frustum {
         let scale = max_abs(scene.min).max(max_abs(scene.max));
         let same = |v: &[f32]| v.iter().all(|&x| x == v[0]);
         if same(rays.ox) && same(rays.oy) && same(rays.oz) {
-            return Self::shared_origin(rays, k, j, dir_sum[k].signum(), scale);
+            return Self::shared_origin::<L>(rays, k, j, dir_sum[k].signum(), scale);
         }
         if let Some(apex) = shared_end(rays) {
             if let Some(f) = Self::shared_end(rays, apex, k, j, -dir_sum[k].signum(), scale) {
@@ -131,7 +132,7 @@ impl Frustum {
         Self::general(rays, scene, k, j, dir_sum[k].signum(), scale)
     }
 
-    fn shared_origin(
+    fn shared_origin<const L: usize>(
         rays: Rays<'_>,
         k: usize,
         j: [usize; 2],
@@ -141,14 +142,13 @@ impl Frustum {
         let o = rays.ray(0).origin;
         let d = [rays.dx, rays.dy, rays.dz];
         let (dk, du, dv) = (d[k], d[j[0]], d[j[1]]);
-        // Extremes kept per lane of a 16-wide accumulator so the loop vectorizes; NaN or
-        // infinite slopes are caught by `finish`, non-positive or infinite `along` by `ok`; a NaN
-        // slope is skipped (a ray with a NaN direction hits nothing).
-        const W: usize = 16;
-        let (mut lo, mut hi) = ([[f32::INFINITY; W]; 2], [[f32::NEG_INFINITY; W]; 2]);
-        let (mut near, mut along_max, mut ok) = ([f32::INFINITY; W], [0.0f32; W], [true; W]);
+        // Extremes kept per lane of an L-wide accumulator (the tracer's lane width) so the loop
+        // vectorizes; NaN or infinite slopes are caught by `finish`, non-positive or infinite
+        // `along` by `ok`; a NaN slope is skipped (a ray with a NaN direction hits nothing).
+        let (mut lo, mut hi) = ([[f32::INFINITY; L]; 2], [[f32::NEG_INFINITY; L]; 2]);
+        let (mut near, mut along_max, mut ok) = ([f32::INFINITY; L], [0.0f32; L], [true; L]);
         for i in 0..rays.len() {
-            let l = i % W;
+            let l = i % L;
             let along = sigma * dk[i];
             ok[l] &= along > 0.0 && along < f32::INFINITY;
             let inv = 1.0 / along;
@@ -169,7 +169,7 @@ impl Frustum {
             return None;
         }
         let fold =
-            |v: &[f32; W], f: fn(f32, f32) -> f32, init: f32| v.iter().copied().fold(init, f);
+            |v: &[f32; L], f: fn(f32, f32) -> f32, init: f32| v.iter().copied().fold(init, f);
         let slope = [0, 1].map(|s| Range {
             lo: fold(&lo[s], f32::min, f32::INFINITY),
             hi: fold(&hi[s], f32::max, f32::NEG_INFINITY),
@@ -513,7 +513,7 @@ mod tests {
         for _ in 0..60 {
             for (kind, rays) in packets(&mut rng) {
                 let b = batch(&rays);
-                let Some(mut f) = Frustum::build(b.view(), &scene) else {
+                let Some(mut f) = Frustum::build::<16>(b.view(), &scene) else {
                     panic!("{kind:?} packet got no frustum");
                 };
                 f.clip_far(rays.iter().fold(0.0f32, |m, r| m.max(r.tmax)));
@@ -565,6 +565,6 @@ mod tests {
             Ray::new(Vec3::Y, -Vec3::X, 0.0, 1.0),
         ];
         let b = batch(&rays);
-        assert!(Frustum::build(b.view(), &Aabb::new(Vec3::splat(-1.0), Vec3::ONE)).is_none());
+        assert!(Frustum::build::<16>(b.view(), &Aabb::new(Vec3::splat(-1.0), Vec3::ONE)).is_none());
     }
 }

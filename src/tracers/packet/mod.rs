@@ -41,7 +41,6 @@ mod masked;
 mod order;
 mod partition;
 mod ranged;
-mod simd;
 mod walk;
 mod workspace;
 
@@ -55,7 +54,6 @@ use crate::stats::{Event, Stats};
 use crate::tracers::{Kernel, Params};
 
 pub use frustum::{Frustum, FrustumKind};
-pub use simd::SimdRay;
 
 use first_hit::FirstHit;
 use masked::Masked;

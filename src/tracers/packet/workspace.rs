@@ -11,7 +11,7 @@ use crate::stats::{Event, Stats};
 use super::frustum::Frustum;
 use super::interval::IntervalPacket;
 use super::order::ChildOrder;
-use super::simd::SimdRay;
+use crate::lanes::SimdRay;
 
 /// What every traversal reads: the tree and its child order.
 pub struct Tree<'a> {
@@ -104,7 +104,7 @@ impl<const L: usize> Packet<L> {
         self.max_t = (0..rays.len()).fold(f32::NEG_INFINITY, |m, i| m.max(rays.tmax[i]));
         let scene = &tree.bvh.nodes[Bvh::ROOT].bounds;
         self.frustum = if frustum {
-            Frustum::build(rays, scene)
+            Frustum::build::<L>(rays, scene)
         } else {
             None
         };

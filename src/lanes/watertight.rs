@@ -1,6 +1,6 @@
 //! The f32 stage of the watertight ray–triangle test (Woop, Benthin and Wald 2013) for `L` rays
-//! at once, in structure-of-arrays lanes: what the packet tracer's SIMD rays and coherent grid
-//! traversal's lanes both run. Each lane computes `WatertightRay::intersect`'s f32 operations in
+//! at once, in structure-of-arrays lanes: what `SimdRay` and coherent grid traversal's lanes both
+//! run. Each lane computes `WatertightRay::intersect`'s f32 operations in
 //! its order (Rust never contracts `a·b + c` into an FMA), so a lane's verdict is the scalar
 //! test's. The lane loops are branch-free over `[f32; L]`, which LLVM turns into L-wide vector
 //! code (`target-cpu=native`; AVX-512 holds 16 lanes).
@@ -8,6 +8,11 @@
 //! Edge functions that come out exactly zero are ambiguous in f32; the scalar test recomputes
 //! them in f64. Callers deal with those lanes (`edges_have_zero`): redo them in f64
 //! (`redo_zero_edges_in_f64`) or hand them to the scalar test.
+
+// Lane loops index several lane arrays in lock step: the indexed form is what LLVM vectorizes.
+#![allow(clippy::needless_range_loop)]
+
+use super::LaneMask;
 
 /// A triangle vertex in every lane's frame: `[x, y, z][lane]`, relative to the lane's origin
 /// along its axes `kx, ky, kz`.
@@ -76,12 +81,14 @@ pub fn edge_functions<const L: usize>(
     e
 }
 
-/// Bit `l` set when one of lane `l`'s edge functions is exactly zero.
+/// The lanes one of whose edge functions is exactly zero.
 #[inline(always)]
-pub fn edges_have_zero<const L: usize>(e: &[[f32; L]; 3]) -> u32 {
-    (0..L).fold(0, |m, l| {
-        m | (((e[0][l] == 0.0) | (e[1][l] == 0.0) | (e[2][l] == 0.0)) as u32) << l
-    })
+pub fn edges_have_zero<const L: usize>(e: &[[f32; L]; 3]) -> LaneMask<L> {
+    let mut zero = [false; L];
+    for l in 0..L {
+        zero[l] = (e[0][l] == 0.0) | (e[1][l] == 0.0) | (e[2][l] == 0.0);
+    }
+    LaneMask::from_bools(&zero)
 }
 
 /// Which lanes hit, from their edge functions: inside (all of one sign), a non-zero determinant

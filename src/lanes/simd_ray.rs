@@ -7,10 +7,8 @@
 //! Both tests perform, lane by lane, exactly the floating-point operations of the single-ray
 //! tests (`RayBoxTest::hit`, `WatertightRay::intersect`), so every lane gets bit for bit the answer
 //! the reference tracer's ray gets:
-//! - slabs: near and far planes chosen by the sign bit of the direction, far distances scaled by
-//!   `FAR_SCALE`, and a running max/min written `if t > acc { t } else { acc }`, which ignores a
-//!   NaN `t` like `f32::max` does (0·∞ when the origin lies on a slab plane);
-//! - triangles: each lane carries its own watertight frame (`kx, ky, kz`, shear). When every lane
+//! - slabs: `lanes::slab`;
+//! - triangles (`lanes::watertight`): each lane carries its own watertight frame (`kx, ky, kz`, shear). When every lane
 //!   of the group has the same frame (the common case for coherent rays) the vertices are
 //!   permuted once per axis; otherwise per lane by selects. Edge functions that come out exactly
 //!   zero are redone in f64 for those lanes, as the scalar test does.
@@ -21,13 +19,14 @@
 // Lane loops index several lane arrays in lock step: the indexed form is what LLVM vectorizes.
 #![allow(clippy::needless_range_loop)]
 
-use crate::geometry::aabb::FAR_SCALE;
-use crate::geometry::watertight_lanes::{
+use glam::Vec3;
+
+use super::watertight::{
     accept, common_axes, edge_functions, edges_have_zero, in_lane_frames, redo_zero_edges_in_f64,
     Permuted,
 };
+use super::{slab, LaneMask};
 use crate::geometry::{Hit, Rays, Triangle, WatertightRay};
-use glam::Vec3;
 
 /// `L` rays, their current closest hits, and what the box and triangle tests precompute.
 #[derive(Clone, Copy, Debug)]
@@ -124,28 +123,14 @@ impl<const L: usize> SimdRay<L> {
     /// lane).
     #[inline(always)]
     pub fn hits_box(&self, lo: [f32; 3], hi: [f32; 3]) -> bool {
-        let mut enter = self.tmin;
-        let mut exit = self.tmax;
-        for a in 0..3 {
-            let (o, inv, neg) = (&self.origin[a], &self.inv_dir[a], &self.negative[a]);
-            for l in 0..L {
-                let t_lo = (lo[a] - o[l]) * inv[l];
-                let t_hi = (hi[a] - o[l]) * inv[l];
-                let (near, far) = if neg[l] != 0 {
-                    (t_hi, t_lo)
-                } else {
-                    (t_lo, t_hi)
-                };
-                let far = far * FAR_SCALE;
-                enter[l] = if near > enter[l] { near } else { enter[l] };
-                exit[l] = if far < exit[l] { far } else { exit[l] };
-            }
-        }
-        let mut any = 0u32;
-        for l in 0..L {
-            any |= (enter[l] <= exit[l]) as u32;
-        }
-        any != 0
+        self.box_lanes(lo, hi).any()
+    }
+
+    /// The lanes whose segment meets the box `[lo, hi]`.
+    #[inline(always)]
+    pub fn box_lanes(&self, lo: [f32; 3], hi: [f32; 3]) -> LaneMask<L> {
+        let (o, inv, neg) = (&self.origin, &self.inv_dir, &self.negative);
+        slab::hits(o, inv, neg, &self.tmin, &self.tmax, lo, hi)
     }
 
     /// A vertex relative to every lane's origin, in every lane's watertight frame.
@@ -215,7 +200,7 @@ impl<const L: usize> SimdRay<L> {
         prim: u32,
     ) -> u32 {
         let mut e = edge_functions(&self.shear, a, b, c);
-        if edges_have_zero(&e) != 0 {
+        if edges_have_zero(&e).any() {
             redo_zero_edges_in_f64(&self.shear, a, b, c, &mut e);
         }
         let (hit, t_scaled, abs_det) = accept(
@@ -312,26 +297,34 @@ mod tests {
             .collect()
     }
 
-    #[test]
-    fn lanes_agree_bit_for_bit_with_the_scalar_tests() {
+    /// Every lane's box and triangle verdicts are the scalar tests' (`RayBoxTest::hit`,
+    /// `WatertightRay::intersect`), bit for bit, at width `L`, full and partial groups.
+    fn lanes_agree_with_the_scalar_tests<const L: usize>() {
         let mut rng = SplitMix64::new(11);
-        let rays = random_rays(&mut rng, 16 * 400);
-        let mut simd = SimdRay::<16>::default();
-        for (chunk_i, chunk) in rays.chunks(16).enumerate() {
+        let rays = random_rays(&mut rng, L * 400);
+        let mut simd = SimdRay::<L>::default();
+        for (chunk_i, chunk) in rays.chunks(L).enumerate() {
             // Some groups partial, to exercise padding.
-            let used = if chunk_i % 5 == 0 { 11 } else { 16 };
+            let used = if chunk_i % 5 == 0 { L - 3 } else { L };
             simd.load(&batch(&chunk[..used]).view(), 0, used);
             let mut v = |s: f32| (rng.unit() * 2.0 - 1.0) * s;
             let p = Vec3::new(v(1.0), v(1.0), v(1.0));
             let tri = Triangle::new(p, p + Vec3::new(v(1.0), v(1.0), v(1.0)), p + Vec3::Z);
             let lo = Vec3::new(v(1.0), v(1.0), v(1.0));
             let b = Aabb::new(lo, lo + Vec3::new(v(1.0).abs(), v(1.0).abs(), 0.5));
-            let any_box = chunk[..used].iter().any(|r| {
-                RayBoxTest::new(r.origin, r.dir)
-                    .hit(&b, r.tmin, r.tmax)
-                    .is_some()
-            });
-            assert_eq!(simd.hits_box(b.min.to_array(), b.max.to_array()), any_box);
+            let box_lanes = simd.box_lanes(b.min.to_array(), b.max.to_array());
+            for (l, r) in chunk[..used].iter().enumerate() {
+                let want = RayBoxTest::new(r.origin, r.dir).hit(&b, r.tmin, r.tmax);
+                assert_eq!(box_lanes.contains(l), want.is_some(), "L = {L}, lane {l}");
+            }
+            assert!(
+                (used..L).all(|l| !box_lanes.contains(l)),
+                "padding never hits"
+            );
+            assert_eq!(
+                simd.hits_box(b.min.to_array(), b.max.to_array()),
+                box_lanes.any()
+            );
             let n = simd.intersect::<false>(&tri, 7);
             let mut expected = 0;
             for (l, r) in chunk[..used].iter().enumerate() {
@@ -346,8 +339,15 @@ mod tests {
                 }
             }
             assert_eq!(n, expected);
-            assert!((used..16).all(|l| !simd.hit(l).is_hit()));
+            assert!((used..L).all(|l| !simd.hit(l).is_hit()));
         }
+    }
+
+    #[test]
+    fn lanes_agree_bit_for_bit_with_the_scalar_tests() {
+        lanes_agree_with_the_scalar_tests::<4>();
+        lanes_agree_with_the_scalar_tests::<8>();
+        lanes_agree_with_the_scalar_tests::<16>();
     }
 
     #[test]

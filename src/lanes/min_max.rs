@@ -1,0 +1,57 @@
+//! The smallest and largest values of a stream, kept per lane of an `L`-wide accumulator so the
+//! loop runs in SIMD lanes (selects, not `f32::min`); a NaN value is skipped.
+
+/// `[[min, max]; Q]` of `value(i)` for `i` in `0..n`, `Q` quantities at once; `[∞, −∞]` when no
+/// value is a number.
+#[inline(always)]
+pub fn min_max<const L: usize, const Q: usize>(
+    n: usize,
+    value: impl Fn(usize) -> [f32; Q],
+) -> [[f32; 2]; Q] {
+    let (mut lo, mut hi) = ([[f32::INFINITY; L]; Q], [[f32::NEG_INFINITY; L]; Q]);
+    let mut bound = |l: usize, x: [f32; Q]| {
+        for q in 0..Q {
+            lo[q][l] = if x[q] < lo[q][l] { x[q] } else { lo[q][l] };
+            hi[q][l] = if x[q] > hi[q][l] { x[q] } else { hi[q][l] };
+        }
+    };
+    let whole = n / L * L;
+    for base in (0..whole).step_by(L) {
+        for l in 0..L {
+            bound(l, value(base + l));
+        }
+    }
+    for (l, i) in (whole..n).enumerate() {
+        bound(l, value(i));
+    }
+    std::array::from_fn(|q| {
+        [
+            lo[q].into_iter().fold(f32::INFINITY, f32::min),
+            hi[q].into_iter().fold(f32::NEG_INFINITY, f32::max),
+        ]
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn slice_min_max<const L: usize>(x: &[f32]) -> [f32; 2] {
+        min_max::<L, 1>(x.len(), |i| [x[i]])[0]
+    }
+
+    #[test]
+    fn min_max_ignores_nans_over_whole_lane_groups_and_the_rest() {
+        // 37 values: whole groups and a rest at every width, extremes in both.
+        let mut x: Vec<f32> = (0..37).map(|i| (i as f32 * 7.0) % 37.0 - 18.0).collect();
+        x[3] = f32::NAN;
+        x[20] = -40.0;
+        x[35] = 50.0;
+        x[36] = f32::NAN;
+        for got in [slice_min_max::<4>, slice_min_max::<8>, slice_min_max::<16>] {
+            assert_eq!(got(&x), [-40.0, 50.0]);
+            assert_eq!(got(&x[..3]), [-18.0, -4.0]);
+            assert_eq!(got(&[f32::NAN]), [f32::INFINITY, f32::NEG_INFINITY]);
+        }
+    }
+}

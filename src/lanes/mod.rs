@@ -1,0 +1,32 @@
+//! The lane layer: rays in structure-of-arrays lanes of a const width `L` (4, 8 or 16: SSE, AVX2,
+//! AVX-512), and the per-lane tests every coherent tracer runs on them. Lane loops are plain,
+//! branch-free loops over `[f32; L]` that LLVM turns into one vector instruction per operation at
+//! the machine's width (`target-cpu=native`).
+//!
+//! - `LaneMask<L>`: which lanes a test passed (one bit per lane).
+//! - `SimdRay<L>`: `L` rays traced in lock step with their closest hits (the packet tracer's
+//!   SIMD ray, Overbeck et al. 2008 §2.1), running `slab` and `watertight` per lane.
+//! - `slab`: the conservative ray–box test (Ize 2013) per lane, bit for bit `RayBoxTest::hit`.
+//! - `watertight`: the f32 stage of the watertight ray–triangle test (Woop et al. 2013) per lane,
+//!   bit for bit `WatertightRay::intersect`.
+//! - `stream`: in-place compaction and partition of a stream of rays in SoA columns by a lane
+//!   predicate — what coherent grid traversal drops finished rays with, and what stream filtering
+//!   (Gribble & Ramani 2008) is built on.
+//! - `min_max`: running per-lane bounds of a stream (the frusta's extremes).
+//!
+//! A tracer picks `L` once (its `lanes` parameter) and every lane type and test of its kernel
+//! takes that `L`.
+
+mod mask;
+mod min_max;
+mod simd_ray;
+pub mod slab;
+pub mod stream;
+pub mod watertight;
+
+pub use mask::LaneMask;
+pub use min_max::min_max;
+pub use simd_ray::SimdRay;
+
+/// The lane widths a tracer may be built with (`lanes` parameter).
+pub const WIDTHS: [usize; 3] = [4, 8, 16];
