@@ -244,6 +244,7 @@ impl RayBatch {
             tmax: &self.tmax,
             packet_start: &self.packet_start,
             time: &self.time,
+            kind: self.kind(),
         }
     }
 }
@@ -264,6 +265,8 @@ pub struct Rays<'a> {
     pub packet_start: &'a [bool],
     /// As `RayBatch::time`: empty (every ray at time 0), or one time per ray.
     pub time: &'a [f32],
+    /// What the rays are for (a tracer may tune itself to it: Embree's coherence hint).
+    pub kind: RayKind,
 }
 
 impl<'a> Rays<'a> {
@@ -317,6 +320,7 @@ impl<'a> Rays<'a> {
             } else {
                 &self.time[range]
             },
+            kind: self.kind,
         }
     }
 

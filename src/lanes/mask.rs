@@ -21,8 +21,14 @@ impl<const L: usize> LaneMask<L> {
     /// The lanes whose flag is set (branch-free, so it vectorizes).
     #[inline(always)]
     pub fn from_bools(flags: &[bool; L]) -> Self {
+        Self::from_fn(|l| flags[l])
+    }
+
+    /// The lanes `l` for which `pass(l)` holds, evaluated for every lane without branching.
+    #[inline(always)]
+    pub fn from_fn(pass: impl Fn(usize) -> bool) -> Self {
         let () = Self::FITS;
-        LaneMask((0..L).fold(0, |m, l| m | (flags[l] as u32) << l))
+        LaneMask((0..L).fold(0, |m, l| m | (pass(l) as u32) << l))
     }
 
     #[inline(always)]

@@ -123,7 +123,8 @@ impl<const L: usize> SimdRay<L> {
     /// lane).
     #[inline(always)]
     pub fn hits_box(&self, lo: [f32; 3], hi: [f32; 3]) -> bool {
-        self.box_lanes(lo, hi).any()
+        let (o, inv, neg) = (&self.origin, &self.inv_dir, &self.negative);
+        slab::any_hit(o, inv, neg, &self.tmin, &self.tmax, lo, hi)
     }
 
     /// The lanes whose segment meets the box `[lo, hi]`.

@@ -10,10 +10,11 @@
 use super::LaneMask;
 use crate::geometry::aabb::FAR_SCALE;
 
-/// The lanes whose segment `[tmin, tmax]` meets the box `[lo, hi]`: `origin`, `inv_dir` and
-/// `negative` (1 where the direction's sign bit is set) are `[axis][lane]`.
+/// Each lane's entry and exit distance of the box `[lo, hi]` within its `[tmin, tmax]`: the lane's
+/// segment meets the box when entry ≤ exit. `origin`, `inv_dir` and `negative` (1 where the
+/// direction's sign bit is set) are `[axis][lane]`.
 #[inline(always)]
-pub fn hits<const L: usize>(
+fn enter_exit<const L: usize>(
     origin: &[[f32; L]; 3],
     inv_dir: &[[f32; L]; 3],
     negative: &[[u32; L]; 3],
@@ -21,7 +22,7 @@ pub fn hits<const L: usize>(
     tmax: &[f32; L],
     lo: [f32; 3],
     hi: [f32; 3],
-) -> LaneMask<L> {
+) -> ([f32; L], [f32; L]) {
     let mut enter = *tmin;
     let mut exit = *tmax;
     for a in 0..3 {
@@ -39,9 +40,44 @@ pub fn hits<const L: usize>(
             exit[l] = if far < exit[l] { far } else { exit[l] };
         }
     }
+    (enter, exit)
+}
+
+/// The lanes whose segment meets the box (arguments as `enter_exit`).
+#[inline(always)]
+pub fn hits<const L: usize>(
+    origin: &[[f32; L]; 3],
+    inv_dir: &[[f32; L]; 3],
+    negative: &[[u32; L]; 3],
+    tmin: &[f32; L],
+    tmax: &[f32; L],
+    lo: [f32; 3],
+    hi: [f32; 3],
+) -> LaneMask<L> {
+    let (enter, exit) = enter_exit(origin, inv_dir, negative, tmin, tmax, lo, hi);
     let mut inside = [false; L];
     for l in 0..L {
         inside[l] = enter[l] <= exit[l];
     }
     LaneMask::from_bools(&inside)
+}
+
+/// Whether any lane's segment meets the box: `hits(..).any()`, reduced with an OR across the
+/// lanes rather than through a mask (the packet traversal's hottest test asks only this).
+#[inline(always)]
+pub fn any_hit<const L: usize>(
+    origin: &[[f32; L]; 3],
+    inv_dir: &[[f32; L]; 3],
+    negative: &[[u32; L]; 3],
+    tmin: &[f32; L],
+    tmax: &[f32; L],
+    lo: [f32; 3],
+    hi: [f32; 3],
+) -> bool {
+    let (enter, exit) = enter_exit(origin, inv_dir, negative, tmin, tmax, lo, hi);
+    let mut any = 0u32;
+    for l in 0..L {
+        any |= (enter[l] <= exit[l]) as u32;
+    }
+    any != 0
 }

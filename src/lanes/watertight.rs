@@ -84,11 +84,7 @@ pub fn edge_functions<const L: usize>(
 /// The lanes one of whose edge functions is exactly zero.
 #[inline(always)]
 pub fn edges_have_zero<const L: usize>(e: &[[f32; L]; 3]) -> LaneMask<L> {
-    let mut zero = [false; L];
-    for l in 0..L {
-        zero[l] = (e[0][l] == 0.0) | (e[1][l] == 0.0) | (e[2][l] == 0.0);
-    }
-    LaneMask::from_bools(&zero)
+    LaneMask::from_fn(|l| (e[0][l] == 0.0) | (e[1][l] == 0.0) | (e[2][l] == 0.0))
 }
 
 /// Which lanes hit, from their edge functions: inside (all of one sign), a non-zero determinant

@@ -10,7 +10,7 @@ use super::denormals::FlushDenormals;
 use crate::accel::embree::ffi::{self, RTCIntersectContext, RTCIntersectContextFlags};
 use crate::accel::embree::EmbreeScene;
 use crate::error::Result;
-use crate::geometry::{Hit, Rays};
+use crate::geometry::{Hit, RayKind, Rays};
 use crate::params::Params;
 use crate::stats::Stats;
 use crate::tracers::Kernel;
@@ -32,11 +32,15 @@ pub trait Submission: 'static {
 }
 
 /// The intersect context's hint (tracer parameter `context`): whether the rays of a call are
-/// coherent. Embree's default (`rtcInitIntersectContext`) is incoherent.
+/// coherent. Embree's own default (`rtcInitIntersectContext`) is incoherent, and its
+/// documentation prescribes the coherent traversal for coherent rays such as primary camera rays;
+/// so `auto` (our default) gives each batch the hint its kind calls for (`for_kind`), and
+/// `coherent` / `incoherent` force one.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Coherence {
-    Coherent,
     #[default]
+    Auto,
+    Coherent,
     Incoherent,
 }
 
@@ -47,10 +51,21 @@ impl Coherence {
         p.get_or("context", Coherence::default())
     }
 
+    /// The hint a batch of `kind` gets: `auto` is coherent for camera rays and for point-light
+    /// shadow rays (which converge on the light), incoherent for bounces, reflection, refraction
+    /// and soft shadows (rays to scattered points of an area light).
+    pub fn for_kind(self, kind: RayKind) -> Coherence {
+        match (self, kind) {
+            (Coherence::Auto, RayKind::Primary | RayKind::Shadow) => Coherence::Coherent,
+            (Coherence::Auto, _) => Coherence::Incoherent,
+            (forced, _) => forced,
+        }
+    }
+
     fn flags(self) -> RTCIntersectContextFlags {
         match self {
             Coherence::Coherent => RTCIntersectContextFlags::RTC_INTERSECT_CONTEXT_FLAG_COHERENT,
-            Coherence::Incoherent => {
+            Coherence::Incoherent | Coherence::Auto => {
                 RTCIntersectContextFlags::RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT
             }
         }
@@ -61,6 +76,7 @@ impl FromStr for Coherence {
     type Err = ();
     fn from_str(s: &str) -> std::result::Result<Self, ()> {
         match s {
+            "auto" => Ok(Coherence::Auto),
             "coherent" => Ok(Coherence::Coherent),
             "incoherent" => Ok(Coherence::Incoherent),
             _ => Err(()),
@@ -71,6 +87,7 @@ impl FromStr for Coherence {
 impl fmt::Display for Coherence {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(match self {
+            Coherence::Auto => "auto",
             Coherence::Coherent => "coherent",
             Coherence::Incoherent => "incoherent",
         })
@@ -97,12 +114,17 @@ impl<M: Submission> EmbreeTracer<M> {
         Ok(Self::new(scene.clone(), Coherence::from_params(params)?))
     }
 
-    /// Runs one Embree call sequence the way Embree asks: FTZ/DAZ on for its duration only, and a
-    /// fresh intersect context.
+    /// Runs one Embree call sequence on rays of `kind` the way Embree asks: FTZ/DAZ on for its
+    /// duration only, and a fresh intersect context with the kind's coherence hint.
     #[inline]
-    fn call<R>(&self, f: impl FnOnce(&EmbreeScene, &mut RTCIntersectContext) -> R) -> R {
+    fn call<R>(
+        &self,
+        kind: RayKind,
+        f: impl FnOnce(&EmbreeScene, &mut RTCIntersectContext) -> R,
+    ) -> R {
         let _denormals = FlushDenormals::new();
-        let mut context = ffi::intersect_context(self.coherence.flags());
+        let flags = self.coherence.for_kind(kind).flags();
+        let mut context = ffi::intersect_context(flags);
         f(&self.scene, &mut context)
     }
 }
@@ -123,12 +145,37 @@ impl<M: Submission> Kernel for EmbreeTracer<M> {
     fn intersect_with<S: Stats>(&self, rays: Rays<'_>, hits: &mut [Hit], stats: &mut S) {
         let rays = rays.slice(0..hits.len());
         count_rays(hits.len(), stats);
-        self.call(|scene, context| M::intersect(scene, context, rays, hits));
+        self.call(rays.kind, |scene, context| {
+            M::intersect(scene, context, rays, hits)
+        });
     }
 
     fn occluded_with<S: Stats>(&self, rays: Rays<'_>, occluded: &mut [bool], stats: &mut S) {
         let rays = rays.slice(0..occluded.len());
         count_rays(occluded.len(), stats);
-        self.call(|scene, context| M::occluded(scene, context, rays, occluded));
+        self.call(rays.kind, |scene, context| {
+            M::occluded(scene, context, rays, occluded)
+        });
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn auto_hints_coherence_by_ray_kind_and_a_parameter_forces_it() {
+        let auto = Coherence::from_params(&Params::new()).unwrap();
+        assert_eq!(auto, Coherence::Auto);
+        let hinted: Vec<Coherence> = RayKind::ALL.iter().map(|&k| auto.for_kind(k)).collect();
+        use Coherence::{Coherent as C, Incoherent as I};
+        // Primary, shadow (point light), diffuse, reflection, refraction, soft shadow.
+        assert_eq!(hinted, [C, C, I, I, I, I]);
+        for forced in [C, I] {
+            let p = Params::new().with("context", forced);
+            let c = Coherence::from_params(&p).unwrap();
+            assert!(RayKind::ALL.iter().all(|&k| c.for_kind(k) == forced));
+        }
+        assert!(Coherence::from_params(&Params::new().with("context", "fast")).is_err());
     }
 }
