@@ -85,7 +85,7 @@ use crate::render::distribution::DrtSettings;
 use crate::render::interleaved::SampleTable;
 use crate::render::whitted::WhittedSettings;
 use crate::tracers::visibility::LightSamples;
-use crate::tracers::{Params, TracerInfo};
+use crate::tracers::{Params, TracerInfo, TRACERS};
 
 use super::figures::FigureSpec;
 use super::tables::TableSpec;
@@ -600,14 +600,17 @@ fn expand_tracers(src: &Source, file: &ExperimentFile) -> Result<Vec<TracerInsta
     };
     let mut used_shared = vec![false; shared.len()];
     let mut instances: Vec<TracerInstance> = Vec::new();
-    for entry in file.tracers.get_ref() {
+    for (entry, info, sweep) in tracer_entries(src, file)? {
         let table = &entry.get_ref().0;
-        let info = TracerInfo::find(&table.name).map_err(|e| src.usage_error(&entry.span(), e))?;
         let accepts = info.accepts();
         let mut axes = match &table.params {
             Some(params) => src.param_axes(params)?,
             None => BTreeMap::new(),
         };
+        for &(key, values) in sweep {
+            axes.entry(key.to_string())
+                .or_insert_with(|| values.iter().map(|v| v.to_string()).collect());
+        }
         if let Some(unknown) = axes.keys().find(|k| !accepts.contains(&k.as_str())) {
             return Err(src.usage_error(
                 &entry.span(),
@@ -649,6 +652,40 @@ fn expand_tracers(src: &Source, file: &ExperimentFile) -> Result<Vec<TracerInsta
         ));
     }
     Ok(instances)
+}
+
+/// The shorthand tracer entry for Embree at its best: every Embree entry point (1, 4, 8, 16,
+/// stream) × intersect context × build quality, so that the run measures the fastest Embree
+/// configuration on its rays. The entry's own `params` replace an axis (e.g. `quality =
+/// ["low", "refit"]` for per-frame rebuilds); the entry points share one scene per quality.
+pub const EMBREE_BEST: &str = "embree-best";
+
+/// Parameter axes given in code: (key, values).
+type Axes = &'static [(&'static str, &'static [&'static str])];
+
+/// The axes `embree-best` sweeps unless its entry gives them.
+const EMBREE_BEST_AXES: Axes = &[
+    ("context", &["coherent", "incoherent"]),
+    ("quality", &["medium", "high"]),
+];
+
+/// A tracer entry of the file, one tracer it names, and the axes it sweeps by default.
+type TracerEntry<'f> = (&'f Spanned<NameOr<TracerTable>>, &'static TracerInfo, Axes);
+
+/// Each tracer entry with the tracer it names (`embree-best` names every Embree tracer).
+fn tracer_entries<'f>(src: &Source, file: &'f ExperimentFile) -> Result<Vec<TracerEntry<'f>>> {
+    let mut entries = Vec::new();
+    for entry in file.tracers.get_ref() {
+        let name = &entry.get_ref().0.name;
+        if name == EMBREE_BEST {
+            let embree = TRACERS.iter().filter(|t| t.accel == AccelKind::Embree);
+            entries.extend(embree.map(|info| (entry, info, EMBREE_BEST_AXES)));
+        } else {
+            let info = TracerInfo::find(name).map_err(|e| src.usage_error(&entry.span(), e))?;
+            entries.push((entry, info, &[][..]));
+        }
+    }
+    Ok(entries)
 }
 
 /// The `render` grids, one workload per combination, each at most once.
@@ -717,6 +754,8 @@ fn cartesian(axes: &BTreeMap<String, Vec<String>>) -> Vec<Params> {
 
 #[cfg(test)]
 mod tests {
+    use std::collections::BTreeSet;
+
     use super::*;
     use crate::render::assembly::Assembly;
     use crate::scene::scene_file::Preset;
@@ -726,6 +765,36 @@ mod tests {
     }
 
     const BASE: &str = "name = \"t\"\nscenes = [\"room\"]\nrays = [\"primary\"]\nresolution = { width = 8, height = 4 }\n";
+
+    #[test]
+    fn embree_best_sweeps_every_entry_point_context_and_quality() {
+        let exp = parse(&format!(
+            "{BASE}tracers = [\"reference\", \"embree-best\"]\n"
+        ))
+        .unwrap();
+        let embree: Vec<String> = exp.instances[1..].iter().map(|i| i.to_string()).collect();
+        // 5 entry points × 2 contexts × 2 qualities, keys sorted, values as listed.
+        assert_eq!(embree.len(), 20);
+        assert_eq!(embree[0], "embree1[context=coherent;quality=medium]");
+        assert_eq!(embree[19], "embree-stream[context=incoherent;quality=high]");
+        let names: BTreeSet<&str> = exp.instances[1..].iter().map(|i| i.info.name).collect();
+        assert_eq!(names.len(), 5);
+        // Its own params replace an axis: per-frame rebuilds sweep low and refit.
+        let exp = parse(&format!(
+            "{BASE}tracers = [{{ name = \"embree-best\", params = {{ quality = [\"low\", \"refit\"], context = [\"auto\"] }} }}]\n"
+        ))
+        .unwrap();
+        assert_eq!(exp.instances.len(), 10);
+        assert!(exp
+            .instances
+            .iter()
+            .all(|i| i.params.0["context"] == "auto"));
+        // A sweep entry also listed on its own is a duplicate instance.
+        let twice = parse(&format!(
+            "{BASE}tracers = [\"embree-best\", {{ name = \"embree16\", params = {{ context = [\"coherent\"], quality = [\"high\"] }} }}]\n"
+        ));
+        assert!(twice.unwrap_err().to_string().contains("listed twice"));
+    }
 
     #[test]
     fn grid_expands_to_every_combination() {

@@ -4,6 +4,7 @@
 //! paper-vs-ours tables (tables.md, see `tables`) and line figures (see `figures`).
 
 pub mod config;
+pub mod embree_best;
 pub mod error_plot;
 pub mod figures;
 pub mod measure;

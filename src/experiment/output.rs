@@ -6,12 +6,16 @@
 //! `build_plus_trace_seconds` is the frame's build (or refit) time of the row's structure plus
 //! the row's fastest pass: "rebuild + render" for that ray kind (0 build when reused).
 //! `rmse`: a distribution frame row's RMSE against its high-spp reference image (empty elsewhere).
+//! `embree_best_*`: the fastest Embree row on the same work in the same run (`embree_best`), its
+//! configuration, and `x_embree_best` = its seconds / this row's (> 1: faster than Embree at its
+//! best); the same for build + trace. Empty when the run measured no Embree row for that work.
 
 use std::path::Path;
 
 use crate::error::{Error, Result};
 use crate::stats::Event;
 
+use super::embree_best::{ratio, EmbreeBest};
 use super::plan::Plan;
 use super::runner::{Case, Traced};
 
@@ -49,6 +53,12 @@ pub const RUNS_COLUMNS: &[&str] = &[
     "counting_seconds",
     "counting_overhead",
     "rmse",
+    "embree_best_seconds",
+    "embree_best_config",
+    "x_embree_best",
+    "embree_best_build_plus_trace_seconds",
+    "embree_best_build_plus_trace_config",
+    "x_embree_best_build_plus_trace",
 ];
 
 /// runs.csv's columns: the fixed ones, then one per `Event`.
@@ -99,6 +109,7 @@ pub fn write_runs(path: &Path, plan: &Plan, cases: &[Case]) -> Result<()> {
     let mut w = csv::Writer::from_path(path).map_err(|e| csv_error(path, e))?;
     w.write_record(runs_columns())
         .map_err(|e| csv_error(path, e))?;
+    let embree = EmbreeBest::of(plan, cases);
     for case in cases {
         let instance = &plan.instances[case.instance];
         let c = &case.counted.counters;
@@ -113,6 +124,9 @@ pub fn write_runs(path: &Path, plan: &Plan, cases: &[Case]) -> Result<()> {
         for timing in &case.timings {
             // The counting pass ran once, on the widest pool: compare it with that row's median.
             let same_threads = timing.threads == case.counted.threads;
+            let best = embree.trace(case, timing);
+            let build_plus_trace = case.build_seconds + timing.seconds_min;
+            let best_build = embree.build_plus_trace(case, timing);
             let fixed = [
                 plan.experiment.clone(),
                 plan.scenes[case.scene].name.clone(),
@@ -133,7 +147,7 @@ pub fn write_runs(path: &Path, plan: &Plan, cases: &[Case]) -> Result<()> {
                 case.build_seconds.to_string(),
                 if case.built { "built" } else { "reused" }.to_string(),
                 cell(build_mtris_per_s(case)),
-                (case.build_seconds + timing.seconds_min).to_string(),
+                build_plus_trace.to_string(),
                 c.rays.to_string(),
                 cell(internal(c.nodes_visited)),
                 cell(internal(c.aabb_tests)),
@@ -144,6 +158,12 @@ pub fn write_runs(path: &Path, plan: &Plan, cases: &[Case]) -> Result<()> {
                 cell(same_threads.then_some(case.counted.seconds)),
                 cell(same_threads.then(|| case.counted.seconds / timing.seconds_median)),
                 cell(case.rmse),
+                cell(best.map(|b| b.seconds)),
+                cell(best.map(|b| &b.config)),
+                cell(ratio(best, timing.seconds_min)),
+                cell(best_build.map(|b| b.seconds)),
+                cell(best_build.map(|b| &b.config)),
+                cell(ratio(best_build, build_plus_trace)),
             ];
             let events = Event::ALL.iter().map(|&e| cell(internal(c.get(e))));
             let row: Vec<String> = fixed.into_iter().chain(events).collect();

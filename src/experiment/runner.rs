@@ -39,7 +39,7 @@ use super::measure::{count_pass, time_passes, timing_of, Counted, Timing};
 use super::plan::{secondary_ray_structure, Plan, SceneLoader, ScenePlan, SECONDARY_RAY_TRACER};
 
 /// What a case measured.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Traced {
     /// A batch of one ray kind, traced on its own.
     Batch(RayKind),
