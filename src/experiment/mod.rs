@@ -154,6 +154,7 @@ mod tests {
     use std::fs;
 
     use super::*;
+    use crate::accel::AccelKind;
     use crate::scene::Scene;
 
     fn scratch(name: &str) -> PathBuf {
@@ -551,6 +552,23 @@ mod tests {
         // The reference image was cached under the results root.
         assert!(out.join(crate::render::convergence::CACHE_DIR).is_dir());
         fs::remove_dir_all(&out).unwrap();
+    }
+
+    #[test]
+    fn every_committed_experiment_parses() {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments");
+        let mut parsed = 0;
+        for entry in fs::read_dir(&dir).unwrap() {
+            let path = entry.unwrap().path();
+            let exp = Experiment::load(&path).unwrap_or_else(|e| panic!("{e}"));
+            assert!(!exp.instances.is_empty(), "{}", path.display());
+            parsed += 1;
+        }
+        assert!(parsed >= 18, "only {parsed} experiment files");
+        // packet.toml compares with Embree at its best: every Embree configuration it sweeps.
+        let packet = Experiment::load(&dir.join("packet.toml")).unwrap();
+        let embree = packet.instances.iter().filter(|i| i.info.accel == AccelKind::Embree);
+        assert_eq!(embree.count(), 20);
     }
 
     #[test]
