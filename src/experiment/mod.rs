@@ -567,7 +567,10 @@ mod tests {
         assert!(parsed >= 18, "only {parsed} experiment files");
         // packet.toml compares with Embree at its best: every Embree configuration it sweeps.
         let packet = Experiment::load(&dir.join("packet.toml")).unwrap();
-        let embree = packet.instances.iter().filter(|i| i.info.accel == AccelKind::Embree);
+        let embree = packet
+            .instances
+            .iter()
+            .filter(|i| i.info.accel == AccelKind::Embree);
         assert_eq!(embree.count(), 20);
     }
 

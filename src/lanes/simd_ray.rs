@@ -21,11 +21,12 @@
 
 use glam::Vec3;
 
+use super::slab::SlabRays;
 use super::watertight::{
     accept, common_axes, edge_functions, edges_have_zero, in_lane_frames, redo_zero_edges_in_f64,
     Permuted,
 };
-use super::{slab, LaneMask};
+use super::LaneMask;
 use crate::geometry::{Hit, Rays, Triangle, WatertightRay};
 
 /// `L` rays, their current closest hits, and what the box and triangle tests precompute.
@@ -123,15 +124,25 @@ impl<const L: usize> SimdRay<L> {
     /// lane).
     #[inline(always)]
     pub fn hits_box(&self, lo: [f32; 3], hi: [f32; 3]) -> bool {
-        let (o, inv, neg) = (&self.origin, &self.inv_dir, &self.negative);
-        slab::any_hit(o, inv, neg, &self.tmin, &self.tmax, lo, hi)
+        self.slabs().any_hit(lo, hi)
     }
 
     /// The lanes whose segment meets the box `[lo, hi]`.
     #[inline(always)]
     pub fn box_lanes(&self, lo: [f32; 3], hi: [f32; 3]) -> LaneMask<L> {
-        let (o, inv, neg) = (&self.origin, &self.inv_dir, &self.negative);
-        slab::hits(o, inv, neg, &self.tmin, &self.tmax, lo, hi)
+        self.slabs().hits(lo, hi)
+    }
+
+    /// The lanes as the slab test reads them.
+    #[inline(always)]
+    fn slabs(&self) -> SlabRays<'_, L> {
+        SlabRays {
+            origin: &self.origin,
+            inv_dir: &self.inv_dir,
+            negative: &self.negative,
+            tmin: &self.tmin,
+            tmax: &self.tmax,
+        }
     }
 
     /// A vertex relative to every lane's origin, in every lane's watertight frame.
