@@ -101,19 +101,46 @@ impl Grid {
     /// offsets).
     pub const MAX_TARGET_CELLS: f64 = (1u64 << 25) as f64;
 
+    /// Most triangle references (cell-list entries) a grid of `n` triangles may hold: 64 per
+    /// triangle (a well-shaped scene needs 2–5 at λ = 5), at least 2²⁴ and at most 2³¹ (8 GiB).
+    pub fn max_references(n: usize) -> u64 {
+        (64 * n as u64).clamp(1 << 24, 1 << 31)
+    }
+
     pub fn build(triangles: &[Triangle], config: GridConfig) -> Grid {
         let start = Instant::now();
         let scene = triangles
             .iter()
             .fold(Aabb::EMPTY, |b, t| b.union(t.bounds()));
-        let (bounds, res) = layout(scene, triangles.len(), config.lambda);
+        // Triangles much larger than a cell (slivers across the scene, a floor under a small
+        // object) are inserted into every cell they span; where that would exceed
+        // `max_references`, the grid gets coarser (half the cells per axis each time) instead of
+        // running out of memory or overflowing the 32-bit cell offsets.
+        let mut lambda = config.lambda as f64;
+        let mut grid = loop {
+            let grid = Grid::empty(triangles, scene, lambda, config);
+            let cap = Self::max_references(triangles.len());
+            if grid.reference_bound() <= cap || grid.cell_count() == 1 {
+                break grid;
+            }
+            lambda /= 8.0;
+        };
+        grid.insert_triangles();
+        grid.mark_macrocells();
+        grid.build_seconds = start.elapsed().as_secs_f64();
+        grid
+    }
+
+    /// The grid's layout for `lambda`, with no triangle inserted yet.
+    fn empty(triangles: &[Triangle], scene: Aabb, lambda: f64, config: GridConfig) -> Grid {
+        let (bounds, res) = layout(scene, triangles.len(), lambda);
         let res_v = Vec3::new(res[0] as f32, res[1] as f32, res[2] as f32);
         let extent = bounds.extent();
         let cell_size = extent / res_v;
         let magnitude = bounds.min.abs().max(bounds.max.abs()).max_element();
         let m = config.macro_size;
         let macro_res = res.map(|r| r.div_ceil(m));
-        let mut grid = Grid {
+        Grid {
             bounds,
             res,
             cell_size,
@@ -126,11 +153,20 @@ impl Grid {
             margin: cell_size.max_element() / 256.0 + magnitude * (1.0 / (1u32 << 20) as f32),
             config,
             build_seconds: 0.0,
-        };
-        grid.insert_triangles();
-        grid.mark_macrocells();
-        grid.build_seconds = start.elapsed().as_secs_f64();
-        grid
+        }
+    }
+
+    /// An upper bound on the cell-list entries insertion makes: each triangle's insertion-box
+    /// cell range (exact insertion keeps a subset of it).
+    fn reference_bound(&self) -> u64 {
+        self.triangles
+            .iter()
+            .map(|tri| {
+                let b = self.insertion_box(tri);
+                let (lo, hi) = (self.cell_of(b.min), self.cell_of(b.max));
+                (0..3).map(|a| (hi[a] - lo[a] + 1) as u64).product::<u64>()
+            })
+            .sum()
     }
 
     pub fn cell_count(&self) -> usize {
@@ -279,7 +315,7 @@ impl Grid {
 
 /// The grid box and resolution for `n` triangles in `scene` (§3). Works in f64 so the cell side of
 /// tiny or huge scenes does not round away.
-fn layout(scene: Aabb, n: usize, lambda: f32) -> (Aabb, [u32; 3]) {
+fn layout(scene: Aabb, n: usize, lambda: f64) -> (Aabb, [u32; 3]) {
     if scene.is_empty() {
         return (Aabb::new(Vec3::ZERO, Vec3::ONE), [1, 1, 1]);
     }
@@ -292,7 +328,7 @@ fn layout(scene: Aabb, n: usize, lambda: f32) -> (Aabb, [u32; 3]) {
         pad = 0.5;
     }
     let padded = e + 2.0 * pad;
-    let target = (lambda as f64 * n as f64).clamp(1.0, Grid::MAX_TARGET_CELLS);
+    let target = (lambda * n as f64).clamp(1.0, Grid::MAX_TARGET_CELLS);
     let mut active = [true; 3];
     let side = loop {
         let k = active.iter().filter(|&&a| a).count();
@@ -307,6 +343,12 @@ fn layout(scene: Aabb, n: usize, lambda: f32) -> (Aabb, [u32; 3]) {
             active[a] = false;
         }
     };
+    // Far from the origin a cell must stay well above the coordinates' f32 spacing, which sets
+    // the insertion margin (2⁻²⁰ of the magnitude): with cells at 2⁻¹⁶ of it or more, the margin
+    // adds at most 1/16 cell to each side of a triangle's box. (Without this bound a 0.15-unit
+    // mesh at 10⁵ got cells smaller than the margin, and each of its triangles went into
+    // ~60,000 cells.)
+    let side = side.max(magnitude * f64::powi(2.0, -16));
     let res = [0, 1, 2].map(|a| ((padded[a] / side).ceil() as u32).max(1));
     let half = DVec3::new(res[0] as f64, res[1] as f64, res[2] as f64) * side * 0.5;
     let centre = scene.center().as_dvec3();
@@ -685,6 +727,50 @@ mod tests {
                 GridConfig::from_params(&Params::new().with(k, v)).is_err(),
                 "{k}={v}"
             );
+        }
+    }
+
+    /// Regression (issue 14): the 69K-triangle, 0.15-unit bunny moved 10⁵ from the origin made
+    /// cells smaller than the insertion margin; each triangle went into ~60,000 cells, the u32
+    /// reference count wrapped and the build indexed out of bounds. Now a cell is at least 2⁻¹⁶
+    /// of the magnitude and every triangle spans a handful of cells.
+    #[test]
+    fn a_small_dense_mesh_far_from_the_origin_gets_cells_above_the_margin() {
+        use crate::scene::tessellate::Surface;
+        let tris =
+            Surface::uv_sphere(256, 136).triangles(|p| p * 0.075 + Vec3::new(1e5, -1e5, 1e5));
+        assert!(tris.len() > 69_000);
+        let g = Grid::build(&tris, GridConfig::default());
+        assert!(g.cell_size.min_element() >= 1e5 * 2f32.powi(-16) * 0.99);
+        assert!(g.margin < g.cell_size.min_element() / 8.0);
+        let per_triangle = g.cell_tris.len() as f64 / tris.len() as f64;
+        assert!(per_triangle <= 8.0, "{per_triangle} references per triangle");
+        assert_every_triangle_is_in_its_cells(&g, &tris);
+    }
+
+    /// Slivers spanning the whole scene would put every triangle in every cell: the grid
+    /// coarsens until the references fit `max_references` instead of exhausting memory.
+    #[test]
+    fn slivers_across_the_scene_coarsen_the_grid_within_the_reference_cap() {
+        let mut rng = SplitMix64::new(7);
+        let tris: Vec<Triangle> = (0..20_000)
+            .map(|_| {
+                let a = rng.vec3(-1.0, 1.0);
+                Triangle::new(a, -a, -a + rng.vec3(-1e-3, 1e-3))
+            })
+            .collect();
+        let g = Grid::build(&tris, GridConfig::default());
+        assert!(g.cell_tris.len() as u64 <= Grid::max_references(tris.len()));
+        assert!(g.cell_count() < 20_000 * 5, "coarsened: {:?}", g.res);
+        assert_every_triangle_is_in_its_cells(&g, &tris);
+    }
+
+    fn assert_every_triangle_is_in_its_cells(g: &Grid, tris: &[Triangle]) {
+        for (id, tri) in tris.iter().enumerate() {
+            for p in tri.v {
+                let [x, y, z] = g.cell_of(p);
+                assert!(g.cell(x, y, z).contains(&(id as u32)), "triangle {id} at {p}");
+            }
         }
     }
 }
