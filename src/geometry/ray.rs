@@ -33,6 +33,18 @@ impl Ray {
     pub fn at(&self, t: f32) -> Vec3 {
         self.origin + self.dir * t
     }
+
+    /// Whether the ray asks a defined question: finite origin and direction, a non-zero
+    /// direction, a finite `tmin` and `tmin < tmax` (`tmax` may be +∞). Every tracer answers
+    /// any other ray with a miss (not occluded): NaN or infinite components, a zero direction,
+    /// an empty or NaN interval.
+    pub fn is_well_formed(&self) -> bool {
+        self.origin.is_finite()
+            && self.dir.is_finite()
+            && self.dir != Vec3::ZERO
+            && self.tmin.is_finite()
+            && self.tmin < self.tmax
+    }
 }
 
 /// What a batch of rays is for; counters and CSV rows are kept per kind.

@@ -92,10 +92,20 @@ impl<const L: usize> SimdRay<L> {
             }
             lanes
         };
-        let d = [at(rays.dx, 1.0), at(rays.dy, 1.0), at(rays.dz, 1.0)];
+        let mut d = [at(rays.dx, 1.0), at(rays.dy, 1.0), at(rays.dz, 1.0)];
         self.origin = [at(rays.ox, 0.0), at(rays.oy, 0.0), at(rays.oz, 0.0)];
         self.tmin = at(rays.tmin, f32::INFINITY);
         self.tmax = at(rays.tmax, f32::NEG_INFINITY);
+        // An ill-formed ray (`Ray::is_well_formed`) is a miss: its lane is loaded as padding.
+        for l in 0..used {
+            if !rays.ray(first + l).is_well_formed() {
+                for a in 0..3 {
+                    self.origin[a][l] = 0.0;
+                    d[a][l] = 1.0;
+                }
+                (self.tmin[l], self.tmax[l]) = (f32::INFINITY, f32::NEG_INFINITY);
+            }
+        }
         self.time = if rays.time.is_empty() {
             [0.0; L]
         } else {

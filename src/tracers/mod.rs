@@ -55,14 +55,28 @@ pub trait SingleRayKernel: Send + Sync {
 impl<T: SingleRayKernel> Kernel for T {
     fn intersect_with<S: Stats>(&self, rays: Rays<'_>, hits: &mut [Hit], stats: &mut S) {
         for (i, hit) in hits.iter_mut().enumerate() {
-            *hit = self.trace::<S, false>(&rays.ray(i), stats);
+            *hit = trace_checked::<T, S, false>(self, &rays.ray(i), stats);
         }
     }
 
     fn occluded_with<S: Stats>(&self, rays: Rays<'_>, occluded: &mut [bool], stats: &mut S) {
         for (i, o) in occluded.iter_mut().enumerate() {
-            *o = self.trace::<S, true>(&rays.ray(i), stats).is_hit();
+            *o = trace_checked::<T, S, true>(self, &rays.ray(i), stats).is_hit();
         }
+    }
+}
+
+/// `kernel.trace`, with an ill-formed ray (`Ray::is_well_formed`) answered by a miss.
+#[inline(always)]
+fn trace_checked<K: SingleRayKernel, S: Stats, const ANY: bool>(
+    kernel: &K,
+    ray: &Ray,
+    stats: &mut S,
+) -> Hit {
+    if ray.is_well_formed() {
+        kernel.trace::<S, ANY>(ray, stats)
+    } else {
+        Hit::MISS
     }
 }
 

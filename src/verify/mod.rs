@@ -7,6 +7,8 @@
 
 pub mod compare;
 pub mod report;
+pub mod stability;
+pub mod truth;
 
 use rayon::prelude::*;
 

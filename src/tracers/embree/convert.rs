@@ -1,4 +1,4 @@
-//! Our rays and hits to and from Embree's: tnear/tfar from tmin/tmax, every mask bit set (ray
+//! Our rays and hits to and from Embree's: tnear/tfar from tmin/tmax (ill-formed rays disabled), every mask bit set (ray
 //! masks are compiled into the Debian library, so a zero mask would miss everything), the ray's time
 //! (motion blur; 0 without a time lane);
 //! back, tfar is the hit distance, primID our triangle index, and (u, v) already our convention
@@ -10,8 +10,35 @@ use crate::geometry::{Hit, Rays};
 /// Every ray sees every geometry.
 pub const ALL_MASK_BITS: u32 = u32::MAX;
 
+/// Embree rejects (and the Debian build asserts on, aborting the process) coordinates beyond
+/// this magnitude (`FLT_LARGE` in Embree's ray validity check).
+const EMBREE_LARGEST: f32 = 1.844e18;
+
+/// What Embree is handed for a ray that is not well formed (`Ray::is_well_formed`), or that it
+/// would reject: a valid ray with an empty interval (tnear > tfar ≥ 0), which hits nothing and
+/// is not occluded — raylab's defined answer for such rays.
+const DISABLED: RTCRay = RTCRay {
+    org_x: 0.0,
+    org_y: 0.0,
+    org_z: 0.0,
+    tnear: 1.0,
+    dir_x: 1.0,
+    dir_y: 0.0,
+    dir_z: 0.0,
+    time: 0.0,
+    tfar: 0.0,
+    mask: ALL_MASK_BITS,
+    id: 0,
+    flags: 0,
+};
+
 #[inline(always)]
 pub fn ray(rays: &Rays<'_>, i: usize) -> RTCRay {
+    let r = rays.ray(i);
+    let in_range = r.origin.abs().max(r.dir.abs()).max_element() <= EMBREE_LARGEST;
+    if !(r.is_well_formed() && in_range) {
+        return DISABLED;
+    }
     RTCRay {
         org_x: rays.ox[i],
         org_y: rays.oy[i],

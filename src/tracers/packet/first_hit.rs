@@ -28,15 +28,15 @@ impl RaySelection for FirstHit {
         stats: &mut S,
     ) -> Option<u32> {
         first_hit(packet, tree, node, ia, stats, |p, cell, s| {
-            let interval = p
-                .interval
-                .as_ref()
-                .expect("IA traversal loads interval bounds");
-            if interval.culls(
-                cell.bounds.min.to_array(),
-                cell.bounds.max.to_array(),
-                p.max_t,
-            ) {
+            // No interval bounds: a packet with an ill-formed ray (`Packet::load`).
+            let culled = p.interval.as_ref().is_some_and(|interval| {
+                interval.culls(
+                    cell.bounds.min.to_array(),
+                    cell.bounds.max.to_array(),
+                    p.max_t,
+                )
+            });
+            if culled {
                 if S::ENABLED {
                     s.event(Event::BoxesCulled, 1);
                 }

@@ -100,15 +100,21 @@ impl<const L: usize> Packet<L> {
         self.negative = sum.map(|s| s.is_sign_negative());
         self.index.clear();
         self.index.extend(0..count as u32);
-        self.live = rays.len() as u32;
+        // Ill-formed rays are misses from the start (`SimdRay::load`); their directions and
+        // intervals would poison the packet's bounds, so such a packet is traced uncullled.
+        let well_formed = (0..rays.len())
+            .filter(|&i| rays.ray(i).is_well_formed())
+            .count();
+        let cull = well_formed == rays.len();
+        self.live = well_formed as u32;
         self.max_t = (0..rays.len()).fold(f32::NEG_INFINITY, |m, i| m.max(rays.tmax[i]));
         let scene = &tree.bvh.nodes[Bvh::ROOT].bounds;
-        self.frustum = if frustum {
+        self.frustum = if frustum && cull {
             Frustum::build::<L>(rays, scene)
         } else {
             None
         };
-        self.interval = interval.then(|| IntervalPacket::new(rays));
+        self.interval = (interval && cull).then(|| IntervalPacket::new(rays));
     }
 
     /// The packet's results, lane by lane.
