@@ -744,7 +744,10 @@ mod tests {
         assert!(g.cell_size.min_element() >= 1e5 * 2f32.powi(-16) * 0.99);
         assert!(g.margin < g.cell_size.min_element() / 8.0);
         let per_triangle = g.cell_tris.len() as f64 / tris.len() as f64;
-        assert!(per_triangle <= 8.0, "{per_triangle} references per triangle");
+        assert!(
+            per_triangle <= 8.0,
+            "{per_triangle} references per triangle"
+        );
         assert_every_triangle_is_in_its_cells(&g, &tris);
     }
 
@@ -769,7 +772,10 @@ mod tests {
         for (id, tri) in tris.iter().enumerate() {
             for p in tri.v {
                 let [x, y, z] = g.cell_of(p);
-                assert!(g.cell(x, y, z).contains(&(id as u32)), "triangle {id} at {p}");
+                assert!(
+                    g.cell(x, y, z).contains(&(id as u32)),
+                    "triangle {id} at {p}"
+                );
             }
         }
     }

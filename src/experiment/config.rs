@@ -73,6 +73,7 @@ use std::fmt;
 use std::marker::PhantomData;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
+use std::time::Duration;
 
 use serde::de::{self, MapAccess, Visitor};
 use serde::{Deserialize, Deserializer, Serialize};
@@ -86,6 +87,7 @@ use crate::render::interleaved::SampleTable;
 use crate::render::whitted::WhittedSettings;
 use crate::tracers::visibility::LightSamples;
 use crate::tracers::{Params, TracerInfo, TRACERS};
+use crate::verify::stability::{CaseKind, Sweep};
 
 use super::figures::FigureSpec;
 use super::tables::TableSpec;
@@ -118,6 +120,8 @@ pub struct Experiment {
     pub tables: Vec<TableSpec>,
     /// Line plots drawn from runs.csv.
     pub figures: Vec<FigureSpec>,
+    /// The numerical stability suite, run instead of scenes × ray kinds.
+    pub stability: Option<StabilitySettings>,
 }
 
 /// A scene by name, with the size for generated scenes (`None`: the generator's default).
@@ -269,6 +273,7 @@ struct ExperimentFile {
     name: Spanned<String>,
     #[serde(default)]
     description: String,
+    #[serde(default = "no_scenes")]
     scenes: Spanned<Vec<NameOr<SceneSpec>>>,
     tracers: Spanned<Vec<Spanned<NameOr<TracerTable>>>>,
     /// The shared grid.
@@ -279,7 +284,11 @@ struct ExperimentFile {
     /// The render workload grid: a table, or an array of tables (each its own grid).
     #[serde(default)]
     render: Option<Spanned<toml::Value>>,
-    resolution: Spanned<Resolution>,
+    #[serde(default)]
+    resolution: Option<Spanned<Resolution>>,
+    /// The numerical stability suite instead of scenes and ray kinds (`experiment::stability`).
+    #[serde(default)]
+    stability: Option<Spanned<StabilitySpec>>,
     #[serde(default = "one")]
     frames: Spanned<usize>,
     #[serde(default = "one_thread")]
@@ -307,9 +316,81 @@ struct SoftShadowSpec {
     samples: u32,
 }
 
+/// `[stability]`: what the numerical stability suite sweeps; every key has a default.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct StabilitySpec {
+    cases: Option<Vec<String>>,
+    offsets: Option<Vec<f64>>,
+    scales: Option<Vec<f64>>,
+    ratios: Option<Vec<f64>>,
+    bounces: Option<u32>,
+    timeout_seconds: Option<f64>,
+}
+
+/// The stability suite's sweep and the time limit of one tracer on one case.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StabilitySettings {
+    pub sweep: Sweep,
+    pub timeout: Duration,
+}
+
+impl StabilitySpec {
+    fn settings(&self, seed: u64) -> std::result::Result<StabilitySettings, String> {
+        let d = Sweep::default();
+        let kinds = match &self.cases {
+            None => d.kinds,
+            Some(names) => names
+                .iter()
+                .map(|n| {
+                    CaseKind::parse(n).ok_or_else(|| {
+                        let known: Vec<&str> = CaseKind::ALL.iter().map(|k| k.name()).collect();
+                        format!("unknown case {n:?} (known: {})", known.join(", "))
+                    })
+                })
+                .collect::<std::result::Result<_, _>>()?,
+        };
+        let finite = |what: &str, v: &Option<Vec<f64>>, default: Vec<f64>, min: f64| {
+            let v = v.clone().unwrap_or(default);
+            match v
+                .iter()
+                .find(|x| !(x.is_finite() && **x >= min && **x <= 1e30))
+            {
+                Some(x) => Err(format!("{what}: {x} is not a number in [{min}, 1e30]")),
+                None if v.is_empty() => Err(format!("{what}: empty list")),
+                None => Ok(v),
+            }
+        };
+        let bounces = self.bounces.unwrap_or(d.bounces);
+        if !(1..=64).contains(&bounces) {
+            return Err(format!("bounces = {bounces}: 1 to 64"));
+        }
+        let timeout = self.timeout_seconds.unwrap_or(60.0);
+        if !(timeout > 0.0 && timeout <= 86_400.0) {
+            return Err(format!(
+                "timeout_seconds = {timeout}: more than 0, at most a day"
+            ));
+        }
+        Ok(StabilitySettings {
+            sweep: Sweep {
+                kinds,
+                offsets: finite("offsets", &self.offsets, d.offsets, 0.0)?,
+                scales: finite("scales", &self.scales, d.scales, 1e-30)?,
+                ratios: finite("ratios", &self.ratios, d.ratios, 1.0)?,
+                bounces,
+                seed,
+            },
+            timeout: Duration::from_secs_f64(timeout),
+        })
+    }
+}
+
 /// Light samples per point when the file does not say (Benthin & Wald 2009 §6 measure 4 to 64).
 pub const DEFAULT_SOFT_SHADOW_SAMPLES: u32 = 16;
 
+fn no_scenes() -> Spanned<Vec<NameOr<SceneSpec>>> {
+    Spanned::new(0..0, Vec::new())
+}
 fn one() -> Spanned<usize> {
     Spanned::new(0..0, 1)
 }
@@ -467,10 +548,37 @@ impl Experiment {
         };
         let frames = positive("frames", &file.frames)?;
         let repeats = positive("repeats", &file.repeats)?;
-        let resolution = file.resolution.get_ref();
-        if resolution.width == 0 || resolution.height == 0 {
-            return Err(src.input_error(&file.resolution.span(), "resolution must be at least 1×1"));
-        }
+        let stability = match &file.stability {
+            Some(spec) => {
+                // The suite generates its own meshes and rays.
+                let given = [
+                    ("scenes", !file.scenes.get_ref().is_empty()),
+                    ("rays", file.rays.is_some()),
+                    ("render", file.render.is_some()),
+                    ("resolution", file.resolution.is_some()),
+                ];
+                if let Some((key, _)) = given.iter().find(|(_, given)| *given) {
+                    return Err(src.usage_error(
+                        &spec.span(),
+                        format!("a [stability] experiment generates its own cases: remove `{key}`"),
+                    ));
+                }
+                Some(
+                    spec.get_ref()
+                        .settings(file.seed)
+                        .map_err(|e| src.usage_error(&spec.span(), format!("stability: {e}")))?,
+                )
+            }
+            None => None,
+        };
+        let (width, height) = match (&file.resolution, &stability) {
+            (Some(r), _) if r.get_ref().width == 0 || r.get_ref().height == 0 => {
+                return Err(src.input_error(&r.span(), "resolution must be at least 1×1"));
+            }
+            (Some(r), _) => (r.get_ref().width, r.get_ref().height),
+            (None, Some(_)) => (0, 0),
+            (None, None) => return Err(src.input_error(&(0..0), "missing field `resolution`")),
+        };
         let threads = file.threads.get_ref().clone();
         if threads.is_empty() || threads.contains(&0) {
             return Err(src.input_error(
@@ -494,7 +602,7 @@ impl Experiment {
             ));
         }
         let scenes: Vec<SceneSpec> = file.scenes.get_ref().iter().map(|s| s.0.clone()).collect();
-        if scenes.is_empty() {
+        if scenes.is_empty() && stability.is_none() {
             return Err(src.input_error(&file.scenes.span(), "no scenes"));
         }
         if let Some(twice) = scenes
@@ -535,7 +643,7 @@ impl Experiment {
             Some(render) => expand_renders(&src, render)?,
             None => Vec::new(),
         };
-        if ray_kinds.is_empty() && renders.is_empty() {
+        if ray_kinds.is_empty() && renders.is_empty() && stability.is_none() {
             let span = file.rays.as_ref().map_or(0..0, |r| r.span());
             return Err(src.input_error(&span, "no ray kinds and no render workload"));
         }
@@ -576,8 +684,9 @@ impl Experiment {
             instances,
             ray_kinds,
             renders,
-            width: resolution.width,
-            height: resolution.height,
+            width,
+            height,
+            stability,
             frames,
             threads,
             warmup: *file.warmup.get_ref(),

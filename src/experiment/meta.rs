@@ -27,7 +27,9 @@ pub struct Meta<'a> {
     pub versions: BTreeMap<&'static str, String>,
     pub experiment_file: ExperimentFile<'a>,
     pub overrides: &'a RunOverrides,
-    pub plan: &'a Plan,
+    /// The plan of a scenes × ray kinds run (a stability run has none).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub plan: Option<&'a Plan>,
 }
 
 #[derive(Debug, Serialize)]
@@ -56,7 +58,8 @@ pub struct ExperimentFile<'a> {
 
 /// The facts of this machine and this build, gathered now.
 pub fn gather<'a>(
-    plan: &'a Plan,
+    experiment: &'a str,
+    plan: Option<&'a Plan>,
     threads: &'a [usize],
     run_id: String,
     started: UtcTime,
@@ -64,7 +67,7 @@ pub fn gather<'a>(
     overrides: &'a RunOverrides,
 ) -> Meta<'a> {
     Meta {
-        experiment: &plan.experiment,
+        experiment,
         run_id,
         date: started.iso8601(),
         commit: commit(),
@@ -84,6 +87,14 @@ pub fn gather<'a>(
         overrides,
         plan,
     }
+}
+
+/// Writes `meta` as meta.json into `dir`.
+pub fn write(dir: &Path, meta: &Meta) -> crate::error::Result<()> {
+    let path = dir.join(META_JSON);
+    let json = serde_json::to_string_pretty(meta)
+        .map_err(|e| crate::error::Error::runtime(format!("meta.json: {e}")))?;
+    std::fs::write(&path, json + "\n").map_err(|e| crate::error::Error::io(&path, e))
 }
 
 /// The commit of the source tree this binary was built from, read when the run starts.

@@ -15,6 +15,7 @@ pub mod plots;
 pub mod results_dir;
 pub mod runner;
 pub mod selection;
+pub mod stability;
 pub mod tables;
 pub mod utc;
 
@@ -95,6 +96,9 @@ pub fn run(
     overrides: &RunOverrides,
     load: SceneLoader,
 ) -> Result<PathBuf> {
+    if let Some(settings) = &exp.stability {
+        return stability::run(exp, settings, file_text, overrides);
+    }
     // A missing font would otherwise only show after the whole run.
     plots::register_font()?;
     let started = utc::UtcTime::now();
@@ -133,17 +137,15 @@ pub fn run(
         }
     }
     let meta = meta::gather(
-        &plan,
+        &plan.experiment,
+        Some(&plan),
         &exp.threads,
         results.run_id(),
         started,
         (&exp.path, file_text),
         overrides,
     );
-    let meta_path = dir.join(meta::META_JSON);
-    let json = serde_json::to_string_pretty(&meta)
-        .map_err(|e| Error::runtime(format!("meta.json: {e}")))?;
-    std::fs::write(&meta_path, json + "\n").map_err(|e| Error::io(&meta_path, e))?;
+    meta::write(dir, &meta)?;
     results.commit()
 }
 

@@ -20,7 +20,6 @@ use crate::geometry::{Hit, Ray, Triangle};
 use crate::scene::Mesh;
 use crate::verify::compare::EDGE_GRAZE_ULPS;
 
-
 /// One triangle the ray meets in f64, or passes within rounding of.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ExactHit {
@@ -145,12 +144,9 @@ impl Truth {
 /// largest coordinate magnitude involved (its vertices and the ray origin: a watertight test works
 /// on the vertices relative to the origin).
 fn rounding(tri: &Triangle, ray: &Ray) -> f64 {
-    let scale = tri
-        .v
-        .iter()
-        .fold(ray.origin.abs().max_element(), |m, v| {
-            m.max(v.abs().max_element())
-        });
+    let scale = tri.v.iter().fold(ray.origin.abs().max_element(), |m, v| {
+        m.max(v.abs().max_element())
+    });
     (EDGE_GRAZE_ULPS * f32::EPSILON) as f64 * scale.max(f32::MIN_POSITIVE) as f64
 }
 
@@ -313,12 +309,32 @@ mod tests {
         let m = mesh(&[unit_triangle(0.0)]);
         let good = down(0.25, 0.25);
         let bad = [
-            Ray { tmax: f32::NAN, ..good },
-            Ray { tmin: 3.0, tmax: 3.0, ..good },
-            Ray { tmin: 4.0, tmax: -1.0, ..good },
-            Ray { dir: Vec3::ZERO, ..good },
-            Ray { dir: Vec3::new(0.0, f32::NAN, -1.0), ..good },
-            Ray { origin: Vec3::new(f32::INFINITY, 0.25, 5.0), ..good },
+            Ray {
+                tmax: f32::NAN,
+                ..good
+            },
+            Ray {
+                tmin: 3.0,
+                tmax: 3.0,
+                ..good
+            },
+            Ray {
+                tmin: 4.0,
+                tmax: -1.0,
+                ..good
+            },
+            Ray {
+                dir: Vec3::ZERO,
+                ..good
+            },
+            Ray {
+                dir: Vec3::new(0.0, f32::NAN, -1.0),
+                ..good
+            },
+            Ray {
+                origin: Vec3::new(f32::INFINITY, 0.25, 5.0),
+                ..good
+            },
         ];
         assert!(good.is_well_formed());
         for ray in bad {

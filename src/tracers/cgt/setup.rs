@@ -147,8 +147,8 @@ impl CgtTracer {
         }
     }
 
-    /// Sets `ws.group` to the rays of `packet` that can hit anything: finite, with a non-zero
-    /// direction, and meeting the grid's box. Branch-free over the packet (`&`, not `&&`), so it
+    /// Sets `ws.group` to the rays of `packet` that can hit anything: well formed (finite, a
+    /// non-zero direction, a non-empty interval) and meeting the grid's box. Branch-free over the packet (`&`, not `&&`), so it
     /// runs in SIMD lanes.
     pub(super) fn usable_rays<const L: usize>(
         &self,
@@ -163,12 +163,14 @@ impl CgtTracer {
             let i = start + p;
             let o = Vec3::new(rays.ox[i], rays.oy[i], rays.oz[i]);
             let d = Vec3::new(rays.dx[i], rays.dy[i], rays.dz[i]);
+            let (tmin, tmax) = (rays.tmin[i], rays.tmax[i]);
+            // `Ray::is_well_formed`, written branch-free, then the grid's box.
             *usable = o.is_finite()
                 & d.is_finite()
                 & (d != Vec3::ZERO)
-                & RayBoxTest::new(o, d)
-                    .hit(bounds, rays.tmin[i], rays.tmax[i])
-                    .is_some();
+                & tmin.is_finite()
+                & (tmin < tmax)
+                & RayBoxTest::new(o, d).hit(bounds, tmin, tmax).is_some();
         }
         ws.group.clear();
         let inside = &ws.inside;

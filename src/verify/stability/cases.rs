@@ -133,12 +133,8 @@ pub fn generate(sweep: &Sweep) -> Vec<Case> {
                 }
             }
             CaseKind::Grazing => cases.extend(sweep.offsets.iter().map(|&o| grazing(o, seed))),
-            CaseKind::AxisParallel => {
-                cases.extend(sweep.offsets.iter().map(|&o| axis_parallel(o)))
-            }
-            CaseKind::IllFormed => {
-                cases.extend(sweep.offsets.iter().map(|&o| ill_formed(o, seed)))
-            }
+            CaseKind::AxisParallel => cases.extend(sweep.offsets.iter().map(|&o| axis_parallel(o))),
+            CaseKind::IllFormed => cases.extend(sweep.offsets.iter().map(|&o| ill_formed(o, seed))),
             CaseKind::SelfIntersection => {
                 for surface in [Bouncing::Sphere, Bouncing::Coplanar] {
                     cases.extend(self_intersection(surface, sweep.bounces, seed));
@@ -214,11 +210,19 @@ fn watertight(shape: Closed, offset: f64, scale: f64, seed: u64) -> Case {
     };
     let map = placed(offset, scale);
     let mesh = mesh_of(surface.triangles(&map));
+    // A mesh fewer than 2⁸ f32 spacings across at its offset is crushed onto a few
+    // representable points: it is still traced (no crash, no hang, no false hit), but no ray
+    // can be required to hit it.
+    let crushed = scale < offset * f64::powi(2.0, -15);
     let centre = DVec3::splat(offset);
     let mut rng = SplitMix64::new(seed ^ 0x57a7);
     let mut origins = vec![centre];
     origins.extend((0..3).map(|_| centre + rng.vec3(-0.4, 0.4).as_dvec3() * scale));
-    let mut targets: Vec<DVec3> = surface.vertices.iter().map(|&v| map(v).as_dvec3()).collect();
+    let mut targets: Vec<DVec3> = surface
+        .vertices
+        .iter()
+        .map(|&v| map(v).as_dvec3())
+        .collect();
     for f in &surface.faces {
         for i in 0..3 {
             let (a, b) = (f[i] as usize, f[(i + 1) % 3] as usize);
@@ -232,13 +236,18 @@ fn watertight(shape: Closed, offset: f64, scale: f64, seed: u64) -> Case {
         rays.extend((0..256).map(|_| towards(o, o + rng.direction().as_dvec3())));
     }
     rays.retain(|r| r.dir != Vec3::ZERO);
-    all_must_hit(
+    let mut case = all_must_hit(
         CaseKind::Watertight,
         format!("{name} scale={scale:e}"),
         offset,
         mesh,
         rays,
-    )
+    );
+    if crushed {
+        case.variant += " (crushed: no must-hit rays)";
+        case.must_hit.iter_mut().for_each(|m| *m = false);
+    }
+    case
 }
 
 /// The cube `[-1, 1]³`, each face cut into `n × n` cells.
@@ -291,10 +300,14 @@ fn slivers(offset: f64, secondary: bool, seed: u64) -> Case {
             let c = rng.vec3(-1.0, 1.0);
             let d = rng.vec3(-0.3, 0.3);
             let (a, b, e) = match i % 6 {
-                0 => (c, c + d, c + 2.0 * d),                  // collinear
-                1 => (c, c, c),                                // a point
-                2 => (c, c, c + d),                            // repeated vertex
-                3 => (c - d * 3.0, c + d * 3.0, c + d * 3.0 + rng.vec3(-1e-4, 1e-4)), // needle
+                0 => (c, c + d, c + 2.0 * d), // collinear
+                1 => (c, c, c),               // a point
+                2 => (c, c, c + d),           // repeated vertex
+                3 => (
+                    c - d * 3.0,
+                    c + d * 3.0,
+                    c + d * 3.0 + rng.vec3(-1e-4, 1e-4),
+                ), // needle
                 _ => (c, c + rng.vec3(-0.1, 0.1), c + rng.vec3(-0.1, 0.1)),
             };
             Triangle::new(at(a), at(b), at(e))
@@ -373,13 +386,20 @@ fn grazing(offset: f64, seed: u64) -> Case {
             let v = grid_point(i, j);
             let interior = (1..n).contains(&i) && (1..n).contains(&j);
             // Through the vertex from above, slanted and straight.
-            let above = v + DVec3::new(rng.range(-0.5, 0.5) as f64, rng.range(-0.5, 0.5) as f64, 2.0);
+            let above = v + DVec3::new(
+                rng.range(-0.5, 0.5) as f64,
+                rng.range(-0.5, 0.5) as f64,
+                2.0,
+            );
             add(towards(above, v), interior);
             add(towards(v + DVec3::Z, v), interior);
             if i < n {
                 // Through the midpoint of the edge to the next vertex (shared when interior).
                 let mid = (v + grid_point(i + 1, j)) * 0.5;
-                add(towards(mid + DVec3::new(0.1, 0.3, 1.0), mid), (1..n).contains(&j));
+                add(
+                    towards(mid + DVec3::new(0.1, 0.3, 1.0), mid),
+                    (1..n).contains(&j),
+                );
                 // Along the edge itself, in the plane.
                 add(towards(v - DVec3::X, v), false);
             }
@@ -388,7 +408,10 @@ fn grazing(offset: f64, seed: u64) -> Case {
             }
             // In the plane of the square, through the vertex from a random direction.
             let dir = rng.direction();
-            add(towards(v - DVec3::new(dir.x as f64, dir.y as f64, 0.0), v), false);
+            add(
+                towards(v - DVec3::new(dir.x as f64, dir.y as f64, 0.0), v),
+                false,
+            );
         }
     }
     // Along the faces of the bounding box: the planes x = ±1 and y = ±1 at z = 0.
@@ -472,14 +495,64 @@ pub fn ill_formed_variants(good: Ray) -> Vec<(&'static str, Ray)> {
     let o = good.origin;
     let d = good.dir;
     vec![
-        ("nan_origin", Ray { origin: Vec3::new(nan, o.y, o.z), ..good }),
-        ("inf_origin", Ray { origin: Vec3::new(o.x, -inf, o.z), ..good }),
-        ("nan_direction", Ray { dir: Vec3::new(d.x, d.y, nan), ..good }),
-        ("inf_direction", Ray { dir: Vec3::new(inf, d.y, d.z), ..good }),
-        ("zero_direction", Ray { dir: Vec3::ZERO, ..good }),
-        ("negative_zero_direction", Ray { dir: Vec3::splat(-0.0), ..good }),
-        ("tmin_equals_tmax", Ray { tmin: 1.0, tmax: 1.0, ..good }),
-        ("tmin_above_tmax", Ray { tmin: 2.0, tmax: 1.0, ..good }),
+        (
+            "nan_origin",
+            Ray {
+                origin: Vec3::new(nan, o.y, o.z),
+                ..good
+            },
+        ),
+        (
+            "inf_origin",
+            Ray {
+                origin: Vec3::new(o.x, -inf, o.z),
+                ..good
+            },
+        ),
+        (
+            "nan_direction",
+            Ray {
+                dir: Vec3::new(d.x, d.y, nan),
+                ..good
+            },
+        ),
+        (
+            "inf_direction",
+            Ray {
+                dir: Vec3::new(inf, d.y, d.z),
+                ..good
+            },
+        ),
+        (
+            "zero_direction",
+            Ray {
+                dir: Vec3::ZERO,
+                ..good
+            },
+        ),
+        (
+            "negative_zero_direction",
+            Ray {
+                dir: Vec3::splat(-0.0),
+                ..good
+            },
+        ),
+        (
+            "tmin_equals_tmax",
+            Ray {
+                tmin: 1.0,
+                tmax: 1.0,
+                ..good
+            },
+        ),
+        (
+            "tmin_above_tmax",
+            Ray {
+                tmin: 2.0,
+                tmax: 1.0,
+                ..good
+            },
+        ),
         ("negative_tmax", Ray { tmax: -1.0, ..good }),
         ("nan_tmax", Ray { tmax: nan, ..good }),
         ("nan_tmin", Ray { tmin: nan, ..good }),
