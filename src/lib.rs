@@ -8,6 +8,7 @@ pub mod error;
 pub mod experiment;
 pub mod geometry;
 pub mod lanes;
+pub mod memory;
 pub mod params;
 pub mod random;
 pub mod render;

@@ -247,6 +247,15 @@ fn execute(command: Command) -> Result<bool> {
             drt,
         } => {
             check_frame(frame, frames)?;
+            let samples = match renderer {
+                Renderer::Distribution => drt.spp as u64,
+                _ => 1,
+            };
+            let rays = width as u64 * height as u64 * samples;
+            raylab::memory::check(
+                &format!("a {width}×{height} render ({rays} rays per batch)"),
+                raylab::memory::for_rays(rays),
+            )?;
             let scene = load_scene(&scene, size)?;
             let frame = scene.frame(frame, frames);
             let params = params_of(params);
@@ -304,6 +313,11 @@ fn execute(command: Command) -> Result<bool> {
             out,
         } => {
             check_frame(frame, frames)?;
+            let rays = resolution as u64 * resolution as u64;
+            raylab::memory::check(
+                &format!("verification at {resolution}² ({rays} rays per batch)"),
+                raylab::memory::for_rays(rays),
+            )?;
             let loaded = load_scene(&scene, size)?;
             let frame = loaded.frame(frame, frames);
             let reports = verify::verify_frame(

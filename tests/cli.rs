@@ -196,3 +196,48 @@ fn whitted_render_writes_a_png_and_rejects_unknown_settings() {
     let png = image::open(dir.join("w.png")).unwrap();
     assert_eq!((png.width(), png.height()), (16, 12));
 }
+
+#[test]
+fn absurd_sizes_are_refused_before_allocating() {
+    let dir = scratch("absurd");
+    let huge = ["--width", "1000000", "--height", "1000000"];
+    let mut args = vec!["render", "--scene", "room"];
+    args.extend(huge);
+    fails_with(&dir, &args, "needs an estimated");
+    fails_with(
+        &dir,
+        &["verify", "--scene", "room", "--tracer", "reference", "--resolution", "4000000"],
+        "needs an estimated",
+    );
+    let exp = experiment(
+        &dir,
+        "huge.toml",
+        "name = \"x\"\nscenes = [\"room\"]\ntracers = [\"reference\"]\nrays = [\"primary\"]\nresolution = { width = 4000000, height = 4000000 }\n",
+    );
+    fails_with(&dir, &["run", &exp], "huge.toml");
+    no_results(&dir);
+}
+
+#[test]
+fn bad_stability_experiments_name_file_and_line() {
+    let dir = scratch("stability");
+    let case = experiment(
+        &dir,
+        "case.toml",
+        "name = \"s\"\ntracers = [\"reference\"]\n\n[stability]\ncases = [\"wobbly\"]\n",
+    );
+    fails_with(&dir, &["run", &case], "case.toml:4");
+    let mixed = experiment(
+        &dir,
+        "mixed.toml",
+        "name = \"s\"\nscenes = [\"room\"]\ntracers = [\"reference\"]\n[stability]\n",
+    );
+    fails_with(&dir, &["run", &mixed], "remove `scenes`");
+    let nan = experiment(
+        &dir,
+        "nan.toml",
+        "name = \"s\"\ntracers = [\"reference\"]\n[stability]\noffsets = [nan]\n",
+    );
+    fails_with(&dir, &["run", &nan], "offsets");
+    no_results(&dir);
+}

@@ -15,8 +15,8 @@ const LAYERS: &[&[&str]] = &[
     &["lanes", "geometry", "stats", "test_util"],
 ];
 
-/// Modules every layer may use: errors, seeded randomness, the parameter map.
-const UTILITIES: &[&str] = &["error", "random", "params"];
+/// Modules every layer may use: errors, seeded randomness, the parameter map, the memory budget.
+const UTILITIES: &[&str] = &["error", "memory", "random", "params"];
 
 fn layer(module: &str) -> Option<usize> {
     LAYERS.iter().position(|peers| peers.contains(&module))

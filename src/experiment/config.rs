@@ -526,6 +526,27 @@ impl Source<'_> {
 
 impl Experiment {
     /// Reads and checks an experiment file.
+    /// The largest ray batch of the run: a frame's camera rays, times the light samples of
+    /// the soft-shadow workload or a distribution render's samples per pixel.
+    pub fn largest_batch(&self) -> u64 {
+        let pixels = self.width as u64 * self.height as u64;
+        let soft = if self.ray_kinds.contains(&RayKind::SoftShadow) {
+            self.soft_shadow_samples as u64
+        } else {
+            1
+        };
+        let spp = self
+            .renders
+            .iter()
+            .map(|r| match r {
+                RenderWorkload::Distribution(d) => d.settings.spp as u64,
+                RenderWorkload::Whitted(_) => 1,
+            })
+            .max()
+            .unwrap_or(1);
+        pixels.saturating_mul(soft.max(spp))
+    }
+
     pub fn load(path: &Path) -> Result<Experiment> {
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
         Experiment::parse(path, &text)

@@ -96,6 +96,14 @@ pub fn run(
     overrides: &RunOverrides,
     load: SceneLoader,
 ) -> Result<PathBuf> {
+    crate::memory::check(
+        &format!(
+            "experiment {} ({} rays per batch)",
+            exp.path.display(),
+            exp.largest_batch()
+        ),
+        crate::memory::for_rays(exp.largest_batch()),
+    )?;
     if let Some(settings) = &exp.stability {
         return stability::run(exp, settings, file_text, overrides);
     }

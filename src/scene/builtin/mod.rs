@@ -85,6 +85,10 @@ pub fn known_names() -> String {
 }
 
 /// Generates the built-in scene `name` at `size` (its default when `None`).
+/// Memory a triangle costs once loaded and built over: the mesh (40 bytes), a BVH (nodes and
+/// indices), a grid's references and Embree's copy, rounded up.
+const BYTES_PER_TRIANGLE: u64 = 512;
+
 pub fn generate(name: &str, size: Option<u32>) -> Result<Scene> {
     let generator = find(name).ok_or_else(|| {
         Error::usage(format!(
@@ -93,6 +97,12 @@ pub fn generate(name: &str, size: Option<u32>) -> Result<Scene> {
         ))
     })?;
     let size = generator.checked_size(size)?;
+    // The mesh and a structure over it; a few hundred bytes a triangle.
+    let triangles = (generator.triangle_count)(size) as u64;
+    crate::memory::check(
+        &format!("built-in scene '{name}' at size {size} ({triangles} triangles)"),
+        triangles.saturating_mul(BYTES_PER_TRIANGLE),
+    )?;
     Ok((generator.build)(size))
 }
 
