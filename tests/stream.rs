@@ -197,6 +197,86 @@ fn occluded_rays_leave_the_stream() {
     assert_eq!(counts(&c), [3, 18, 3, 18, 20, 6, 6, 8, 2, 6]);
 }
 
+/// Two unit-cube leaves side by side along x, each holding a triangle across x (at x = 0.5 and
+/// x = 1.5), so a ray along ±x meets both and only the nearer leaf's hit counts.
+fn two_walls() -> Bvh {
+    let wall = |x: f32| {
+        Triangle::new(
+            Vec3::new(x, 0.0, 0.0),
+            Vec3::new(x, 1.0, 0.0),
+            Vec3::new(x, 0.0, 1.0),
+        )
+    };
+    let cube = |x0: f32, x1: f32| Aabb::new(Vec3::new(x0, 0.0, 0.0), Vec3::new(x1, 1.0, 1.0));
+    let nodes = vec![
+        BvhNode {
+            bounds: cube(0.0, 2.0),
+            first: 1,
+            count: 0,
+        },
+        BvhNode {
+            bounds: cube(0.0, 1.0),
+            first: 0,
+            count: 1,
+        },
+        BvhNode {
+            bounds: cube(1.0, 2.0),
+            first: 1,
+            count: 1,
+        },
+    ];
+    Bvh {
+        pairs: child_pairs(&nodes),
+        nodes,
+        depth: vec![0, 1, 1],
+        triangles: vec![wall(0.5), wall(1.5)],
+        prim_ids: vec![0, 1],
+        config: BvhConfig::default(),
+        build_seconds: 0.0,
+        motion_end: None,
+    }
+}
+
+/// A stream of four rays at y = z = 0.25, each +x from x = −1 or −x from x = 3, visits first
+/// the child on the side most of its rays come from (the children's split axis is x). With three
+/// +x rays: all four meet leaf 1 (4 triangle tests: +x hit at t = 1.5, −x at t = 2.5); at
+/// leaf 2's box the +x rays' segments now end at t = 1.5 < 2, so only the −x ray goes on (1
+/// test, its hit moves to t = 1.5). Mirrored with three −x rays. Either way 3 nodes, 12 box
+/// tests, 5 triangle tests; the other order would take 7 — and every ray's hit is its nearer
+/// wall at t = 1.5.
+#[test]
+fn children_are_visited_front_to_back_by_the_streams_majority_direction() {
+    let tree = Arc::new(two_walls());
+    for plus in [[true, true, false, true], [false, true, false, false]] {
+        let mut batch = RayBatch::new(RayKind::Diffuse);
+        for (i, &p) in plus.iter().enumerate() {
+            let (x, dx) = if p { (-1.0, 1.0) } else { (3.0, -1.0) };
+            let ray = Ray::new(
+                Vec3::new(x, 0.25, 0.25),
+                Vec3::new(dx, 0.0, 0.0),
+                0.0,
+                100.0,
+            );
+            batch.push(ray, i as u32);
+        }
+        let config = StreamConfig {
+            stream: StreamSize::Rays(4),
+            width: 4,
+        };
+        let mut hits = vec![Hit::MISS; 4];
+        let mut c = Counters::default();
+        StreamTracer::new(tree.clone(), config).intersect_counted(batch.view(), &mut hits, &mut c);
+        assert_eq!(
+            (c.nodes_visited, c.aabb_tests, c.triangle_tests),
+            (3, 12, 5),
+            "{plus:?}"
+        );
+        for (h, &p) in hits.iter().zip(&plus) {
+            assert_eq!((h.t, h.prim), (1.5, if p { 0 } else { 1 }), "{plus:?}");
+        }
+    }
+}
+
 /// Rays that can hit nothing — NaN origin or direction, zero direction, tmin > tmax, infinite
 /// tmin — are answered (miss, not occluded) without a panic, at every width, next to ones that
 /// hit.
