@@ -5,9 +5,10 @@
 //!   streams of S consecutive rays (camera rays come in Morton-ordered 32×32 tiles, so S = 1024
 //!   is the paper's 32×32 initial stream and 4096 its 64×64). A stream is SoA columns that carry
 //!   each ray's index (`rays`), partitioned in place as it goes (§3.1 "Memory management").
-//! - **SIMD width** (`width` = N ∈ 4, 8, 12, 16, 32, 64; `width`): N rays per test. 4, 8 and 16
-//!   are the lane layer's widths; 12 uses 12 of 16 lanes; 32 and 64 are 2 or 4 16-lane groups
-//!   processed as one.
+//!   Explicit packets of the batch (packet assembly) play no part: streams need no packets.
+//! - **SIMD width** (`width` = N ∈ 4, 8, 12, 16, 32, 64): N rays per test (§4). 4, 8 and 16 are
+//!   the lane layer's widths; 12 uses 12 of 16 lanes; 32 and 64 are 2 or 4 16-lane groups
+//!   processed as one (`width`).
 //! - **Traversal** (§3.2, Fig. 3, `traverse`): at each node a box filter (`filter`) tests the
 //!   stream N rays at a time and partitions it in place; the rays that meet the box go on to the
 //!   leaf's intersection stage (`intersect`) or to both children, front to back by the
@@ -16,7 +17,8 @@
 //! - **Exact hits**: every lane runs the reference tracer's slab and watertight tests bit for
 //!   bit, so each ray gets the reference's closest hit (up to the order in which triangles at
 //!   exactly equal distance are met). Occlusion rays end at their first hit and leave the stream.
-//!   Rays that can hit nothing (NaN, zero direction, `tmin > tmax`) fail the root's filter.
+//!   Rays that can hit nothing (NaN, zero direction, `tmin > tmax`) miss: `tmin > tmax` fails
+//!   the root's filter, and a NaN passes slabs as in the reference tracer but no triangle.
 //!
 //! Counters: `ray` per ray; `node(depth)` per node a stream is filtered at; `aabb_test(depth)`
 //! per ray in a box filter's stream; `triangle_test(depth)` per live ray tested against a

@@ -20,7 +20,7 @@ use super::rays::StreamRays;
 
 /// What a query answers per ray: the closest hit, or whether anything is hit (`ANY`: then a ray
 /// ends at its first hit).
-pub trait Answer: Copy + Send {
+pub trait Answer {
     const ANY: bool;
     /// The triangle test of every lane of `simd` for this query (`SimdRay::intersect::<ANY>`).
     fn intersect<const L: usize>(simd: &mut SimdRay<L>, tri: &Triangle, prim: u32);
