@@ -33,10 +33,23 @@ pub enum Event {
     SlicesStepped,
     /// Empty macrocells skipped.
     MacrocellsSkipped,
+    /// Box filters run (stream filtering: one per node a stream is tested against).
+    /// `TraversalLanesActive / StreamBoxTests` = the mean stream length at box tests.
+    StreamBoxTests,
+    /// Rays in the streams of the box filters: the SIMD lanes traversal fills.
+    TraversalLanesActive,
+    /// SIMD lanes traversal issues: each box filter's stream rounded up to whole groups of the
+    /// SIMD width. `TraversalLanesActive / TraversalLanesIssued` = traversal's SIMD utilisation.
+    TraversalLanesIssued,
+    /// Live rays in the groups tested against triangles, per triangle (lanes that do work).
+    IntersectionLanesActive,
+    /// SIMD lanes intersection issues: the SIMD width per group and triangle.
+    /// `IntersectionLanesActive / IntersectionLanesIssued` = intersection's SIMD utilisation.
+    IntersectionLanesIssued,
 }
 
 impl Event {
-    pub const ALL: [Event; 8] = [
+    pub const ALL: [Event; 13] = [
         Event::Packets,
         Event::MailboxHits,
         Event::TrianglesCulled,
@@ -45,6 +58,11 @@ impl Event {
         Event::LeafActiveRays,
         Event::SlicesStepped,
         Event::MacrocellsSkipped,
+        Event::StreamBoxTests,
+        Event::TraversalLanesActive,
+        Event::TraversalLanesIssued,
+        Event::IntersectionLanesActive,
+        Event::IntersectionLanesIssued,
     ];
     pub const COUNT: usize = Event::ALL.len();
 
@@ -59,6 +77,11 @@ impl Event {
             Event::LeafActiveRays => "leaf_active_rays",
             Event::SlicesStepped => "slices_stepped",
             Event::MacrocellsSkipped => "macrocells_skipped",
+            Event::StreamBoxTests => "stream_box_tests",
+            Event::TraversalLanesActive => "traversal_lanes_active",
+            Event::TraversalLanesIssued => "traversal_lanes_issued",
+            Event::IntersectionLanesActive => "intersection_lanes_active",
+            Event::IntersectionLanesIssued => "intersection_lanes_issued",
         }
     }
 }

@@ -1,7 +1,8 @@
-//! The foundation's correctness bar: the reference, obvhs, cgt and packet tracers agree with Embree (robust
-//! mode) on well over a million rays — primary, shadow and diffuse bounces — over three built-in
-//! scenes and two real ones (conference, bunny), with zero unexplained disagreements; and the
-//! reference tracer agrees on Whitted's reflection and refraction rays. Ties are classified and
+//! The foundation's correctness bar: the reference, obvhs, cgt, packet and stream tracers agree
+//! with Embree (robust mode) on well over a million rays — primary, shadow and diffuse bounces —
+//! over three built-in scenes and two real ones (conference, bunny), with zero unexplained
+//! disagreements; and the reference, packet and stream tracers agree on Whitted's reflection and
+//! refraction rays. Ties are classified and
 //! printed, not hidden.
 
 use raylab::geometry::RayKind;
@@ -80,7 +81,7 @@ fn cgt_agrees_with_embree() {
 
 /// Reflection rays on the room with every surface a mirror (scenes/room-reflective.toml), and
 /// reflection and refraction rays on the room with every surface glass (scenes/room-glass.toml),
-/// for the reference tracer and every traversal of the packet tracer.
+/// for the reference tracer, every traversal of the packet tracer and the stream tracer.
 #[test]
 fn tracers_agree_with_embree_on_reflection_and_refraction() {
     let tol = Tolerance::default();
@@ -98,6 +99,10 @@ fn tracers_agree_with_embree_on_reflection_and_refraction() {
         ("packet", packet("partition", 8, 8)),
         ("packet", packet("ia", 32, 16)),
         ("packet", packet("masked", 4, 4)),
+        (
+            "stream",
+            Params::new().with("width", 12).with("stream", 1024),
+        ),
     ];
     for ((scene, kinds), (tracer, params)) in [
         (&mirrors, &[RayKind::Reflection][..]),
@@ -158,5 +163,16 @@ fn packet_agrees_with_embree() {
             .with("lanes", lanes)
             .with("frustum", frustum);
         agrees_with_embree_with("packet", &params);
+    }
+}
+
+/// Three widths — one lane group (16), 12 of 16 lanes, four groups as one (64) — with streams of
+/// a 32×32 tile and of the whole chunk; every width × stream size is checked against the
+/// reference tracer in tests/stream.rs.
+#[test]
+fn stream_agrees_with_embree() {
+    for (width, stream) in [(16, "4096"), (12, "1024"), (64, "frame")] {
+        let params = Params::new().with("width", width).with("stream", stream);
+        agrees_with_embree_with("stream", &params);
     }
 }

@@ -1,6 +1,6 @@
 //! The light-visibility query gives every tracer the same rays, so every tracer must give the same
-//! occlusion bits: reference, packet (each traversal), obvhs, cgt, grid-dda and Embree (robust),
-//! on the room and the conference room with a quad light and on a BART scene with one added —
+//! occlusion bits: reference, packet (each traversal), stream, obvhs, cgt, grid-dda and Embree
+//! (robust), on the room and the conference room with a quad light and on a BART scene with one added —
 //! the soft-shadow workload of the runner (16 interleaved light samples per primary hit).
 
 use glam::Vec3;
@@ -79,6 +79,8 @@ fn every_tracer_sees_the_same_light_samples() {
         ("packet", packet("ranged")),
         ("packet", packet("partition")),
         ("packet", packet("ia")),
+        ("stream", Params::new()),
+        ("stream", Params::new().with("width", 4).with("stream", 64)),
         ("embree1", Params::new()),
     ];
     for (name, scene) in scenes() {

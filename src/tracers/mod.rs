@@ -9,6 +9,7 @@ pub mod obvhs;
 pub mod packet;
 pub mod reference;
 pub mod registry;
+pub mod stream;
 pub mod visibility;
 
 use crate::geometry::{Hit, Ray, Rays};

@@ -13,6 +13,7 @@ use crate::tracers::embree::{
     Coherence, EmbreeTracer, Packets16, Packets4, Packets8, Single, Stream, Submission,
 };
 use crate::tracers::packet::{PacketConfig, PacketTracer};
+use crate::tracers::stream::{StreamConfig, StreamTracer};
 use crate::tracers::{
     dda::GridDdaTracer, obvhs::ObvhsTracer, reference::ReferenceTracer, Params, Tracer,
     VisibilityQuery,
@@ -135,6 +136,15 @@ pub const TRACERS: &[TracerInfo] = &[
         make: |params, accel| Ok(Box::new(PacketTracer::from_params(accel.bvh()?.clone(), params)?)),
         motion_blur: true,
         chunk_rays: CHUNK_RAYS,
+    },
+    TracerInfo {
+        name: "stream",
+        accel: AccelKind::Bvh,
+        params: StreamConfig::PARAMS,
+        about: "stream filtering (Gribble & Ramani 2008): streams of S rays (stream = S or frame) through the SAH BVH; at each node a box filter tests N rays at a time (width ∈ 4,8,12,16,32,64) and partitions the stream in place, the rays that meet the box going on to the leaf or to both children, front to back; exact closest hits (watertight, robust slabs per lane)",
+        make: |params, accel| Ok(Box::new(StreamTracer::from_params(accel.bvh()?.clone(), params)?)),
+        motion_blur: false,
+        chunk_rays: 16 * CHUNK_RAYS,
     },
 ];
 

@@ -57,7 +57,7 @@ pub use frustum::{Frustum, FrustumKind};
 
 use first_hit::FirstHit;
 use masked::Masked;
-use order::ChildOrder;
+pub use order::ChildOrder;
 use partition::Partition;
 use ranged::Ranged;
 use walk::traverse;

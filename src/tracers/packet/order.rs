@@ -17,7 +17,8 @@ impl ChildOrder {
             .nodes
             .iter()
             .map(|n| {
-                if n.is_leaf() {
+                // An empty tree's root is neither leaf nor parent: it has no children to order.
+                if n.is_leaf() || bvh.is_empty() {
                     return 0;
                 }
                 let (l, r) = (

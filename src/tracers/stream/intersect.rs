@@ -1,0 +1,78 @@
+//! The intersection stage (Gribble & Ramani 2008 §3.2 "Intersection"): a leaf's sub-stream is
+//! tested against each of the leaf's triangles `N` rays at a time, every lane running the
+//! reference tracer's watertight test bit for bit (`SimdRay::intersect`), and the hits are
+//! scattered to the rays' slots. As in the paper's implementation, no filter stack splits the
+//! test into stages (its leaf streams are too short to pay for one). Occlusion rays that hit are
+//! dropped from the stream after the leaf; a group stops early once all its rays have hit.
+
+use crate::accel::BvhNode;
+use crate::geometry::Hit;
+use crate::lanes::stream::partition_by;
+use crate::lanes::LaneMask;
+use crate::stats::{Event, Stats};
+
+use super::traverse::{Answer, Walk};
+use super::width::Width;
+
+impl<const L: usize, const N: usize, A: Answer> Walk<'_, L, N, A> {
+    /// Intersects the rays `0..len` with the triangles of `leaf` (at depth `depth`). Returns how
+    /// many rays are still live, moved to the front.
+    pub fn leaf<S: Stats>(
+        &mut self,
+        leaf: &BvhNode,
+        depth: usize,
+        len: usize,
+        stats: &mut S,
+    ) -> usize {
+        let group = Width::<L, N>::GROUP;
+        if S::ENABLED {
+            stats.event(Event::LeavesVisited, 1);
+            stats.event(Event::LeafActiveRays, len as u64);
+        }
+        let triangles = leaf.first as usize..(leaf.first + leaf.count) as usize;
+        for base in (0..len).step_by(N) {
+            for (g, simd) in self.groups.iter_mut().enumerate() {
+                let at = base + g * group;
+                let used = len.saturating_sub(at).min(group);
+                if used > 0 {
+                    self.rays.load_triangle_lanes(at, used, simd);
+                } else {
+                    simd.used = 0;
+                    simd.tmax = [f32::NEG_INFINITY; L];
+                }
+            }
+            for i in triangles.clone() {
+                let live: u32 = self.groups.iter().map(|simd| simd.live_lanes()).sum();
+                if live == 0 {
+                    break;
+                }
+                if S::ENABLED {
+                    (0..live).for_each(|_| stats.triangle_test(depth));
+                    stats.event(Event::IntersectionLanesActive, live as u64);
+                    stats.event(Event::IntersectionLanesIssued, N as u64);
+                }
+                let (tri, prim) = (&self.bvh.triangles[i], self.bvh.prim_ids[i]);
+                for simd in self.groups.iter_mut() {
+                    if simd.live_lanes() > 0 {
+                        A::intersect(simd, tri, prim);
+                    }
+                }
+            }
+            for (g, simd) in self.groups.iter().enumerate() {
+                let at = base + g * group;
+                for l in 0..simd.used as usize {
+                    if simd.prim[l] != Hit::NO_PRIM {
+                        self.answers[self.rays.id[at + l] as usize].record(simd.hit(l));
+                        self.rays.tmax[at + l] = simd.tmax[l];
+                    }
+                }
+            }
+        }
+        if !A::ANY {
+            return len;
+        }
+        partition_by::<L, _>(self.rays, len, group, |rays, base| {
+            LaneMask::from_fn(|l| rays.tmax[base + l] != f32::NEG_INFINITY)
+        })
+    }
+}

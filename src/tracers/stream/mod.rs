@@ -1,0 +1,193 @@
+//! Stream filtering (Gribble and Ramani 2008, "Coherent Ray Tracing via Stream Filtering") over
+//! the binary SAH BVH.
+//!
+//! - **Streams** (`stream` = S rays, or `frame` for the whole work chunk): the chunk is cut into
+//!   streams of S consecutive rays (camera rays come in Morton-ordered 32×32 tiles, so S = 1024
+//!   is the paper's 32×32 initial stream and 4096 its 64×64). A stream is SoA columns that carry
+//!   each ray's index (`rays`), partitioned in place as it goes (§3.1 "Memory management").
+//!   Explicit packets of the batch (packet assembly) play no part: streams need no packets.
+//! - **SIMD width** (`width` = N ∈ 4, 8, 12, 16, 32, 64): N rays per test (§4). 4, 8 and 16 are
+//!   the lane layer's widths; 12 uses 12 of 16 lanes; 32 and 64 are 2 or 4 16-lane groups
+//!   processed as one (`width`).
+//! - **Traversal** (§3.2, Fig. 3, `traverse`): at each node a box filter (`filter`) tests the
+//!   stream N rays at a time and partitions it in place; the rays that meet the box go on to the
+//!   leaf's intersection stage (`intersect`) or to both children, front to back by the
+//!   sub-stream's dominant direction (the sign most of its rays have along the node's split
+//!   axis; the split axis as the packet tracer's `ChildOrder` finds it).
+//! - **Exact hits**: every lane runs the reference tracer's slab and watertight tests bit for
+//!   bit, so each ray gets the reference's closest hit (up to the order in which triangles at
+//!   exactly equal distance are met). Occlusion rays end at their first hit and leave the stream.
+//!   Rays that can hit nothing (NaN, zero direction, `tmin > tmax`) miss: `tmin > tmax` fails
+//!   the root's filter, and a NaN passes slabs as in the reference tracer but no triangle.
+//!
+//! Counters: `ray` per ray; `node(depth)` per node a stream is filtered at; `aabb_test(depth)`
+//! per ray in a box filter's stream; `triangle_test(depth)` per live ray tested against a
+//! triangle. Events (Tables 2–4): `StreamBoxTests` per box filter, `TraversalLanesActive` /
+//! `TraversalLanesIssued` (rays in the box filters' streams / whole N-wide groups: traversal's
+//! SIMD utilisation; active ÷ box tests = mean stream length), `IntersectionLanesActive` /
+//! `IntersectionLanesIssued` (live rays / N per group and triangle: intersection's utilisation),
+//! `LeavesVisited` and `LeafActiveRays` (leaf streams and their rays: mean intersection stream
+//! length).
+
+mod filter;
+mod intersect;
+mod rays;
+mod traverse;
+mod width;
+
+use std::str::FromStr;
+use std::sync::Arc;
+
+use crate::accel::Bvh;
+use crate::error::{Error, Result};
+use crate::geometry::{Hit, Rays};
+use crate::lanes::SimdRay;
+use crate::stats::Stats;
+use crate::tracers::packet::ChildOrder;
+use crate::tracers::{Kernel, Params};
+
+use rays::StreamRays;
+use traverse::{Answer, Walk};
+use width::Width;
+
+/// Rays per initial stream.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum StreamSize {
+    /// Streams of this many consecutive rays (≥ 1).
+    Rays(usize),
+    /// The whole work chunk as one stream.
+    Frame,
+}
+
+impl FromStr for StreamSize {
+    type Err = ();
+    fn from_str(s: &str) -> std::result::Result<Self, ()> {
+        match s {
+            "frame" => Ok(StreamSize::Frame),
+            _ => match s.parse() {
+                Ok(n) if n > 0 => Ok(StreamSize::Rays(n)),
+                _ => Err(()),
+            },
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct StreamConfig {
+    pub stream: StreamSize,
+    /// SIMD width N: rays per box or triangle test.
+    pub width: usize,
+}
+
+impl Default for StreamConfig {
+    fn default() -> Self {
+        StreamConfig {
+            stream: StreamSize::Rays(4096),
+            width: 16,
+        }
+    }
+}
+
+impl StreamConfig {
+    pub const PARAMS: &'static [&'static str] = &["stream", "width"];
+    pub const WIDTHS: [usize; 6] = [4, 8, 12, 16, 32, 64];
+
+    pub fn from_params(p: &Params) -> Result<Self> {
+        let d = StreamConfig::default();
+        let c = StreamConfig {
+            stream: p.get_or("stream", d.stream)?,
+            width: p.get_or("width", d.width)?,
+        };
+        if !Self::WIDTHS.contains(&c.width) {
+            return Err(Error::usage(format!(
+                "stream tracer: width must be one of {:?} (got {})",
+                Self::WIDTHS,
+                c.width
+            )));
+        }
+        Ok(c)
+    }
+}
+
+pub struct StreamTracer {
+    bvh: Arc<Bvh>,
+    order: ChildOrder,
+    config: StreamConfig,
+}
+
+impl StreamTracer {
+    pub fn new(bvh: Arc<Bvh>, config: StreamConfig) -> Self {
+        let order = ChildOrder::new(&bvh);
+        StreamTracer { bvh, order, config }
+    }
+
+    /// The tracer over a static `bvh` (it has no motion blur).
+    pub fn from_params(bvh: Arc<Bvh>, params: &Params) -> Result<Self> {
+        if bvh.motion_end.is_some() {
+            return Err(Error::usage(
+                "stream tracer: no motion blur (a moving BVH was given)",
+            ));
+        }
+        Ok(Self::new(bvh, StreamConfig::from_params(params)?))
+    }
+
+    pub fn config(&self) -> StreamConfig {
+        self.config
+    }
+
+    /// Traces `rays` stream by stream with width `N` on `L` lanes, recording each ray's answer.
+    fn run<const L: usize, const N: usize, S: Stats, A: Answer>(
+        &self,
+        rays: Rays<'_>,
+        answers: &mut [A],
+        stats: &mut S,
+    ) {
+        if S::ENABLED {
+            (0..rays.len()).for_each(|_| stats.ray());
+        }
+        if self.bvh.is_empty() || rays.is_empty() {
+            return;
+        }
+        let size = match self.config.stream {
+            StreamSize::Rays(n) => n.min(rays.len()),
+            StreamSize::Frame => rays.len(),
+        };
+        let mut stream = StreamRays::<L>::default();
+        let mut groups = vec![SimdRay::<L>::default(); Width::<L, N>::GROUPS];
+        for first in (0..rays.len()).step_by(size) {
+            let n = size.min(rays.len() - first);
+            stream.load(&rays, first, n);
+            let mut walk = Walk::<L, N, A> {
+                bvh: &self.bvh,
+                order: &self.order,
+                rays: &mut stream,
+                groups: &mut groups,
+                answers,
+            };
+            walk.visit(Bvh::ROOT as u32, n, stats);
+        }
+    }
+
+    fn trace<S: Stats, A: Answer>(&self, rays: Rays<'_>, answers: &mut [A], stats: &mut S) {
+        match self.config.width {
+            4 => self.run::<4, 4, S, A>(rays, answers, stats),
+            8 => self.run::<8, 8, S, A>(rays, answers, stats),
+            12 => self.run::<16, 12, S, A>(rays, answers, stats),
+            16 => self.run::<16, 16, S, A>(rays, answers, stats),
+            32 => self.run::<16, 32, S, A>(rays, answers, stats),
+            _ => self.run::<16, 64, S, A>(rays, answers, stats),
+        }
+    }
+}
+
+impl Kernel for StreamTracer {
+    fn intersect_with<S: Stats>(&self, rays: Rays<'_>, hits: &mut [Hit], stats: &mut S) {
+        hits.fill(Hit::MISS);
+        self.trace(rays, hits, stats);
+    }
+
+    fn occluded_with<S: Stats>(&self, rays: Rays<'_>, occluded: &mut [bool], stats: &mut S) {
+        occluded.fill(false);
+        self.trace(rays, occluded, stats);
+    }
+}

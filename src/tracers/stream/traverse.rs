@@ -1,0 +1,137 @@
+//! Traversal with stream filtering (Gribble & Ramani 2008 §3.2, Fig. 3): at each node the box
+//! filter keeps the rays that meet the node; an empty output stream ends the visit, a leaf runs
+//! the intersection stage on it, an interior node sends it to both children, front to back.
+//! The walk is the paper's recursion; a sub-stream is a prefix of its parent's, reordered in
+//! place, so the far child filters the rays the near child handed back (their segments now
+//! shortened by its hits).
+//!
+//! Occlusion: a ray ends at its first hit and is dropped from the stream — moved behind the
+//! stream's live rays on the way back up, so no later filter tests it.
+
+use crate::accel::Bvh;
+use crate::geometry::{Hit, Triangle};
+use crate::lanes::stream::SoaRays;
+use crate::lanes::SimdRay;
+use crate::stats::Stats;
+use crate::tracers::packet::ChildOrder;
+
+use super::filter::filter;
+use super::rays::StreamRays;
+
+/// What a query answers per ray: the closest hit, or whether anything is hit (`ANY`: then a ray
+/// ends at its first hit).
+pub trait Answer {
+    const ANY: bool;
+    /// The triangle test of every lane of `simd` for this query (`SimdRay::intersect::<ANY>`).
+    fn intersect<const L: usize>(simd: &mut SimdRay<L>, tri: &Triangle, prim: u32);
+    fn record(&mut self, hit: Hit);
+}
+
+impl Answer for Hit {
+    const ANY: bool = false;
+    #[inline(always)]
+    fn intersect<const L: usize>(simd: &mut SimdRay<L>, tri: &Triangle, prim: u32) {
+        simd.intersect::<false>(tri, prim);
+    }
+    #[inline(always)]
+    fn record(&mut self, hit: Hit) {
+        *self = hit;
+    }
+}
+
+impl Answer for bool {
+    const ANY: bool = true;
+    #[inline(always)]
+    fn intersect<const L: usize>(simd: &mut SimdRay<L>, tri: &Triangle, prim: u32) {
+        simd.intersect::<true>(tri, prim);
+    }
+    #[inline(always)]
+    fn record(&mut self, _: Hit) {
+        *self = true;
+    }
+}
+
+/// One stream's walk through the tree: the tree, the stream, the leaf stage's lane groups, and
+/// the answers by ray index.
+pub struct Walk<'a, const L: usize, const N: usize, A: Answer> {
+    pub bvh: &'a Bvh,
+    pub order: &'a ChildOrder,
+    pub rays: &'a mut StreamRays<L>,
+    /// One `SimdRay` per `L`-lane part of an `N`-wide group (`Width::GROUPS`).
+    pub groups: &'a mut [SimdRay<L>],
+    pub answers: &'a mut [A],
+}
+
+impl<const L: usize, const N: usize, A: Answer> Walk<'_, L, N, A> {
+    /// Fig. 3 `traverse(node, in_stream)` with the stream's rays `0..len` (`len > 0`). Returns
+    /// how many of them are still live, moved to the front (all of them, but for occlusion).
+    pub fn visit<S: Stats>(&mut self, node: u32, len: usize, stats: &mut S) -> usize {
+        let cell = self.bvh.nodes[node as usize];
+        let depth = if S::ENABLED {
+            self.bvh.depth[node as usize] as usize
+        } else {
+            0
+        };
+        if S::ENABLED {
+            stats.node(depth);
+        }
+        let (hit, negative) = filter::<L, N, S>(self.rays, len, &cell.bounds, depth, stats);
+        if hit == 0 {
+            return len;
+        }
+        let live = if cell.is_leaf() {
+            self.leaf(&cell, depth, hit, stats)
+        } else {
+            let (near, far) = self.order.near_far(node as usize, cell.first, negative);
+            let live = self.visit(near, hit, stats);
+            if live > 0 {
+                self.visit(far, live, stats)
+            } else {
+                0
+            }
+        };
+        drop_finished(self.rays, live, hit, len)
+    }
+}
+
+/// The rays `0..len` are live `0..live`, finished `live..hit` and live again `hit..len` (they
+/// missed the node): moves the finished ones to the end, swapping as few rays as there are in
+/// the smaller run, and returns how many are live.
+fn drop_finished<R: SoaRays>(rays: &mut R, live: usize, hit: usize, len: usize) -> usize {
+    let (finished, missed) = (hit - live, len - hit);
+    for i in 0..finished.min(missed) {
+        rays.swap_rays(live + i, len - 1 - i);
+    }
+    len - finished
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Ray ids in one column.
+    struct Ids(Vec<u32>);
+
+    impl SoaRays for Ids {
+        fn move_ray(&mut self, from: usize, to: usize) {
+            self.0[to] = self.0[from];
+        }
+        fn swap_rays(&mut self, a: usize, b: usize) {
+            self.0.swap(a, b);
+        }
+    }
+
+    #[test]
+    fn finished_rays_go_behind_the_live_ones() {
+        // live 0 1, finished 2 3 4, missed 5 6; then finished 2, missed 3 4 5 6; then none.
+        for (live, hit, len) in [(2, 5, 7), (2, 3, 7), (3, 3, 5), (0, 4, 4)] {
+            let mut ids = Ids((0..len as u32).collect());
+            let n = drop_finished(&mut ids, live, hit, len);
+            assert_eq!(n, len - (hit - live));
+            let mut front: Vec<u32> = ids.0[..n].to_vec();
+            front.sort_unstable();
+            let want: Vec<u32> = (0..live as u32).chain(hit as u32..len as u32).collect();
+            assert_eq!(front, want, "{live} {hit} {len}");
+        }
+    }
+}
