@@ -1,5 +1,5 @@
 //! The numerical stability suite on every case kind, for the from-scratch tracers (one
-//! configuration of each packet traversal, cgt, grid-dda, reference): no leak, no crash, no hang,
+//! configuration of each packet traversal, cgt, grid-dda, reference, stream): no leak, no crash, no hang,
 //! every ill-formed ray a miss — and the one known weakness, pinned so a change shows: our
 //! watertight test (Woop et al. 2013) computes the distance to needle triangles (aspect ratio
 //! ~10⁴) with up to ~2·10⁻⁵ relative error, which the f64 truth calls wrong on a handful of the
