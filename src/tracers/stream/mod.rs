@@ -156,7 +156,7 @@ impl StreamTracer {
         let mut groups = vec![SimdRay::<L>::default(); Width::<L, N>::GROUPS];
         for first in (0..rays.len()).step_by(size) {
             let n = size.min(rays.len() - first);
-            stream.load(&rays, first, n);
+            let len = stream.load(&rays, first, n);
             let mut walk = Walk::<L, N, A> {
                 bvh: &self.bvh,
                 order: &self.order,
@@ -164,7 +164,7 @@ impl StreamTracer {
                 groups: &mut groups,
                 answers,
             };
-            walk.visit(Bvh::ROOT as u32, n, stats);
+            walk.visit(Bvh::ROOT as u32, len, stats);
         }
     }
 

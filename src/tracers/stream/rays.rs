@@ -79,9 +79,11 @@ impl<const L: usize> Default for StreamRays<L> {
 }
 
 impl<const L: usize> StreamRays<L> {
-    /// Replaces the stream by rays `first .. first + n` of `rays` (ids `first ..`), and pads
-    /// every column with `L` rays that hit nothing.
-    pub fn load(&mut self, rays: &Rays<'_>, first: usize, n: usize) {
+    /// Replaces the stream by the well-formed rays among `first .. first + n` of `rays` (ids
+    /// `first ..`; an ill-formed ray is a miss and never enters, so it cannot sway the
+    /// stream's direction or cost its neighbours a filter), pads every column with `L` rays that
+    /// hit nothing, and returns the stream's length.
+    pub fn load(&mut self, rays: &Rays<'_>, first: usize, n: usize) -> usize {
         let slots = n + L;
         for c in self.origin.iter_mut().chain(&mut self.inv_dir) {
             c.resize(slots, 0.0);
@@ -93,8 +95,11 @@ impl<const L: usize> StreamRays<L> {
         self.tmin.resize(slots, f32::INFINITY);
         self.tmax.resize(slots, f32::NEG_INFINITY);
         self.id.resize(slots, 0);
-        for s in 0..n {
-            let i = first + s;
+        let mut s = 0;
+        for i in first..first + n {
+            if !rays.ray(i).is_well_formed() {
+                continue;
+            }
             let dir = Vec3::new(rays.dx[i], rays.dy[i], rays.dz[i]);
             let (_, k, shear) = WatertightRay::new(Vec3::ZERO, dir).parts();
             for a in 0..3 {
@@ -108,11 +113,13 @@ impl<const L: usize> StreamRays<L> {
             self.tmin[s] = rays.tmin[i];
             self.tmax[s] = rays.tmax[i];
             self.id[s] = i as u32;
+            s += 1;
         }
-        for s in n..slots {
-            self.tmin[s] = f32::INFINITY;
-            self.tmax[s] = f32::NEG_INFINITY;
+        for pad in s..slots {
+            self.tmin[pad] = f32::INFINITY;
+            self.tmax[pad] = f32::NEG_INFINITY;
         }
+        s
     }
 
     /// Rays `base .. base + L` as the slab test reads them.
