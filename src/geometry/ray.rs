@@ -35,14 +35,16 @@ impl Ray {
     }
 
     /// Whether the ray asks a defined question: finite origin and direction, a non-zero
-    /// direction, a finite `tmin` and `tmin < tmax` (`tmax` may be +∞). Every tracer answers
-    /// any other ray with a miss (not occluded): NaN or infinite components, a zero direction,
-    /// an empty or NaN interval.
+    /// direction, a finite `tmin ≥ 0` (Embree's rule; its ray check aborts on a negative one)
+    /// and `tmin < tmax` (`tmax` may be +∞). Every tracer answers any other ray with a miss
+    /// (not occluded): NaN or infinite components, a zero direction, a negative `tmin`, an
+    /// empty or NaN interval.
     pub fn is_well_formed(&self) -> bool {
         self.origin.is_finite()
             && self.dir.is_finite()
             && self.dir != Vec3::ZERO
             && self.tmin.is_finite()
+            && self.tmin >= 0.0
             && self.tmin < self.tmax
     }
 }

@@ -78,6 +78,38 @@ pub fn axis_component(x: [f32; 3], k: usize) -> f32 {
     }
 }
 
+/// Below this ratio of |U + V + W| to the magnitude of the products the edge functions are
+/// differences of, a ray that passes inside every edge has lost more than 10 of f32's 24 bits to
+/// cancellation: a needle-thin triangle (aspect ratio ≳ 10³) or a grazing ray. There the f32 edge
+/// functions put the hit distance off by up to 2·10⁻⁴ relative, or on the wrong side of the
+/// origin (the stability suite's slivers; an exact rational check confirmed Embree's robust
+/// answer and the f64 one), while f64 edge functions from the same sheared coordinates are
+/// accurate to ~10⁻⁸.
+const ILL_CONDITIONED: f32 = 1.0 / 1024.0;
+
+/// The sum of |products| the three edge functions are differences of: the scale of their
+/// rounding errors.
+#[inline(always)]
+pub fn edge_product_scale(a: [f32; 2], b: [f32; 2], c: [f32; 2]) -> f32 {
+    (c[0] * b[1]).abs()
+        + (c[1] * b[0]).abs()
+        + (a[0] * c[1]).abs()
+        + (a[1] * c[0]).abs()
+        + (b[0] * a[1]).abs()
+        + (b[1] * a[0]).abs()
+}
+
+/// Whether the f32 edge functions `u, v, w` (of product scale `scale`) must be redone in f64:
+/// one is exactly zero, or the ray passes inside every edge with the edge functions
+/// ill-conditioned (`ILL_CONDITIONED`). Rays passing outside an edge by more than rounding keep
+/// their f32 answer, so the f64 path runs only for hits on needles and grazing hits.
+#[inline(always)]
+pub fn needs_f64(u: f32, v: f32, w: f32, scale: f32) -> bool {
+    let zero = (u == 0.0) | (v == 0.0) | (w == 0.0);
+    let inside = ((u >= 0.0) & (v >= 0.0) & (w >= 0.0)) | ((u <= 0.0) & (v <= 0.0) & (w <= 0.0));
+    zero | (inside & ((u + v + w).abs() < ILL_CONDITIONED * scale))
+}
+
 impl WatertightRay {
     #[inline(always)]
     pub fn new(origin: Vec3, dir: Vec3) -> Self {
@@ -130,14 +162,23 @@ impl WatertightRay {
         let mut u = cx * by - cy * bx;
         let mut v = ax * cy - ay * cx;
         let mut w = bx * ay - by * ax;
-        // Exactly zero edge functions are ambiguous in f32: redo them in f64 (Woop et al. §4).
-        if u == 0.0 || v == 0.0 || w == 0.0 {
+        let outside = |u: f32, v: f32, w: f32| {
+            (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0)
+        };
+        // Outside, with no zero edge function: no f64 redo (`needs_f64`) can follow, so done
+        // without computing its scale.
+        if u != 0.0 && v != 0.0 && w != 0.0 && outside(u, v, w) {
+            return None;
+        }
+        // Exactly zero edge functions are ambiguous in f32 (Woop et al. §4), and ill-conditioned
+        // ones are imprecise: redo them in f64.
+        if needs_f64(u, v, w, edge_product_scale([ax, ay], [bx, by], [cx, cy])) {
             let f = |x: f32| x as f64;
             u = (f(cx) * f(by) - f(cy) * f(bx)) as f32;
             v = (f(ax) * f(cy) - f(ay) * f(cx)) as f32;
             w = (f(bx) * f(ay) - f(by) * f(ax)) as f32;
         }
-        if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
+        if outside(u, v, w) {
             return None;
         }
         let det = u + v + w;

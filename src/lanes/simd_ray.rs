@@ -23,8 +23,7 @@ use glam::Vec3;
 
 use super::slab::SlabRays;
 use super::watertight::{
-    accept, common_axes, edge_functions, edges_have_zero, in_lane_frames, redo_zero_edges_in_f64,
-    Permuted,
+    accept, common_axes, edge_functions, in_lane_frames, needs_f64, redo_edges_in_f64, Permuted,
 };
 use super::LaneMask;
 use crate::geometry::{Hit, Rays, Triangle, WatertightRay};
@@ -212,7 +211,7 @@ impl<const L: usize> SimdRay<L> {
     }
 
     /// The watertight test on a triangle already in every lane's frame (`watertight_lanes`),
-    /// ambiguous zero edge functions redone in f64 as the scalar test does.
+    /// zero or ill-conditioned edge functions redone in f64 as the scalar test does.
     #[inline(always)]
     fn intersect_permuted<const ANY: bool>(
         &mut self,
@@ -221,9 +220,10 @@ impl<const L: usize> SimdRay<L> {
         c: &Permuted<L>,
         prim: u32,
     ) -> u32 {
-        let mut e = edge_functions(&self.shear, a, b, c);
-        if edges_have_zero(&e).any() {
-            redo_zero_edges_in_f64(&self.shear, a, b, c, &mut e);
+        let (mut e, scale) = edge_functions(&self.shear, a, b, c);
+        let redo = needs_f64(&e, &scale);
+        if redo.any() {
+            redo_edges_in_f64(&self.shear, a, b, c, &mut e, redo);
         }
         let (hit, t_scaled, abs_det) = accept(
             &e,

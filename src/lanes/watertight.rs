@@ -5,14 +5,16 @@
 //! test's. The lane loops are branch-free over `[f32; L]`, which LLVM turns into L-wide vector
 //! code (`target-cpu=native`; AVX-512 holds 16 lanes).
 //!
-//! Edge functions that come out exactly zero are ambiguous in f32; the scalar test recomputes
-//! them in f64. Callers deal with those lanes (`edges_have_zero`): redo them in f64
-//! (`redo_zero_edges_in_f64`) or hand them to the scalar test.
+//! Edge functions that come out exactly zero are ambiguous in f32, and ill-conditioned ones
+//! (needles, grazing hits) imprecise; the scalar test recomputes them in f64
+//! (`geometry::needs_f64`). Callers deal with those lanes (`needs_f64`): redo them in f64
+//! (`redo_edges_in_f64`) or hand them to the scalar test.
 
 // Lane loops index several lane arrays in lock step: the indexed form is what LLVM vectorizes.
 #![allow(clippy::needless_range_loop)]
 
 use super::LaneMask;
+use crate::geometry::triangle::{self, edge_product_scale};
 
 /// A triangle vertex in every lane's frame: `[x, y, z][lane]`, relative to the lane's origin
 /// along its axes `kx, ky, kz`.
@@ -60,16 +62,18 @@ pub fn in_lane_frames<const L: usize>(
 }
 
 /// The edge functions `[U, V, W][lane]` of the triangle `a, b, c` sheared into each lane's ray
-/// space (`shear` = `[sx, sy, sz][lane]`).
+/// space (`shear` = `[sx, sy, sz][lane]`), and the magnitude of the products they are
+/// differences of (`edge_product_scale`).
 #[inline(always)]
 pub fn edge_functions<const L: usize>(
     shear: &[[f32; L]; 3],
     a: &Permuted<L>,
     b: &Permuted<L>,
     c: &Permuted<L>,
-) -> [[f32; L]; 3] {
+) -> ([[f32; L]; 3], [f32; L]) {
     let [sx, sy, _] = shear;
     let mut e = [[0.0f32; L]; 3];
+    let mut scale = [0.0f32; L];
     for l in 0..L {
         let (ax, ay) = (a[0][l] - sx[l] * a[2][l], a[1][l] - sy[l] * a[2][l]);
         let (bx, by) = (b[0][l] - sx[l] * b[2][l], b[1][l] - sy[l] * b[2][l]);
@@ -77,14 +81,15 @@ pub fn edge_functions<const L: usize>(
         e[0][l] = cx * by - cy * bx;
         e[1][l] = ax * cy - ay * cx;
         e[2][l] = bx * ay - by * ax;
+        scale[l] = edge_product_scale([ax, ay], [bx, by], [cx, cy]);
     }
-    e
+    (e, scale)
 }
 
-/// The lanes one of whose edge functions is exactly zero.
+/// The lanes whose edge functions the scalar test redoes in f64 (`geometry::needs_f64`).
 #[inline(always)]
-pub fn edges_have_zero<const L: usize>(e: &[[f32; L]; 3]) -> LaneMask<L> {
-    LaneMask::from_fn(|l| (e[0][l] == 0.0) | (e[1][l] == 0.0) | (e[2][l] == 0.0))
+pub fn needs_f64<const L: usize>(e: &[[f32; L]; 3], scale: &[f32; L]) -> LaneMask<L> {
+    LaneMask::from_fn(|l| triangle::needs_f64(e[0][l], e[1][l], e[2][l], scale[l]))
 }
 
 /// Which lanes hit, from their edge functions: inside (all of one sign), a non-zero determinant
@@ -115,22 +120,20 @@ pub fn accept<const L: usize>(
     (hit, t_scaled, abs_det)
 }
 
-/// The edge functions of the lanes with an exactly zero one, recomputed in f64 (Woop et al. §4),
-/// exactly as `WatertightRay::intersect` does.
+/// The edge functions of the lanes in `redo`, recomputed in f64 from the same sheared
+/// coordinates, exactly as `WatertightRay::intersect` does.
 #[cold]
-pub fn redo_zero_edges_in_f64<const L: usize>(
+pub fn redo_edges_in_f64<const L: usize>(
     shear: &[[f32; L]; 3],
     a: &Permuted<L>,
     b: &Permuted<L>,
     c: &Permuted<L>,
     e: &mut [[f32; L]; 3],
+    redo: LaneMask<L>,
 ) {
     let [sx, sy, _] = shear;
     let f = |x: f32| x as f64;
-    for l in 0..L {
-        if e[0][l] != 0.0 && e[1][l] != 0.0 && e[2][l] != 0.0 {
-            continue;
-        }
+    for l in redo.iter() {
         let (ax, ay) = (a[0][l] - sx[l] * a[2][l], a[1][l] - sy[l] * a[2][l]);
         let (bx, by) = (b[0][l] - sx[l] * b[2][l], b[1][l] - sy[l] * b[2][l]);
         let (cx, cy) = (c[0][l] - sx[l] * c[2][l], c[1][l] - sy[l] * c[2][l]);

@@ -77,6 +77,7 @@ fn trace_checked<K: SingleRayKernel, S: Stats, const ANY: bool>(
     if ray.is_well_formed() {
         kernel.trace::<S, ANY>(ray, stats)
     } else {
+        stats.ray();
         Hit::MISS
     }
 }

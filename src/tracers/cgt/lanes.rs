@@ -19,7 +19,7 @@ use glam::Vec3;
 use crate::geometry::triangle::axis_component;
 use crate::geometry::{Triangle, WatertightRay};
 use crate::lanes::stream::{compact, SoaRays};
-use crate::lanes::watertight::{accept, edge_functions, edges_have_zero, Permuted};
+use crate::lanes::watertight::{accept, edge_functions, needs_f64, Permuted};
 use crate::lanes::LaneMask;
 
 /// A packet's active rays, one lane slot each; the vectors' length is a multiple of `L`, and the
@@ -137,7 +137,7 @@ impl<const L: usize> LaneRays<L> {
 
     /// The lanes of slots `base .. base + L` that may hit the triangle with vertices `v` (bit
     /// `l` for slot `base + l`): the watertight test's f32 stage (`watertight_lanes`), plus the
-    /// lanes with an exactly zero edge function, which the scalar test settles in f64.
+    /// lanes with a zero or ill-conditioned edge function, which the scalar test settles in f64.
     #[inline(always)]
     fn candidates(&self, base: usize, v: &[[f32; 3]; 3]) -> LaneMask<L> {
         let lanes = |x: &Vec<f32>| -> [f32; L] { x[base..base + L].try_into().unwrap() };
@@ -161,10 +161,10 @@ impl<const L: usize> LaneRays<L> {
             out
         };
         let (a, b, c) = (permute(&v[0]), permute(&v[1]), permute(&v[2]));
-        let e = edge_functions(&shear, &a, &b, &c);
+        let (e, scale) = edge_functions(&shear, &a, &b, &c);
         let (tmin, tmax) = (lanes(&self.tmin), lanes(&self.tmax));
         let (hit, _, _) = accept(&e, &shear[2], [&a[2], &b[2], &c[2]], &tmin, &tmax);
-        LaneMask::from_bools(&hit) | edges_have_zero(&e)
+        LaneMask::from_bools(&hit) | needs_f64(&e, &scale)
     }
 
     fn resize(&mut self, n: usize) {

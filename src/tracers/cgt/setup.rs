@@ -148,7 +148,7 @@ impl CgtTracer {
     }
 
     /// Sets `ws.group` to the rays of `packet` that can hit anything: well formed (finite, a
-    /// non-zero direction, a non-empty interval) and meeting the grid's box. Branch-free over the packet (`&`, not `&&`), so it
+    /// non-zero direction, a non-empty interval from tmin ≥ 0) and meeting the grid's box. Branch-free over the packet (`&`, not `&&`), so it
     /// runs in SIMD lanes.
     pub(super) fn usable_rays<const L: usize>(
         &self,
@@ -169,6 +169,7 @@ impl CgtTracer {
                 & d.is_finite()
                 & (d != Vec3::ZERO)
                 & tmin.is_finite()
+                & (tmin >= 0.0)
                 & (tmin < tmax)
                 & RayBoxTest::new(o, d).hit(bounds, tmin, tmax).is_some();
         }
