@@ -28,7 +28,7 @@
 use std::path::Path;
 
 use crate::error::{Error, Result};
-use crate::geometry::{RayBatch, RayKind, Rays};
+use crate::geometry::{Hit, RayBatch, RayKind, Rays};
 
 /// The first 8 bytes of a binary ray file.
 pub const MAGIC: &[u8; 8] = b"RAYLABRY";
@@ -72,6 +72,39 @@ pub fn write_rays(path: &Path, rays: Rays<'_>, format: RayFileFormat) -> Result<
         RayFileFormat::Csv => encode_csv(rays).into_bytes(),
     };
     std::fs::write(path, bytes).map_err(|e| Error::io(path, e))
+}
+
+/// The header of `hits_csv`.
+pub const HITS_CSV_HEADER: &str = "ray,hit,t,prim,u,v";
+/// The header of `occlusion_csv`.
+pub const OCCLUSION_CSV_HEADER: &str = "ray,occluded";
+
+/// Closest hits as CSV, one line per ray in file order: `ray,hit,t,prim,u,v` with `hit` 1 or 0;
+/// a miss reads `ray,0,inf,-1,0,0`. Values are written in the shortest form that reads back
+/// exactly, so two tracers' files compare byte for byte.
+pub fn hits_csv(hits: &[Hit]) -> String {
+    let mut out = String::with_capacity(32 + hits.len() * 40);
+    out.push_str(HITS_CSV_HEADER);
+    out.push('\n');
+    for (i, h) in hits.iter().enumerate() {
+        let line = match h.is_hit() {
+            true => format!("{i},1,{},{},{},{}\n", h.t, h.prim, h.u, h.v),
+            false => format!("{i},0,inf,-1,0,0\n"),
+        };
+        out.push_str(&line);
+    }
+    out
+}
+
+/// Occlusion answers as CSV, one line per ray in file order: `ray,occluded` with 1 or 0.
+pub fn occlusion_csv(occluded: &[bool]) -> String {
+    let mut out = String::with_capacity(16 + occluded.len() * 10);
+    out.push_str(OCCLUSION_CSV_HEADER);
+    out.push('\n');
+    for (i, &o) in occluded.iter().enumerate() {
+        out.push_str(&format!("{i},{}\n", u8::from(o)));
+    }
+    out
 }
 
 fn has_time(rays: &Rays<'_>) -> bool {
@@ -507,6 +540,21 @@ mod tests {
         let rays = parse_rays(path(), ok.as_bytes()).unwrap();
         assert_eq!(rays.len(), 1);
         assert!(rays.dx[0].is_nan() && rays.dy[0] == f32::NEG_INFINITY);
+    }
+
+    #[test]
+    fn hits_and_occlusion_csv() {
+        let hit = Hit {
+            t: 1.5,
+            prim: 7,
+            u: 0.25,
+            v: 0.125,
+        };
+        assert_eq!(
+            hits_csv(&[hit, Hit::MISS]),
+            "ray,hit,t,prim,u,v\n0,1,1.5,7,0.25,0.125\n1,0,inf,-1,0,0\n"
+        );
+        assert_eq!(occlusion_csv(&[true, false]), "ray,occluded\n0,1\n1,0\n");
     }
 
     #[test]
