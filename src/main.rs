@@ -60,6 +60,10 @@ enum Command {
         /// Override the timed repeats.
         #[arg(long)]
         repeats: Option<usize>,
+        /// Also write every generated ray batch to rays/<scene>-f<frame>-<kind>.rays in the
+        /// results directory (binary ray files, for `trace`, `verify --rays`, `rays = [{ file }]`).
+        #[arg(long)]
+        dump_rays: bool,
     },
     /// Render a frame to a PNG: ray casting with point-light shadows and Lambert shading, or
     /// Whitted ray tracing (mirror reflection, Fresnel refraction, packet-assembled batches).
@@ -252,6 +256,7 @@ fn execute(command: Command) -> Result<bool> {
             frames,
             warmup,
             repeats,
+            dump_rays,
         } => {
             let overrides = RunOverrides {
                 output: out,
@@ -260,6 +265,7 @@ fn execute(command: Command) -> Result<bool> {
                 frames,
                 warmup,
                 repeats,
+                dump_rays,
             };
             let dir = run_experiment(&experiment, &overrides)?;
             println!("results: {}", dir.display());
