@@ -1152,6 +1152,44 @@ mod tests {
     }
 
     #[test]
+    fn ray_files_mix_with_kinds_relative_to_the_experiment() {
+        let text = "name = \"t\"\nscenes = [\"room\"]\ntracers = [\"reference\"]\n\
+                    rays = [\"primary\", { file = \"sub/a.rays\" }, \"shadow\", { file = \"sub/a.rays\" }]\n\
+                    resolution = { width = 8, height = 4 }\n";
+        let exp = Experiment::parse(Path::new("dir/exp.toml"), text).unwrap();
+        assert_eq!(exp.ray_kinds, vec![RayKind::Primary, RayKind::Shadow]);
+        assert_eq!(
+            exp.ray_files,
+            vec![RayFileSpec {
+                name: "sub/a.rays".into(),
+                path: PathBuf::from("dir/sub/a.rays"),
+            }]
+        );
+        // Files alone are enough rays.
+        let only = text
+            .replace("\"primary\", ", "")
+            .replace("\"shadow\", ", "");
+        assert!(Experiment::parse(Path::new("exp.toml"), &only)
+            .unwrap()
+            .ray_kinds
+            .is_empty());
+        for (bad, needle) in [
+            ("{ file = \"\" }", "empty path"),
+            ("{ path = \"a.rays\" }", "unknown field"),
+            ("\"a.rays\"", "unknown ray kind"),
+        ] {
+            let e = parse(&format!(
+                "{}tracers = [\"reference\"]\n",
+                BASE.replace("[\"primary\"]", &format!("[{bad}]"))
+            ))
+            .unwrap_err();
+            assert_eq!(e.exit_code(), 2);
+            assert!(e.to_string().contains(needle), "{bad}: {e}");
+            assert!(e.to_string().contains("exp.toml:3"), "{bad}: {e}");
+        }
+    }
+
+    #[test]
     fn the_render_grid_expands_to_every_combination() {
         let text = "name = \"t\"\nscenes = [\"room\"]\nresolution = { width = 8, height = 4 }\n\
                     tracers = [\"reference\"]\nrender = { renderer = \"whitted\", max_depth = [1, 2], \
