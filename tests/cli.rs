@@ -398,3 +398,52 @@ fn bad_ray_files_fail_with_their_byte_offset() {
     no_results(&dir);
     assert!(!dir.join("results/verify").exists());
 }
+
+/// Ill-formed rays are valid ray-file content: every tracer traces them without aborting (Embree's
+/// linked build asserts on non-finite or huge components and on a negative tmin), and Embree
+/// answers each of those with a miss.
+#[test]
+fn ill_formed_rays_are_traced_without_aborting() {
+    let dir = scratch("ill-formed-rays");
+    std::fs::write(
+        dir.join("ill.csv"),
+        "ox,oy,oz,dx,dy,dz,tmin,tmax\n\
+         NaN,1,8,0,0,-1,0,inf\n0,1,8,0,inf,-1,0,inf\n0,1,8,0,0,-1e30,0,inf\n\
+         0,1,8,0,0,-1,NaN,inf\n0,1,8,0,0,-1,-1,inf\n0,1,8,0,0,-1,0,NaN\n-inf,1,8,0,0,-1,0,inf\n",
+    )
+    .unwrap();
+    for tracer in [
+        "reference",
+        "obvhs",
+        "packet",
+        "cgt",
+        "grid-dda",
+        "embree1",
+        "embree8",
+        "embree16",
+        "embree-stream",
+    ] {
+        for query in [&[][..], &["--occluded"][..]] {
+            let out = format!("{tracer}{}.csv", query.len());
+            let mut args = vec![
+                "trace", "--scene", "room", "--tracer", tracer, "--rays", "ill.csv", "--out", &out,
+            ];
+            args.extend_from_slice(query);
+            let (code, stderr) = raylab(&dir, &args);
+            assert_eq!(code, 0, "{tracer} {query:?}: {stderr}");
+            let answers = std::fs::read_to_string(dir.join(&out)).unwrap();
+            let answered: Vec<&str> = answers
+                .lines()
+                .skip(1)
+                .map(|l| l.split(',').nth(1).unwrap_or(""))
+                .collect();
+            assert_eq!(answered.len(), 7, "{tracer}: {answers}");
+            if tracer.starts_with("embree") {
+                assert!(
+                    answered.iter().all(|&a| a == "0"),
+                    "{tracer} {query:?}: {answers}"
+                );
+            }
+        }
+    }
+}
