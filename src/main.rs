@@ -60,8 +60,8 @@ enum Command {
         /// Override the timed repeats.
         #[arg(long)]
         repeats: Option<usize>,
-        /// Also write every generated ray batch to rays/<scene>-f<frame>-<kind>.rays in the
-        /// results directory (binary ray files, for `trace`, `verify --rays`, `rays = [{ file }]`).
+        /// Also write every generated ray batch to rays/<scene>[-s<size>]-f<frame>-<kind>.rays in
+        /// the results directory (binary ray files, for `trace`, `verify --rays`, `rays = [{ file }]`).
         #[arg(long)]
         dump_rays: bool,
     },
