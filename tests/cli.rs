@@ -418,6 +418,7 @@ fn ill_formed_rays_are_traced_without_aborting() {
         "packet",
         "cgt",
         "grid-dda",
+        "stream",
         "embree1",
         "embree8",
         "embree16",
