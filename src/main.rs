@@ -1,4 +1,4 @@
-//! The `raylab` command line: run, render, verify, scenes. Parsing and printing only; the work is
+//! The `raylab` command line: run, render, verify, trace, scenes. Parsing and printing only; the work is
 //! in the library. Any `Error` is printed once and exits with its code (2 for bad input).
 
 use std::path::PathBuf;
@@ -9,6 +9,8 @@ use clap::{Parser, Subcommand};
 use raylab::error::{Error, Result};
 use raylab::experiment::results_dir::PendingResults;
 use raylab::experiment::{run_experiment, RunOverrides};
+use raylab::geometry::ray_file::{hits_csv, occlusion_csv, read_rays};
+use raylab::geometry::RayKind;
 use raylab::render::assembly::Assembly;
 use raylab::render::distribution::{render_distribution, DrtSettings, FrameGeometry, DRT_KINDS};
 use raylab::render::image::Image;
@@ -20,6 +22,7 @@ use raylab::render::whitted::{
 };
 use raylab::scene::library::{list_scenes, load_scene};
 use raylab::scene::{Frame, Scene};
+use raylab::tracers::batch::{trace_hits, trace_occlusion};
 use raylab::tracers::Params;
 use raylab::verify::{self, format_table, Tolerance};
 
@@ -57,6 +60,10 @@ enum Command {
         /// Override the timed repeats.
         #[arg(long)]
         repeats: Option<usize>,
+        /// Also write every generated ray batch to rays/<scene>[-s<size>]-f<frame>-<kind>.rays in
+        /// the results directory (binary ray files, for `trace`, `verify --rays`, `rays = [{ file }]`).
+        #[arg(long)]
+        dump_rays: bool,
     },
     /// Render a frame to a PNG: ray casting with point-light shadows and Lambert shading, or
     /// Whitted ray tracing (mirror reflection, Fresnel refraction, packet-assembled batches).
@@ -111,6 +118,10 @@ enum Command {
         frames: usize,
         #[arg(long, default_value_t = 1)]
         seed: u64,
+        /// Compare on the rays of this ray file instead of generated camera and secondary rays:
+        /// as closest-hit queries (row `primary`) and as occlusion queries (row `shadow`).
+        #[arg(long, conflicts_with_all = ["resolution", "seed"])]
+        rays: Option<PathBuf>,
         /// Unexplained disagreements allowed per ray kind.
         #[arg(long, default_value_t = 0)]
         max_unexplained: u64,
@@ -121,6 +132,32 @@ enum Command {
         /// (a -2, -3… suffix when that exists), written whole or not at all.
         #[arg(long, default_value = "results")]
         out: PathBuf,
+    },
+    /// Trace the rays of a ray file (binary or CSV, see README "Ray files") with one tracer and
+    /// write one line per ray: `ray,hit,t,prim,u,v` (closest hit) or `ray,occluded`.
+    Trace {
+        #[arg(long)]
+        scene: String,
+        #[arg(long)]
+        size: Option<u32>,
+        #[arg(long, default_value = "reference")]
+        tracer: String,
+        #[arg(long = "param", value_parser = parse_param)]
+        params: Vec<(String, String)>,
+        /// Frame index along the scene's animation / camera path, of `--frames`.
+        #[arg(long, default_value_t = 0)]
+        frame: usize,
+        #[arg(long, default_value_t = 1)]
+        frames: usize,
+        /// The ray file.
+        #[arg(long)]
+        rays: PathBuf,
+        /// Ask whether anything lies within [tmin, tmax] (occlusion) instead of the closest hit.
+        #[arg(long)]
+        occluded: bool,
+        /// Where to write the CSV (default: standard output).
+        #[arg(long)]
+        out: Option<PathBuf>,
     },
     /// List built-in scenes and the scenes found on the search path, with triangle counts.
     Scenes,
@@ -219,6 +256,7 @@ fn execute(command: Command) -> Result<bool> {
             frames,
             warmup,
             repeats,
+            dump_rays,
         } => {
             let overrides = RunOverrides {
                 output: out,
@@ -227,6 +265,7 @@ fn execute(command: Command) -> Result<bool> {
                 frames,
                 warmup,
                 repeats,
+                dump_rays,
             };
             let dir = run_experiment(&experiment, &overrides)?;
             println!("results: {}", dir.display());
@@ -308,33 +347,50 @@ fn execute(command: Command) -> Result<bool> {
             frame,
             frames,
             seed,
+            rays,
             max_unexplained,
             max_distance_error,
             out,
         } => {
             check_frame(frame, frames)?;
-            let rays = resolution as u64 * resolution as u64;
-            raylab::memory::check(
-                &format!("verification at {resolution}² ({rays} rays per batch)"),
-                raylab::memory::for_rays(rays),
-            )?;
+            let file_rays = rays
+                .map(|path| read_rays(&path).map(|batch| (path, batch)))
+                .transpose()?;
+            let (what, per_batch) = match &file_rays {
+                Some((path, batch)) => (
+                    format!("verification on {} ({} rays)", path.display(), batch.len()),
+                    batch.len() as u64,
+                ),
+                None => {
+                    let n = resolution as u64 * resolution as u64;
+                    (
+                        format!("verification at {resolution}² ({n} rays per batch)"),
+                        n,
+                    )
+                }
+            };
+            raylab::memory::check(&what, raylab::memory::for_rays(per_batch))?;
             let loaded = load_scene(&scene, size)?;
             let frame = loaded.frame(frame, frames);
-            let reports = verify::verify_frame(
-                &loaded,
-                &frame,
-                &tracer,
-                &params_of(params),
-                resolution,
-                resolution,
-                seed,
-            )?;
+            let params = params_of(params);
+            let (reports, on) = match &file_rays {
+                Some((path, batch)) => (
+                    verify::verify_rays(&frame, &tracer, &params, batch)?,
+                    format!("the {} rays of {}", batch.len(), path.display()),
+                ),
+                None => (
+                    verify::verify_frame(
+                        &loaded, &frame, &tracer, &params, resolution, resolution, seed,
+                    )?,
+                    format!("{resolution}²"),
+                ),
+            };
             let tol = Tolerance {
                 max_unexplained,
                 max_distance_error_p99: max_distance_error,
             };
             println!(
-                "{tracer} vs {} on {scene}, frame {}, {resolution}²:",
+                "{tracer} vs {} on {scene}, frame {}, {on}:",
                 raylab::tracers::ORACLE,
                 frame.index
             );
@@ -350,6 +406,36 @@ fn execute(command: Command) -> Result<bool> {
                 if pass { "PASS" } else { "FAIL" }
             );
             return Ok(pass);
+        }
+        Command::Trace {
+            scene,
+            size,
+            tracer,
+            params,
+            frame,
+            frames,
+            rays,
+            occluded,
+            out,
+        } => {
+            check_frame(frame, frames)?;
+            let mut batch = read_rays(&rays)?;
+            let loaded = load_scene(&scene, size)?;
+            let frame = loaded.frame(frame, frames);
+            let tracer = raylab::tracers::tracer_for_frame(&tracer, &params_of(params), &frame)?;
+            let csv = if occluded {
+                batch.kind = Some(RayKind::Shadow);
+                occlusion_csv(&trace_occlusion(tracer.as_ref(), &batch))
+            } else {
+                hits_csv(&trace_hits(tracer.as_ref(), &batch))
+            };
+            match out {
+                Some(path) => {
+                    std::fs::write(&path, csv).map_err(|e| Error::io(&path, e))?;
+                    eprintln!("{} rays → {}", batch.len(), path.display());
+                }
+                None => print!("{csv}"),
+            }
         }
         Command::Scenes => {
             println!("{:<22} {:>10}  source", "scene", "triangles");

@@ -249,3 +249,211 @@ fn bad_stability_experiments_name_file_and_line() {
     fails_with(&dir, &["run", &nan], "offsets");
     no_results(&dir);
 }
+
+/// The one results directory of experiment `name` under `root`.
+fn only_run(root: &Path, name: &str) -> PathBuf {
+    let runs: Vec<PathBuf> = std::fs::read_dir(root.join(name))
+        .unwrap()
+        .flatten()
+        .map(|e| e.path())
+        .collect();
+    assert_eq!(runs.len(), 1, "{runs:?}");
+    runs[0].clone()
+}
+
+#[test]
+fn dumped_rays_replay_with_trace_verify_and_experiments() {
+    use raylab::geometry::ray_file::{hits_csv, read_rays};
+    use raylab::tracers::batch::trace_hits;
+
+    let dir = scratch("ray-files");
+    let exp = experiment(
+        &dir,
+        "dump.toml",
+        "name = \"dump\"\nscenes = [\"room\"]\ntracers = [\"reference\"]\nrays = [\"primary\", \"shadow\"]\n\
+         resolution = { width = 32, height = 32 }\nwarmup = 0\nrepeats = 1\n",
+    );
+    let (code, stderr) = raylab(&dir, &["run", &exp, "--dump-rays"]);
+    assert_eq!(code, 0, "{stderr}");
+    let rays = only_run(&dir.join("results"), "dump").join("rays");
+    let (primary, shadow) = (
+        rays.join("room-f0-primary.rays"),
+        rays.join("room-f0-shadow.rays"),
+    );
+    assert!(shadow.exists(), "{:?}", walk(&rays));
+
+    // The dump holds exactly the camera rays the run generated.
+    let scene = raylab::scene::library::load_scene("room", None).unwrap();
+    let frame = scene.frame(0, 1);
+    let batch = read_rays(&primary).unwrap();
+    let camera = raylab::render::rays::primary_rays(&frame.camera, 32, 32);
+    let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    assert_eq!(batch.len(), 32 * 32);
+    for (read, made) in [
+        (&batch.ox, &camera.ox),
+        (&batch.dz, &camera.dz),
+        (&batch.tmin, &camera.tmin),
+        (&batch.tmax, &camera.tmax),
+    ] {
+        assert_eq!(bits(read), bits(made));
+    }
+
+    // `trace` answers as the reference tracer does on those rays, line for line.
+    let (code, stderr) = raylab(
+        &dir,
+        &[
+            "trace",
+            "--scene",
+            "room",
+            "--tracer",
+            "reference",
+            "--rays",
+            primary.to_str().unwrap(),
+            "--out",
+            "hits.csv",
+        ],
+    );
+    assert_eq!(code, 0, "{stderr}");
+    let reference =
+        raylab::tracers::tracer_for_frame("reference", &raylab::tracers::Params::new(), &frame)
+            .unwrap();
+    let hits = trace_hits(reference.as_ref(), &batch);
+    assert!(hits.iter().filter(|h| h.is_hit()).count() > 512);
+    let written = std::fs::read_to_string(dir.join("hits.csv")).unwrap();
+    assert_eq!(written, hits_csv(&hits));
+
+    // `verify --rays` passes another tracer on the dumped shadow rays.
+    let (code, stderr) = raylab(
+        &dir,
+        &[
+            "verify",
+            "--scene",
+            "room",
+            "--tracer",
+            "obvhs",
+            "--rays",
+            shadow.to_str().unwrap(),
+        ],
+    );
+    assert_eq!(code, 0, "{stderr}");
+
+    // An experiment replays the file (path relative to the experiment file).
+    std::fs::create_dir_all(dir.join("replay")).unwrap();
+    std::fs::copy(&primary, dir.join("replay/camera.rays")).unwrap();
+    let replay = experiment(
+        &dir,
+        "replay/replay.toml",
+        "name = \"replay\"\nscenes = [\"room\"]\ntracers = [\"reference\"]\n\
+         rays = [\"primary\", { file = \"camera.rays\" }]\n\
+         resolution = { width = 32, height = 32 }\nwarmup = 0\nrepeats = 1\n",
+    );
+    let (code, stderr) = raylab(&dir, &["run", &replay]);
+    assert_eq!(code, 0, "{stderr}");
+    let runs =
+        std::fs::read_to_string(only_run(&dir.join("results"), "replay").join("runs.csv")).unwrap();
+    let file_row = runs
+        .lines()
+        .find(|l| l.contains(",file:camera.rays,"))
+        .unwrap_or_else(|| panic!("no file row in {runs}"));
+    assert!(file_row.contains(",1024,"), "{file_row}");
+}
+
+#[test]
+fn bad_ray_files_fail_with_their_byte_offset() {
+    let dir = scratch("bad-ray-files");
+    // A header claiming 1024 rays, cut 100 bytes in: rays 0 and 1 whole, ray 2 from byte 88.
+    let mut bytes = b"RAYLABRY".to_vec();
+    bytes.extend_from_slice(&1u32.to_le_bytes());
+    bytes.extend_from_slice(&0u32.to_le_bytes());
+    bytes.extend_from_slice(&1024u64.to_le_bytes());
+    bytes.resize(100, 0);
+    std::fs::write(dir.join("cut.rays"), &bytes).unwrap();
+    std::fs::write(
+        dir.join("bad.csv"),
+        "ox,oy,oz,dx,dy,dz,tmin,tmax\n0,0,0,0,0,1,0\n",
+    )
+    .unwrap();
+    let trace = |file: &'static str| ["trace", "--scene", "room", "--rays", file];
+    fails_with(&dir, &trace("cut.rays"), "cut.rays: byte offset 88");
+    fails_with(&dir, &trace("bad.csv"), "bad.csv:2");
+    fails_with(&dir, &trace("missing.rays"), "missing.rays");
+    fails_with(
+        &dir,
+        &[
+            "verify", "--scene", "room", "--tracer", "obvhs", "--rays", "cut.rays",
+        ],
+        "cut.rays: byte offset 88",
+    );
+    for (name, entry, needle) in [
+        ("cut.toml", "{ file = \"cut.rays\" }", "byte offset 88"),
+        (
+            "missing.toml",
+            "{ file = \"missing.rays\" }",
+            "missing.rays",
+        ),
+        ("typo.toml", "{ fiel = \"cut.rays\" }", "typo.toml:4"),
+    ] {
+        let exp = experiment(
+            &dir,
+            name,
+            &format!(
+                "name = \"x\"\nscenes = [\"room\"]\ntracers = [\"reference\"]\nrays = [\"primary\", {entry}]\n\
+                 resolution = {{ width = 8, height = 8 }}\n"
+            ),
+        );
+        fails_with(&dir, &["run", &exp, "--dump-rays"], needle);
+    }
+    no_results(&dir);
+    assert!(!dir.join("results/verify").exists());
+}
+
+/// Ill-formed rays are valid ray-file content: every tracer traces them without aborting (Embree's
+/// linked build asserts on non-finite or huge components and on a negative tmin) and answers a ray
+/// that is not well formed (`Ray::is_well_formed`) with a miss; Embree answers all of them so.
+#[test]
+fn ill_formed_rays_are_traced_without_aborting() {
+    let dir = scratch("ill-formed-rays");
+    std::fs::write(
+        dir.join("ill.csv"),
+        "ox,oy,oz,dx,dy,dz,tmin,tmax\n\
+         NaN,1,8,0,0,-1,0,inf\n0,1,8,0,inf,-1,0,inf\n0,1,8,0,0,-1e30,0,inf\n\
+         0,1,8,0,0,-1,NaN,inf\n0,1,8,0,0,-1,-1,inf\n0,1,8,0,0,-1,0,NaN\n-inf,1,8,0,0,-1,0,inf\n",
+    )
+    .unwrap();
+    // Rays 2 (a huge but finite direction) and 4 (a negative tmin) are well formed.
+    let ill_formed = [0, 1, 3, 5, 6];
+    for tracer in [
+        "reference",
+        "obvhs",
+        "packet",
+        "cgt",
+        "grid-dda",
+        "stream",
+        "embree1",
+        "embree8",
+        "embree16",
+        "embree-stream",
+    ] {
+        for query in [&[][..], &["--occluded"][..]] {
+            let out = format!("{tracer}{}.csv", query.len());
+            let mut args = vec![
+                "trace", "--scene", "room", "--tracer", tracer, "--rays", "ill.csv", "--out", &out,
+            ];
+            args.extend_from_slice(query);
+            let (code, stderr) = raylab(&dir, &args);
+            assert_eq!(code, 0, "{tracer} {query:?}: {stderr}");
+            let answers = std::fs::read_to_string(dir.join(&out)).unwrap();
+            let answered: Vec<&str> = answers
+                .lines()
+                .skip(1)
+                .map(|l| l.split(',').nth(1).unwrap_or(""))
+                .collect();
+            assert_eq!(answered.len(), 7, "{tracer}: {answers}");
+            for (i, answer) in answered.iter().enumerate() {
+                if ill_formed.contains(&i) || tracer.starts_with("embree") {
+                    assert_eq!(*answer, "0", "{tracer} {query:?} ray {i}: {answers}");
+                }
+            }
+        }
+    }
+}

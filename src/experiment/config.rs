@@ -11,6 +11,10 @@
 //! rays = ["primary", "shadow", "diffuse", "reflection", "refraction"]   # ray batches (optional
 //!                                      # with `render`): each kind traced on its own; reflection and
 //!                                      # refraction leave the primary hits (bounce 1)
+//!                                      # `{ file = "my.rays" }` entries (path relative to this file;
+//!                                      # binary or CSV, see `geometry::ray_file`) mix with the kinds:
+//!                                      # the file's rays, closest hit, measured on every scene and
+//!                                      # frame; runs.csv's ray_kind says `file:my.rays`
 //! # A rendering workload (optional): every tracer instance renders each frame with the Whitted
 //! # renderer, once per combination of the lists below (a single value is a one-value list).
 //! # Or `[[render]]` tables, each its own grid (e.g. one per workload of Overbeck 2008, Fig. 5).
@@ -103,6 +107,8 @@ pub struct Experiment {
     /// Every (tracer, parameter combination) to measure, in file order, grid in key order.
     pub instances: Vec<TracerInstance>,
     pub ray_kinds: Vec<RayKind>,
+    /// `rays = [{ file = "…" }]` entries, in file order.
+    pub ray_files: Vec<RayFileSpec>,
     /// Render workloads (Whitted or distribution), one per combination of a `render` grid.
     pub renders: Vec<RenderWorkload>,
     pub width: u32,
@@ -122,6 +128,15 @@ pub struct Experiment {
     pub figures: Vec<FigureSpec>,
     /// The numerical stability suite, run instead of scenes × ray kinds.
     pub stability: Option<StabilitySettings>,
+}
+
+/// A `rays = [{ file = "…" }]` entry: the path as written, and resolved against the experiment
+/// file's directory.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct RayFileSpec {
+    /// As written in the experiment (the `file:<name>` of runs.csv's ray_kind).
+    pub name: String,
+    pub path: PathBuf,
 }
 
 /// A scene by name, with the size for generated scenes (`None`: the generator's default).
@@ -280,7 +295,7 @@ struct ExperimentFile {
     #[serde(default)]
     params: Option<Spanned<BTreeMap<String, toml::Value>>>,
     #[serde(default)]
-    rays: Option<Spanned<Vec<Spanned<String>>>>,
+    rays: Option<Spanned<Vec<Spanned<NameOr<RayEntry>>>>>,
     /// The render workload grid: a table, or an array of tables (each its own grid).
     #[serde(default)]
     render: Option<Spanned<toml::Value>>,
@@ -307,6 +322,30 @@ struct ExperimentFile {
     tables: Vec<Spanned<TableSpec>>,
     #[serde(default)]
     figures: Vec<Spanned<FigureSpec>>,
+}
+
+/// A `rays` entry: a ray kind by name, or `{ file = "…" }`.
+enum RayEntry {
+    Kind(String),
+    File(String),
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RayFileTable {
+    file: String,
+}
+
+impl From<String> for RayEntry {
+    fn from(name: String) -> Self {
+        RayEntry::Kind(name)
+    }
+}
+
+impl<'de> Deserialize<'de> for RayEntry {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        RayFileTable::deserialize(d).map(|t| RayEntry::File(t.file))
+    }
 }
 
 /// `soft_shadow = { samples = 16 }`: the `soft_shadow` workload's light samples per point.
@@ -642,16 +681,32 @@ impl Experiment {
         }
 
         let mut ray_kinds = Vec::new();
+        let mut ray_files: Vec<RayFileSpec> = Vec::new();
         let no_rays = Vec::new();
         let rays = file.rays.as_ref().map_or(&no_rays, |r| r.get_ref());
-        for name in rays {
-            let kind = RayKind::parse(name.get_ref()).ok_or_else(|| {
+        for entry in rays {
+            let name = match &entry.get_ref().0 {
+                RayEntry::Kind(name) => name,
+                RayEntry::File(name) => {
+                    if name.is_empty() {
+                        return Err(src.input_error(&entry.span(), "ray file: empty path"));
+                    }
+                    if !ray_files.iter().any(|f| &f.name == name) {
+                        let dir = path.parent().unwrap_or(Path::new(""));
+                        ray_files.push(RayFileSpec {
+                            name: name.clone(),
+                            path: dir.join(name),
+                        });
+                    }
+                    continue;
+                }
+            };
+            let kind = RayKind::parse(name).ok_or_else(|| {
                 let known: Vec<&str> = RayKind::ALL.iter().map(|k| k.name()).collect();
                 src.usage_error(
-                    &name.span(),
+                    &entry.span(),
                     format!(
-                        "unknown ray kind {:?} (known: {})",
-                        name.get_ref(),
+                        "unknown ray kind {name:?} (known: {}, or {{ file = \"…\" }})",
                         known.join(", ")
                     ),
                 )
@@ -664,7 +719,8 @@ impl Experiment {
             Some(render) => expand_renders(&src, render)?,
             None => Vec::new(),
         };
-        if ray_kinds.is_empty() && renders.is_empty() && stability.is_none() {
+        if ray_kinds.is_empty() && ray_files.is_empty() && renders.is_empty() && stability.is_none()
+        {
             let span = file.rays.as_ref().map_or(0..0, |r| r.span());
             return Err(src.input_error(&span, "no ray kinds and no render workload"));
         }
@@ -704,6 +760,7 @@ impl Experiment {
             scenes,
             instances,
             ray_kinds,
+            ray_files,
             renders,
             width,
             height,
@@ -1092,6 +1149,44 @@ mod tests {
             parse(&format!("{BASE}tracers = [\"reference\", \"reference\"]\n")).unwrap_err(),
         );
         assert!(msg.contains("listed twice"), "{msg}");
+    }
+
+    #[test]
+    fn ray_files_mix_with_kinds_relative_to_the_experiment() {
+        let text = "name = \"t\"\nscenes = [\"room\"]\ntracers = [\"reference\"]\n\
+                    rays = [\"primary\", { file = \"sub/a.rays\" }, \"shadow\", { file = \"sub/a.rays\" }]\n\
+                    resolution = { width = 8, height = 4 }\n";
+        let exp = Experiment::parse(Path::new("dir/exp.toml"), text).unwrap();
+        assert_eq!(exp.ray_kinds, vec![RayKind::Primary, RayKind::Shadow]);
+        assert_eq!(
+            exp.ray_files,
+            vec![RayFileSpec {
+                name: "sub/a.rays".into(),
+                path: PathBuf::from("dir/sub/a.rays"),
+            }]
+        );
+        // Files alone are enough rays.
+        let only = text
+            .replace("\"primary\", ", "")
+            .replace("\"shadow\", ", "");
+        assert!(Experiment::parse(Path::new("exp.toml"), &only)
+            .unwrap()
+            .ray_kinds
+            .is_empty());
+        for (bad, needle) in [
+            ("{ file = \"\" }", "empty path"),
+            ("{ path = \"a.rays\" }", "unknown field"),
+            ("\"a.rays\"", "unknown ray kind"),
+        ] {
+            let e = parse(&format!(
+                "{}tracers = [\"reference\"]\n",
+                BASE.replace("[\"primary\"]", &format!("[{bad}]"))
+            ))
+            .unwrap_err();
+            assert_eq!(e.exit_code(), 2);
+            assert!(e.to_string().contains(needle), "{bad}: {e}");
+            assert!(e.to_string().contains("exp.toml:3"), "{bad}: {e}");
+        }
     }
 
     #[test]

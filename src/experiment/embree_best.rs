@@ -101,6 +101,8 @@ fn config(instance: &InstancePlan, traced: Traced) -> String {
             ..
         } => Some(RayKind::Reflection),
         Traced::Frame { .. } => None,
+        // Ray files are traced as batches of primary rays.
+        Traced::File(_) => Some(RayKind::Primary),
     };
     let coherence = Coherence::from_params(&instance.params).unwrap_or_default();
     let mut parts = vec![instance.tracer.clone()];

@@ -29,6 +29,9 @@ use crate::scene::library::load_scene;
 pub use config::{Experiment, SceneSpec, StructureKey, TracerInstance};
 pub use plan::{Plan, SceneLoader};
 
+/// Where `--dump-rays` writes the generated batches, in the results directory.
+pub const RAYS_DIR: &str = "rays";
+
 /// Command-line replacements for experiment settings, for quick or scaled-down runs. Recorded in
 /// meta.json, since they change what the numbers mean.
 #[derive(Clone, Debug, Default, Serialize)]
@@ -40,6 +43,9 @@ pub struct RunOverrides {
     pub frames: Option<usize>,
     pub warmup: Option<usize>,
     pub repeats: Option<usize>,
+    /// Not a setting: also write every generated ray batch to `rays/` in the results directory
+    /// (`runner::dump_name`), for replay with `trace`, `verify --rays` or `rays = [{ file }]`.
+    pub dump_rays: bool,
 }
 
 impl RunOverrides {
@@ -115,7 +121,8 @@ pub fn run(
     let results = results_dir::PendingResults::create(&exp.output, &exp.name, &started.compact())?;
 
     let progress = runner::progress_bar(plan.measurements());
-    let cases = runner::run_plan(exp, &plan, load, &progress);
+    let dump = overrides.dump_rays.then(|| results.dir().join(RAYS_DIR));
+    let cases = runner::run_plan(exp, &plan, load, &progress, dump.as_deref());
     progress.finish_and_clear();
     let cases = cases?;
 
@@ -877,6 +884,7 @@ series = "scene"
             frames: Some(1),
             warmup: Some(2),
             repeats: Some(5),
+            dump_rays: false,
         };
         overrides.apply(&mut exp).unwrap();
         assert_eq!(

@@ -136,7 +136,7 @@ pub fn write_runs(path: &Path, plan: &Plan, cases: &[Case]) -> Result<()> {
                 instance.params.to_string(),
                 instance.structure.to_string(),
                 cell(case.traced.render().map(|r| &plan.renders[r])),
-                case.traced.kind_name().to_string(),
+                case.traced.kind_name(plan),
                 cell(case.traced.depth()),
                 timing.threads.to_string(),
                 case.rays.to_string(),
@@ -180,7 +180,7 @@ pub fn write_histograms(path: &Path, plan: &Plan, cases: &[Case]) -> Result<()> 
         .map_err(|e| csv_error(path, e))?;
     for case in cases
         .iter()
-        .filter(|c| c.counts_internals && matches!(c.traced, Traced::Batch(_)))
+        .filter(|c| c.counts_internals && matches!(c.traced, Traced::Batch(_) | Traced::File(_)))
     {
         let instance = &plan.instances[case.instance];
         let c = &case.counted.counters;
@@ -192,7 +192,7 @@ pub fn write_histograms(path: &Path, plan: &Plan, cases: &[Case]) -> Result<()> 
                 case.frame.to_string(),
                 instance.tracer.clone(),
                 instance.params.to_string(),
-                case.traced.kind_name().to_string(),
+                case.traced.kind_name(plan),
                 depth.to_string(),
                 c.aabb_by_depth.get(depth).copied().unwrap_or(0).to_string(),
                 c.triangle_by_depth

@@ -7,12 +7,14 @@
 
 use std::collections::BTreeMap;
 use std::fmt;
+use std::path::PathBuf;
 
 use serde::ser::SerializeMap;
 use serde::{Serialize, Serializer};
 
 use crate::accel::AccelKind;
 use crate::error::{Error, Result};
+use crate::geometry::ray_file::read_rays;
 use crate::geometry::{RayKind, Triangle};
 use crate::scene::{Material, Mesh, Scene};
 use crate::tracers::{build_tracer, Params};
@@ -41,6 +43,9 @@ pub struct Plan {
     /// The render workloads (`RenderWorkload` labels), measured for every instance and scene.
     pub renders: Vec<String>,
     pub scenes: Vec<ScenePlan>,
+    /// The `rays = [{ file = "…" }]` batches, read and checked now, measured on every scene and
+    /// frame.
+    pub ray_files: Vec<RayFilePlan>,
     /// Run-wide remarks (oversubscribed threads).
     pub notes: Vec<String>,
 }
@@ -75,6 +80,14 @@ pub struct ScenePlan {
     pub rebuild_per_frame: bool,
     /// Decisions worth reading: what was left out and why.
     pub notes: Vec<String>,
+}
+
+#[derive(Debug, Serialize)]
+pub struct RayFilePlan {
+    /// As written in the experiment: runs.csv's ray_kind is `file:<name>`.
+    pub name: String,
+    pub path: PathBuf,
+    pub rays: usize,
 }
 
 #[derive(Debug, Serialize)]
@@ -125,9 +138,21 @@ impl ScenePlan {
 impl Plan {
     /// Loads every scene to learn what it needs, and builds every tracer instance once on a
     /// one-triangle mesh so bad parameter values fail now, not an hour into the run. Scenes are
-    /// dropped again (the run reloads each in turn), so only one is ever held in memory.
+    /// dropped again (the run reloads each in turn), so only one is ever held in memory. Ray
+    /// files are read and checked the same way, so a bad one fails before anything is measured.
     pub fn derive(exp: &Experiment, load: SceneLoader) -> Result<Plan> {
         let instances = plan_instances(exp)?;
+        let ray_files = exp
+            .ray_files
+            .iter()
+            .map(|f| {
+                Ok(RayFilePlan {
+                    name: f.name.clone(),
+                    path: f.path.clone(),
+                    rays: read_rays(&f.path)?.len(),
+                })
+            })
+            .collect::<Result<Vec<_>>>()?;
         let mut scenes = Vec::with_capacity(exp.scenes.len());
         for spec in &exp.scenes {
             // A bad scene name is a mistake in the experiment file: say which file.
@@ -156,6 +181,7 @@ impl Plan {
             instances,
             renders: exp.renders.iter().map(|r| r.to_string()).collect(),
             scenes,
+            ray_files,
             notes,
         })
     }
@@ -166,7 +192,7 @@ impl Plan {
         let per_kind = self.frames * self.instances.len() * self.threads.len();
         self.scenes
             .iter()
-            .map(|s| (s.ray_kinds.len() + self.renders.len()) * per_kind)
+            .map(|s| (s.ray_kinds.len() + self.ray_files.len() + self.renders.len()) * per_kind)
             .sum()
     }
 }
@@ -331,6 +357,15 @@ impl fmt::Display for Plan {
         }
         for render in &self.renders {
             writeln!(f, "  render workload: {render}")?;
+        }
+        for file in &self.ray_files {
+            writeln!(
+                f,
+                "  ray file {} ({}): {} rays, closest hit, on every scene and frame",
+                file.name,
+                file.path.display(),
+                file.rays
+            )?;
         }
         for scene in &self.scenes {
             let size = scene.size.map_or(String::new(), |s| format!(" size {s}"));

@@ -10,6 +10,7 @@
 use std::collections::BTreeMap;
 use std::hint::black_box;
 use std::io::IsTerminal;
+use std::path::Path;
 use std::time::{Duration, Instant};
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -17,6 +18,7 @@ use rayon::{ThreadPool, ThreadPoolBuilder};
 
 use crate::accel::Accel;
 use crate::error::{Error, Result};
+use crate::geometry::ray_file::{read_rays, write_rays, RayFileFormat};
 use crate::geometry::{RayBatch, RayKind};
 use crate::random::mix64;
 use crate::render::area_light::soft_shadow_points;
@@ -34,7 +36,7 @@ use crate::tracers::batch::trace_hits;
 use crate::tracers::visibility::{LightSamples, QuadLight, ShadingPoints};
 use crate::tracers::{build_tracer, Params, Tracer, TracerInfo, VisibilityQuery};
 
-use super::config::{DistributionWorkload, Experiment, RenderWorkload, StructureKey};
+use super::config::{DistributionWorkload, Experiment, RenderWorkload, SceneSpec, StructureKey};
 use super::measure::{count_pass, time_passes, timing_of, Counted, Timing};
 use super::plan::{secondary_ray_structure, Plan, SceneLoader, ScenePlan, SECONDARY_RAY_TRACER};
 
@@ -51,31 +53,35 @@ pub enum Traced {
     },
     /// A whole rendered frame: all its batches plus sampling, shading and packet assembly.
     Frame { render: usize },
+    /// The rays of ray file `Plan::ray_files[i]`, closest hit.
+    File(usize),
 }
 
 impl Traced {
-    /// runs.csv's `ray_kind`.
-    pub fn kind_name(self) -> &'static str {
+    /// runs.csv's `ray_kind`: the kind, batch or `frame`, or `file:<name>` for a ray file.
+    pub fn kind_name(self, plan: &Plan) -> String {
         match self {
-            Traced::Batch(kind) => kind.name(),
-            Traced::Render { batch, .. } => batch.name(),
-            Traced::Frame { .. } => "frame",
+            Traced::Batch(kind) => kind.name().to_string(),
+            Traced::Render { batch, .. } => batch.name().to_string(),
+            Traced::Frame { .. } => "frame".to_string(),
+            Traced::File(i) => format!("file:{}", plan.ray_files[i].name),
         }
     }
 
-    /// Bounce depth: camera rays 0, rays leaving their hits 1; none for a whole frame.
+    /// Bounce depth: camera rays 0, rays leaving their hits 1; none for a whole frame or a ray
+    /// file.
     pub fn depth(self) -> Option<u32> {
         match self {
             Traced::Batch(RayKind::Primary) => Some(0),
             Traced::Batch(_) => Some(1),
             Traced::Render { depth, .. } => Some(depth),
-            Traced::Frame { .. } => None,
+            Traced::Frame { .. } | Traced::File(_) => None,
         }
     }
 
     pub fn render(self) -> Option<usize> {
         match self {
-            Traced::Batch(_) => None,
+            Traced::Batch(_) | Traced::File(_) => None,
             Traced::Render { render, .. } | Traced::Frame { render } => Some(render),
         }
     }
@@ -141,13 +147,35 @@ pub fn progress_bar(measurements: usize) -> ProgressBar {
     bar
 }
 
-/// Runs every measurement of `plan`, loading each scene with `load` when its turn comes.
+/// Runs every measurement of `plan`, loading each scene with `load` when its turn comes. With
+/// `dump_rays`, every generated ray batch is also written there as a binary ray file
+/// (`dump_name`).
 pub fn run_plan(
     exp: &Experiment,
     plan: &Plan,
     load: SceneLoader,
     progress: &ProgressBar,
+    dump_rays: Option<&Path>,
 ) -> Result<Vec<Case>> {
+    let file_batches = plan
+        .ray_files
+        .iter()
+        .map(|f| {
+            let batch = read_rays(&f.path)?;
+            match batch.len() == f.rays {
+                true => Ok(batch),
+                false => Err(Error::runtime(format!(
+                    "ray file {} changed during the run: {} rays when planned, {} now",
+                    f.path.display(),
+                    f.rays,
+                    batch.len()
+                ))),
+            }
+        })
+        .collect::<Result<Vec<RayBatch>>>()?;
+    if let Some(dir) = dump_rays {
+        std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    }
     let pools = exp
         .threads
         .iter()
@@ -188,6 +216,14 @@ pub fn run_plan(
             let frame_tracers = current.as_ref().expect("built above");
             let workloads =
                 generate_workloads(exp, scene_plan, &scene, &frame, frame_tracers, widest)?;
+            if let Some(dir) = dump_rays {
+                for workload in &workloads {
+                    if let Workload::Rays(batch) = workload {
+                        let path = dir.join(dump_name(spec, f, batch.kind()));
+                        write_rays(&path, batch.view(), RayFileFormat::Binary)?;
+                    }
+                }
+            }
             for (i, tracer) in frame_tracers.tracers.iter().enumerate() {
                 let measure = Measure {
                     exp,
@@ -208,6 +244,9 @@ pub fn run_plan(
                 };
                 for workload in &workloads {
                     cases.push(measure.batch(workload));
+                }
+                for (file, batch) in file_batches.iter().enumerate() {
+                    cases.push(measure.file(file, batch));
                 }
                 for (r, workload) in exp.renders.iter().enumerate() {
                     cases.extend(measure.render(r, &plan.renders[r], workload)?);
@@ -283,16 +322,28 @@ impl Measure<'_> {
         }
     }
 
-    /// One workload traced on its own: timed at every thread count, then counted once.
+    /// One workload traced on its own.
     fn batch(&self, workload: &Workload) -> Case {
-        let (exp, tracer, work) = (self.exp, self.tracer, workload.work());
         let kind = workload.kind();
-        let timings = self.at_every_pool(&kind.name(), |pool| {
+        self.traced(Traced::Batch(kind), kind.name(), workload.work())
+    }
+
+    /// The rays of `Experiment::ray_files[file]`.
+    fn file(&self, file: usize, batch: &RayBatch) -> Case {
+        let what = format!("file:{}", self.exp.ray_files[file].name);
+        self.traced(Traced::File(file), &what, Work::of_batch(batch))
+    }
+
+    /// `work` traced on its own (`what` in the progress line): timed at every thread count, then
+    /// counted once.
+    fn traced(&self, traced: Traced, what: &str, work: Work<'_>) -> Case {
+        let (exp, tracer) = (self.exp, self.tracer);
+        let timings = self.at_every_pool(&what, |pool| {
             time_passes(pool, tracer, work, exp.warmup, exp.repeats)
         });
         // After the timed passes, so it never acts as an extra warm-up for them.
         let counted = count_pass(self.widest, tracer, work);
-        self.case(Traced::Batch(kind), work.rays(), counted, timings)
+        self.case(traced, work.rays(), counted, timings)
     }
 
     /// Render workload `r` (`label` in the plan): every frame timed at every thread count, one
@@ -562,6 +613,14 @@ impl Workload {
             }),
         }
     }
+}
+
+/// The file a generated batch is dumped to: `<scene>[-s<size>]-f<frame>-<kind>.rays` (a scene
+/// given as a path has its separators replaced).
+pub fn dump_name(spec: &SceneSpec, frame: usize, kind: RayKind) -> String {
+    let size = spec.size.map_or(String::new(), |s| format!("-s{s}"));
+    let scene = spec.name.replace(['/', '\\'], "_");
+    format!("{scene}{size}-f{frame}-{}.rays", kind.name())
 }
 
 /// The workloads of the scene's ray kinds for one frame, in the plan's order. Secondary rays are

@@ -2,6 +2,7 @@
 
 pub mod aabb;
 pub mod ray;
+pub mod ray_file;
 pub mod triangle;
 
 pub use aabb::{Aabb, RayBoxTest};

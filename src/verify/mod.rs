@@ -114,3 +114,25 @@ pub fn verify_frame(
         &batches,
     ))
 }
+
+/// `raylab verify --rays`: the rays of a ray file, compared twice — as closest-hit queries
+/// (reported as `primary`) and as occlusion queries (reported as `shadow`).
+pub fn verify_rays(
+    frame: &Frame,
+    tracer: &str,
+    params: &Params,
+    rays: &RayBatch,
+) -> Result<Vec<KindReport>> {
+    let oracle = tracer_for_frame(ORACLE, &oracle_params(), frame)?;
+    let tested = tracer_for_frame(tracer, params, frame)?;
+    let batches = [RayKind::Primary, RayKind::Shadow].map(|kind| RayBatch {
+        kind: Some(kind),
+        ..rays.clone()
+    });
+    Ok(compare_batches(
+        frame,
+        tested.as_ref(),
+        oracle.as_ref(),
+        &batches,
+    ))
+}

@@ -36,7 +36,8 @@ const DISABLED: RTCRay = RTCRay {
 pub fn ray(rays: &Rays<'_>, i: usize) -> RTCRay {
     let r = rays.ray(i);
     let in_range = r.origin.abs().max(r.dir.abs()).max_element() <= EMBREE_LARGEST;
-    if !(r.is_well_formed() && in_range) {
+    // Embree also asserts tnear ≥ 0 (a well-formed ray may start its interval behind the origin).
+    if !(r.is_well_formed() && in_range && r.tmin >= 0.0) {
         return DISABLED;
     }
     RTCRay {
