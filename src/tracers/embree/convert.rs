@@ -36,8 +36,7 @@ const DISABLED: RTCRay = RTCRay {
 pub fn ray(rays: &Rays<'_>, i: usize) -> RTCRay {
     let r = rays.ray(i);
     let in_range = r.origin.abs().max(r.dir.abs()).max_element() <= EMBREE_LARGEST;
-    // Embree also asserts tnear ≥ 0 (a well-formed ray may start its interval behind the origin).
-    if !(r.is_well_formed() && in_range && r.tmin >= 0.0) {
+    if !(r.is_well_formed() && in_range) {
         return DISABLED;
     }
     RTCRay {
