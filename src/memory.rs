@@ -59,8 +59,8 @@ mod tests {
     #[test]
     fn work_above_the_free_memory_is_refused_with_the_estimate() {
         let rays = 1_000_000u64 * 1_000_000;
-        let e = check_against("a 1000000×1000000 image", for_rays(rays), Some(24 << 30))
-            .unwrap_err();
+        let e =
+            check_against("a 1000000×1000000 image", for_rays(rays), Some(24 << 30)).unwrap_err();
         assert_eq!(e.exit_code(), 2);
         let message = e.to_string();
         assert!(message.contains("238418579.1 GiB"), "{message}");

@@ -206,7 +206,15 @@ fn absurd_sizes_are_refused_before_allocating() {
     fails_with(&dir, &args, "needs an estimated");
     fails_with(
         &dir,
-        &["verify", "--scene", "room", "--tracer", "reference", "--resolution", "4000000"],
+        &[
+            "verify",
+            "--scene",
+            "room",
+            "--tracer",
+            "reference",
+            "--resolution",
+            "4000000",
+        ],
         "needs an estimated",
     );
     let exp = experiment(

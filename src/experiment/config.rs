@@ -82,7 +82,7 @@ use toml::Spanned;
 use crate::accel::AccelKind;
 use crate::error::{Error, Result};
 use crate::geometry::RayKind;
-use crate::render::distribution::DrtSettings;
+use crate::render::distribution::{DrtSettings, Integrator};
 use crate::render::interleaved::SampleTable;
 use crate::render::whitted::WhittedSettings;
 use crate::tracers::visibility::LightSamples;
@@ -140,8 +140,9 @@ pub enum RenderWorkload {
     Distribution(DistributionWorkload),
 }
 
-/// A distribution ray tracing workload (Boulos et al. 2007 §4). Its `settings` carry no image
-/// size: the runner renders at the experiment's resolution.
+/// A distribution ray tracing workload (Boulos et al. 2007 §4) or, with `settings.integrator`
+/// `Path`, a path tracing one (Gribble & Ramani 2008 §4). Its `settings` carry no image size: the
+/// runner renders at the experiment's resolution.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct DistributionWorkload {
     pub settings: DrtSettings,
@@ -183,7 +184,8 @@ impl fmt::Display for RenderWorkload {
             ),
             RenderWorkload::Distribution(w) => write!(
                 f,
-                "renderer=distribution;aperture={};focus={};max_depth={};shutter={};spp={}",
+                "renderer={};aperture={};focus={};max_depth={};shutter={};spp={}",
+                w.settings.integrator.name(),
                 camera(w.settings.aperture),
                 camera(w.settings.focus_distance),
                 w.settings.max_depth,
@@ -194,9 +196,9 @@ impl fmt::Display for RenderWorkload {
     }
 }
 
-/// One combination of a distribution `render` grid: the renderer's settings and the workload's
-/// shutter interval (motion blur), or what is wrong with them.
-fn distribution_workload(params: &Params) -> Result<DistributionWorkload> {
+/// One combination of a distribution or path `render` grid: the renderer's settings and the
+/// workload's shutter interval (motion blur), or what is wrong with them.
+fn distribution_workload(integrator: Integrator, params: &Params) -> Result<DistributionWorkload> {
     let mut settings = params.clone();
     let shutter = match settings.0.remove("shutter") {
         None => None,
@@ -210,7 +212,7 @@ fn distribution_workload(params: &Params) -> Result<DistributionWorkload> {
         },
     };
     Ok(DistributionWorkload {
-        settings: DrtSettings::from_params(&settings, &["shutter"])?,
+        settings: DrtSettings::from_params(integrator, &settings, &["shutter"])?,
         shutter,
     })
 }
@@ -855,13 +857,17 @@ fn expand_render_grid(
         Some([name]) if name == "whitted" => {
             |params| WhittedSettings::from_params(params).map(RenderWorkload::Whitted)
         }
-        Some([name]) if name == "distribution" => {
-            |params| distribution_workload(params).map(RenderWorkload::Distribution)
-        }
+        Some([name]) if name == "distribution" => |params| {
+            distribution_workload(Integrator::Distribution, params)
+                .map(RenderWorkload::Distribution)
+        },
+        Some([name]) if name == "path" => |params| {
+            distribution_workload(Integrator::Path, params).map(RenderWorkload::Distribution)
+        },
         _ => {
             return Err(src.usage_error(
                 &table.span(),
-                "render needs renderer = \"whitted\" or \"distribution\"",
+                "render needs renderer = \"whitted\", \"distribution\" or \"path\"",
             ))
         }
     };
@@ -1124,7 +1130,7 @@ mod tests {
         assert_eq!(whitted(&exp, 0).materials, Some(Preset::Glass));
 
         for (bad, word) in [
-            ("render = { renderer = \"path\" }", "renderer"),
+            ("render = { renderer = \"bidirectional\" }", "renderer"),
             (
                 "render = { renderer = \"whitted\", assembly = \"octants\" }",
                 "octants",
@@ -1231,6 +1237,40 @@ mod tests {
         ] {
             let text = format!(
                 "{BASE}tracers = [\"reference\"]\nrender = {{ renderer = \"distribution\", {bad} }}\n"
+            );
+            let msg = usage_message(parse(&text).unwrap_err());
+            assert!(
+                msg.starts_with("exp.toml:6:") && msg.contains(word),
+                "{msg}"
+            );
+        }
+    }
+
+    #[test]
+    fn a_path_grid_is_a_sampled_workload_with_its_own_limits() {
+        let text = format!(
+            "{BASE}tracers = [\"reference\"]\nrender = {{ renderer = \"path\", spp = [1, 3], aperture = 0.1 }}\n"
+        );
+        let exp = parse(&text).unwrap();
+        let labels: Vec<String> = exp.renders.iter().map(|r| r.to_string()).collect();
+        assert_eq!(
+            labels,
+            [
+                "renderer=path;aperture=0.1;focus=camera;max_depth=5;shutter=none;spp=1",
+                "renderer=path;aperture=0.1;focus=camera;max_depth=5;shutter=none;spp=3"
+            ]
+        );
+        let RenderWorkload::Distribution(w) = exp.renders[1] else {
+            panic!("a sampled workload")
+        };
+        assert_eq!(w.settings.integrator, Integrator::Path);
+        for (bad, word) in [
+            ("spp = 0", "spp"),
+            ("max_depth = 65", "max_depth"),
+            ("packet = 4", "packet"),
+        ] {
+            let text = format!(
+                "{BASE}tracers = [\"reference\"]\nrender = {{ renderer = \"path\", {bad} }}\n"
             );
             let msg = usage_message(parse(&text).unwrap_err());
             assert!(

@@ -85,7 +85,10 @@ fn remove_abandoned(parent: &Path) {
         let path = entry.path();
         let proc = Path::new("/proc");
         if !proc.is_dir() {
-            eprintln!("raylab: {} holds partial results of an earlier run", path.display());
+            eprintln!(
+                "raylab: {} holds partial results of an earlier run",
+                path.display()
+            );
         } else if pid.is_none_or(|pid| !proc.join(pid.to_string()).exists()) {
             match fs::remove_dir_all(&path) {
                 Ok(()) => eprintln!(

@@ -22,7 +22,7 @@ use crate::random::mix64;
 use crate::render::area_light::soft_shadow_points;
 use crate::render::assembly::BatchKind;
 use crate::render::convergence::reference_image;
-use crate::render::distribution::{render_distribution, DrtSettings, FrameGeometry};
+use crate::render::distribution::{render_sampled, DrtSettings, FrameGeometry};
 use crate::render::image::Image;
 use crate::render::motion::{tracer_for_motion, MovingMesh};
 use crate::render::rays::{diffuse_rays, primary_rays, shadow_rays};
@@ -412,7 +412,7 @@ impl RenderJob<'_> {
                 })
             }
             RenderWorkload::Distribution(w) => {
-                let out = render_distribution(
+                let out = render_sampled(
                     self.scene,
                     self.frame,
                     FrameGeometry::of(self.frame, self.moving),

@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 
 use crate::error::{Error, Result};
 use crate::random::mix64;
-use crate::render::distribution::{render_distribution, DrtFrame, DrtSettings, FrameGeometry};
+use crate::render::distribution::{render_sampled, DrtFrame, DrtSettings, FrameGeometry};
 use crate::render::image::Image;
 use crate::render::motion::MovingMesh;
 use crate::render::wavefront::Tracing;
@@ -131,7 +131,7 @@ pub fn reference_image(
         spp: REFERENCE_SPP,
         ..*settings
     };
-    let image = render_distribution(
+    let image = render_sampled(
         scene,
         frame,
         geometry,
@@ -212,7 +212,7 @@ pub fn error_against_time(
     spps.iter()
         .map(|&spp| {
             let run = DrtSettings { spp, ..*settings };
-            let rendered = render_distribution(
+            let rendered = render_sampled(
                 scene,
                 frame,
                 FrameGeometry::of(frame, motion),
