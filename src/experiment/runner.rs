@@ -462,7 +462,7 @@ impl RenderJob<'_> {
         Ok((out, start.elapsed().as_secs_f64()))
     }
 
-    /// A distribution frame's RMSE against the reference image of the same settings, cached
+    /// A distribution or path frame's RMSE against the reference image of the same settings, cached
     /// under the results root (rendered with the reference tracer on first use); `None` for
     /// other renderers.
     fn rmse(&self, image: &Image) -> Result<Option<f64>> {

@@ -1,5 +1,6 @@
-//! Error against run time for distribution ray tracing (issue item 9): each sample count's image
-//! is compared with a high-sample reference image by RMSE, next to the time it took.
+//! Error against run time for distribution ray tracing (issue item 9) and path tracing (Gribble &
+//! Ramani 2008 §4): each sample count's image is compared with a high-sample reference image of
+//! the same integrator by RMSE, next to the time it took.
 //!
 //! The reference (`REFERENCE_SPP` samples per pixel, reference tracer) is expensive, so it is
 //! rendered once and cached on disk under `<results root>/cache/drt-reference/`. The cache key is
