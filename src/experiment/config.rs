@@ -149,6 +149,9 @@ pub struct DistributionWorkload {
     /// Shutter interval in seconds of the scene's animation from the frame's time (motion blur);
     /// the tracers then run over the moving geometry (`render::motion`).
     pub shutter: Option<f32>,
+    /// Whether frame rows carry the RMSE against the cached high-spp reference image (`rmse =
+    /// false` in the `render` table skips the reference, for workloads measured for speed only).
+    pub rmse: bool,
 }
 
 impl DistributionWorkload {
@@ -158,7 +161,9 @@ impl DistributionWorkload {
             spp: 0,
             ..w.settings
         };
-        with_spp(self) == with_spp(other) && self.shutter == other.shutter
+        with_spp(self) == with_spp(other)
+            && self.shutter == other.shutter
+            && self.rmse == other.rmse
     }
 }
 
@@ -184,11 +189,12 @@ impl fmt::Display for RenderWorkload {
             ),
             RenderWorkload::Distribution(w) => write!(
                 f,
-                "renderer={};aperture={};focus={};max_depth={};shutter={};spp={}",
+                "renderer={};aperture={};focus={};max_depth={}{};shutter={};spp={}",
                 w.settings.integrator.name(),
                 camera(w.settings.aperture),
                 camera(w.settings.focus_distance),
                 w.settings.max_depth,
+                if w.rmse { "" } else { ";rmse=false" },
                 w.shutter.map_or("none".to_string(), |s| s.to_string()),
                 w.settings.spp
             ),
@@ -211,9 +217,19 @@ fn distribution_workload(integrator: Integrator, params: &Params) -> Result<Dist
             }
         },
     };
+    let rmse = match settings.0.remove("rmse").as_deref() {
+        None | Some("true") => true,
+        Some("false") => false,
+        Some(value) => {
+            return Err(Error::usage(format!(
+                "render rmse = {value:?} is not valid (true or false)"
+            )))
+        }
+    };
     Ok(DistributionWorkload {
-        settings: DrtSettings::from_params(integrator, &settings, &["shutter"])?,
+        settings: DrtSettings::from_params(integrator, &settings, &["shutter", "rmse"])?,
         shutter,
+        rmse,
     })
 }
 
@@ -1263,10 +1279,19 @@ mod tests {
         let RenderWorkload::Distribution(w) = exp.renders[1] else {
             panic!("a sampled workload")
         };
-        assert_eq!(w.settings.integrator, Integrator::Path);
+        assert_eq!((w.settings.integrator, w.rmse), (Integrator::Path, true));
+        let text = format!(
+            "{BASE}tracers = [\"reference\"]\nrender = {{ renderer = \"path\", rmse = false }}\n"
+        );
+        let exp = parse(&text).unwrap();
+        assert_eq!(
+            exp.renders[0].to_string(),
+            "renderer=path;aperture=camera;focus=camera;max_depth=5;rmse=false;shutter=none;spp=16"
+        );
         for (bad, word) in [
             ("spp = 0", "spp"),
             ("max_depth = 65", "max_depth"),
+            ("rmse = 1", "rmse"),
             ("packet = 4", "packet"),
         ] {
             let text = format!(

@@ -78,6 +78,9 @@ fn spp_groups(exp: &Experiment) -> Vec<Vec<usize>> {
         let RenderWorkload::Distribution(w) = workload else {
             continue;
         };
+        if !w.rmse {
+            continue;
+        }
         let same = |&&i: &&usize| matches!(&exp.renders[i], RenderWorkload::Distribution(v) if v.same_but_spp(w));
         match groups
             .iter_mut()

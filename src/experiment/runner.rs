@@ -469,6 +469,9 @@ impl RenderJob<'_> {
         let RenderWorkload::Distribution(w) = self.workload else {
             return Ok(None);
         };
+        if !w.rmse {
+            return Ok(None);
+        }
         let (reference, _) = reference_image(
             self.scene,
             self.frame,
