@@ -13,6 +13,7 @@ use raylab::render::assembly::Assembly;
 use raylab::render::distribution::{render_sampled, DrtSettings, FrameGeometry, Integrator};
 use raylab::render::image::Image;
 use raylab::render::motion::MovingMesh;
+use raylab::render::path::ShadeStreams;
 use raylab::render::raycast::render_raycast;
 use raylab::render::wavefront::Tracing;
 use raylab::render::whitted::{
@@ -436,7 +437,13 @@ fn render_drt(
         None => None,
     };
     let geometry = FrameGeometry::of(frame, moving.as_ref());
-    let tracer = geometry.tracer(tracer, params)?;
+    let built = geometry.tracer(tracer, params)?;
+    // Path tracing shades in the stream tracer's streams (counters only).
+    let settings = &DrtSettings {
+        shade: ShadeStreams::of_tracer(tracer, params, built.chunk_rays()),
+        ..*settings
+    };
+    let tracer = built;
     let drt = render_sampled(
         scene,
         frame,

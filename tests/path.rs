@@ -350,3 +350,55 @@ fn rmse_falls_as_one_over_root_spp() {
         assert!((0.35..=0.65).contains(&ratio), "{rmse:?}: ratio {ratio}");
     }
 }
+
+/// Shading runs as Fig. 4's filter stack over streams of the bounce's rays: the image does not
+/// depend on the stream size or width, the counted closest-hit batches carry the shading
+/// filters' counts (every ray passes at least the miss or hit filter), utilisation is at most 1,
+/// and longer initial streams give longer shading streams (Gribble & Ramani Table 4's trend).
+#[test]
+fn shading_filters_are_counted_and_do_not_change_the_image() {
+    use raylab::render::path::ShadeStreams;
+    use raylab::stats::Event;
+    let scene = three_material_room();
+    let frame = scene.frame(0, 1);
+    let tracer = tracer_for_frame("stream", &Params::new(), &frame).unwrap();
+    let run = |stream: usize, width: usize| {
+        let settings = DrtSettings {
+            shade: ShadeStreams { stream, width },
+            ..path_settings(48, 32, 4, 4)
+        };
+        render_sampled(
+            &scene,
+            &frame,
+            FrameGeometry::Static(&frame.mesh),
+            tracer.as_ref(),
+            &settings,
+            Tracing::Counted,
+        )
+        .unwrap()
+    };
+    let mut lengths = Vec::new();
+    let mut image = None;
+    for (stream, width) in [(16, 16), (1024, 16), (4096, 16), (4096, 8)] {
+        let out = run(stream, width);
+        if let Some(first) = &image {
+            assert!(out.image == *first, "stream {stream}, width {width}");
+        }
+        image.get_or_insert(out.image.clone());
+        let (mut filters, mut active, mut issued) = (0, 0, 0);
+        for b in out.batches.iter().filter(|b| b.kind.name() != "shadow") {
+            let c = &b.counters;
+            assert!(c.get(Event::ShadeLanesActive) >= b.rays as u64, "{b:?}");
+            filters += c.get(Event::ShadeFilters);
+            active += c.get(Event::ShadeLanesActive);
+            issued += c.get(Event::ShadeLanesIssued);
+        }
+        assert!(active <= issued && issued < active + filters * width as u64);
+        lengths.push(active as f64 / filters as f64);
+    }
+    assert!(
+        lengths[0] < lengths[1] && lengths[1] < lengths[2],
+        "{lengths:?}"
+    );
+    assert!(lengths[0] <= 16.0, "{lengths:?}");
+}

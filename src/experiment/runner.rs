@@ -25,6 +25,7 @@ use crate::render::convergence::reference_image;
 use crate::render::distribution::{render_sampled, DrtSettings, FrameGeometry};
 use crate::render::image::Image;
 use crate::render::motion::{tracer_for_motion, MovingMesh};
+use crate::render::path::ShadeStreams;
 use crate::render::rays::{diffuse_rays, primary_rays, shadow_rays};
 use crate::render::specular::specular_rays;
 use crate::render::wavefront::{BatchRecord, Tracing, Work};
@@ -318,6 +319,11 @@ impl Measure<'_> {
             tracer: motion_tracer.as_deref().unwrap_or(self.tracer),
             exp: self.exp,
             workload,
+            shade: ShadeStreams::of_tracer(
+                instance.info.name,
+                &instance.params,
+                self.tracer.chunk_rays(),
+            ),
         };
         let timed = self
             .at_every_pool(&label, |pool| job.time(pool))
@@ -381,14 +387,17 @@ struct RenderJob<'a> {
     tracer: &'a dyn Tracer,
     exp: &'a Experiment,
     workload: &'a RenderWorkload,
+    /// How a path workload groups its shading: the stream tracer's own streams and width.
+    shade: ShadeStreams,
 }
 
 impl RenderJob<'_> {
-    /// A distribution workload's settings at the experiment's resolution.
+    /// A distribution or path workload's settings at the experiment's resolution.
     fn drt_settings(&self, w: &DistributionWorkload) -> DrtSettings {
         DrtSettings {
             width: self.exp.width,
             height: self.exp.height,
+            shade: self.shade,
             ..w.settings
         }
     }

@@ -18,6 +18,7 @@ use crate::random::mix64;
 use crate::render::distribution::{render_sampled, DrtFrame, DrtSettings, FrameGeometry};
 use crate::render::image::Image;
 use crate::render::motion::MovingMesh;
+use crate::render::path::ShadeStreams;
 use crate::render::wavefront::Tracing;
 use crate::scene::{Frame, Mesh, Scene};
 use crate::tracers::{Params, Tracer};
@@ -66,6 +67,7 @@ pub fn reference_key(
         frame.camera,
         DrtSettings {
             spp: REFERENCE_SPP,
+            shade: ShadeStreams::default(),
             ..*settings
         }
     );

@@ -30,12 +30,15 @@ use crate::render::glossy::sample_phong_lobe;
 use crate::render::image::Image;
 use crate::render::interleaved::{SampleTable, DIMENSION_PAIRS};
 use crate::render::motion::{tracer_for_motion, MovingMesh};
-use crate::render::path::{render_path, PATH_DEFAULT_DEPTH, PATH_KINDS, PATH_MAX_DEPTH};
+use crate::render::path::{
+    render_path, ShadeStreams, PATH_DEFAULT_DEPTH, PATH_KINDS, PATH_MAX_DEPTH,
+};
 use crate::render::rays::{morton_decode, CameraProjection, SurfacePoint, TILE};
 use crate::render::shading::{specular_response, AMBIENT, BACKGROUND};
 use crate::render::specular::{reflect, reflection_ray};
 use crate::render::wavefront::{trace, Answers, BatchRecord, Tracing, Work};
 use crate::scene::{Camera, Frame, Scene};
+use crate::stats::Counters;
 use crate::tracers::visibility::{LightSamples, QuadLight, ShadingPoint, ShadingPoints};
 use crate::tracers::{tracer_for_mesh, Params, Tracer, VisibilityQuery};
 
@@ -92,6 +95,9 @@ impl Integrator {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct DrtSettings {
     pub integrator: Integrator,
+    /// Path tracing: how shading is grouped into streams (counters only; set by the runner from
+    /// the stream tracer's parameters).
+    pub shade: ShadeStreams,
     pub width: u32,
     pub height: u32,
     /// Samples per pixel: a perfect square (1, 4, 16, 64, ...).
@@ -110,6 +116,7 @@ impl Default for DrtSettings {
     fn default() -> Self {
         DrtSettings {
             integrator: Integrator::Distribution,
+            shade: ShadeStreams::default(),
             width: 256,
             height: 256,
             spp: 16,
@@ -170,6 +177,8 @@ impl DrtSettings {
         if self.width == 0
             || self.height == 0
             || self.spp == 0
+            || self.shade.stream == 0
+            || self.shade.width == 0
             || !lens_ok
             || self.max_depth > max_depth
         {
@@ -281,6 +290,13 @@ impl Records {
         let packets = batch.packet_start.iter().filter(|s| **s).count();
         let work = Work::of_batch(batch);
         self.trace(tracer, work, generation.kind, packets, depth, tracing)
+    }
+
+    /// Adds `counters` (the shading filters') to the record of `kind` at `depth`.
+    pub(crate) fn count(&mut self, depth: u32, kind: BatchKind, counters: &Counters) {
+        if let Some(record) = self.batches.get_mut(&(depth, kind)) {
+            record.counters.merge(counters);
+        }
     }
 
     /// The finished frame: `sum` (per pixel, over `spp` samples) averaged into its image.

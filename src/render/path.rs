@@ -9,10 +9,14 @@
 //! pixel · spp + sample, dimension)`, the dimension fixed per bounce and use: the image depends
 //! on the hits alone, not on the tracer, the thread count or the wave size.
 //!
-//! Per hit, in the order of the filter stack of Fig. 4: misses take the background; rays after
-//! the camera or a specular (delta) bounce that cross a quad light take its emission ("light
-//! hits": lights are not geometry, they neither block nor end a path); surface emission is added;
-//! then the material's own split. Materials map from `scene::Material` as follows:
+//! Shading runs as the filter stack of Fig. 4 over streams of `ShadeStreams::stream` consecutive
+//! rays of a bounce: rays after the camera or a specular (delta) bounce that cross a quad light
+//! take its emission ("light hits": lights are not geometry, they neither block nor end a path);
+//! misses take the background; hits add their surface's emission; then each material shader runs
+//! over its own sub-stream (next-event estimation, then the next ray). Each filter's sub-stream is
+//! counted as SIMD work of width `ShadeStreams::width` (events `shade_*`, Tables 3 and 4's S and
+//! shade columns). Shadow rays are a separate query per light, not a filter of the stream.
+//! Materials map from `scene::Material` as follows:
 //!
 //! * `dielectric = Some((ior, transmittance))` → **dielectric**: Fresnel reflection (exact,
 //!   `shading::fresnel_dielectric`) or Snell refraction, chosen with probability F, refraction
@@ -41,6 +45,7 @@ use glam::Vec3;
 use crate::error::Result;
 use crate::geometry::{Ray, RayBatch, RayKind};
 use crate::render::area_light::sample_light;
+use crate::render::assembly::BatchKind;
 use crate::render::distribution::{DrtFrame, DrtSettings, FrameGeometry, Records};
 use crate::render::rays::{morton_decode, CameraProjection, SurfacePoint, TILE};
 use crate::render::sampling::{cosine_hemisphere, uniform};
@@ -48,8 +53,10 @@ use crate::render::shading::{fresnel_dielectric, BACKGROUND};
 use crate::render::specular::{reflect, reflection_ray, refract, refraction_ray, relative_ior};
 use crate::render::wavefront::{Answers, Tracing, Work};
 use crate::scene::{Frame, Light, Material, Scene};
+use crate::stats::{Counters, Event, Stats};
+use crate::tracers::stream::{StreamConfig, StreamSize};
 use crate::tracers::visibility::{LightSamples, QuadLight, ShadingPoint, ShadingPoints};
-use crate::tracers::{Tracer, VisibilityQuery};
+use crate::tracers::{Params, Tracer, VisibilityQuery};
 
 /// The kinds of rays a path-traced frame traces: camera rays, shadow rays (next-event
 /// estimation) and path rays (every bounce after the camera, whatever lobe sampled it).
@@ -128,6 +135,86 @@ struct LightQuery {
     last_pixel: Option<u32>,
 }
 
+/// The material shaders of §4, each a filter of the stack (Fig. 4: "the remaining rays are then
+/// processed by the shader").
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Shader {
+    Lambertian,
+    CoupledGlossy,
+    Dielectric,
+}
+
+impl Shader {
+    pub const ALL: [Shader; 3] = [
+        Shader::Lambertian,
+        Shader::CoupledGlossy,
+        Shader::Dielectric,
+    ];
+}
+
+/// How the path renderer groups its shading (Gribble & Ramani 2008 §3.2, Fig. 4): streams of
+/// `stream` consecutive rays of a bounce's batch go through the filter stack, each filter's
+/// sub-stream processed `width` at a time. Only the shading counters depend on it, not the image.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ShadeStreams {
+    pub stream: usize,
+    pub width: usize,
+}
+
+impl Default for ShadeStreams {
+    /// The stream tracer's defaults: 64×64 initial streams, N = 16.
+    fn default() -> Self {
+        ShadeStreams {
+            stream: 4096,
+            width: 16,
+        }
+    }
+}
+
+impl ShadeStreams {
+    /// The streams and width of tracer `name` with `params` when it is the stream filtering
+    /// tracer (a `frame` stream: its work chunk of `chunk_rays`), else the defaults.
+    pub fn of_tracer(name: &str, params: &Params, chunk_rays: usize) -> ShadeStreams {
+        match (name, StreamConfig::from_params(params)) {
+            ("stream", Ok(config)) => ShadeStreams {
+                stream: match config.stream {
+                    StreamSize::Rays(n) => n,
+                    StreamSize::Frame => chunk_rays,
+                },
+                width: config.width,
+            },
+            _ => ShadeStreams::default(),
+        }
+    }
+}
+
+/// The shading filters' counters: sub-streams, their rays and the SIMD lanes they issue.
+struct ShadeCounts {
+    width: usize,
+    counters: Counters,
+}
+
+impl ShadeCounts {
+    fn new(width: usize) -> Self {
+        ShadeCounts {
+            width,
+            counters: Counters::default(),
+        }
+    }
+
+    /// Books one shading operation over the sub-stream `rays` and hands it back to run.
+    fn filter<'a>(&mut self, rays: &'a [usize]) -> &'a [usize] {
+        if !rays.is_empty() {
+            let issued = rays.len().div_ceil(self.width) * self.width;
+            self.counters.event(Event::ShadeFilters, 1);
+            self.counters
+                .event(Event::ShadeLanesActive, rays.len() as u64);
+            self.counters.event(Event::ShadeLanesIssued, issued as u64);
+        }
+        rays
+    }
+}
+
 /// How a surface scatters (the material mapping of the module comment).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Bsdf {
@@ -145,6 +232,17 @@ pub enum Bsdf {
 }
 
 impl Bsdf {
+    /// The shader that runs it.
+    pub fn shader(&self) -> Shader {
+        match self {
+            Bsdf::Dielectric { .. } => Shader::Dielectric,
+            Bsdf::Opaque { glossy: None, .. } => Shader::Lambertian,
+            Bsdf::Opaque {
+                glossy: Some(_), ..
+            } => Shader::CoupledGlossy,
+        }
+    }
+
     pub fn of(m: &Material) -> Bsdf {
         match m.dielectric {
             Some((ior, transmittance)) => Bsdf::Dielectric { ior, transmittance },
@@ -373,6 +471,7 @@ pub fn render_path(
         .flat_map(|ty| (0..tiles_x).map(move |tx| (tx, ty)))
         .collect();
     let bsdfs: Vec<Bsdf> = scene.materials.iter().map(Bsdf::of).collect();
+    let has_quad_light = scene.quad_light().is_some();
 
     let mut sum = vec![Vec3::ZERO; (settings.width * settings.height) as usize];
     let mut records = Records::default();
@@ -423,83 +522,147 @@ pub fn render_path(
             else {
                 unreachable!("camera and path rays are traced for closest hits")
             };
-            let mut shadows: Vec<LightQuery> =
-                scene.lights.iter().map(|_| LightQuery::default()).collect();
-            let mut next = Generation::new(RayKind::Diffuse);
             let base = DIMS_BEFORE_BOUNCES + DIMS_PER_BOUNCE * depth;
-            for (i, hit) in hits.iter().enumerate() {
-                let p = current.served[i];
-                let state = paths[p];
-                let ray = current.batch.ray(i);
-                // Fig. 4's filters: light hits (after specular bounces), then misses.
-                let t_max = if hit.is_hit() { hit.t } else { ray.tmax };
-                if state.specular {
-                    colour[p] += state.weight * light_hits(&scene.lights, &ray, t_max);
-                }
-                if !hit.is_hit() {
-                    colour[p] += state.weight * BACKGROUND;
-                    continue;
-                }
-                let (triangle, material) = geometry.triangle(hit.prim, ray.time);
-                let surface = SurfacePoint::on_triangle(&triangle, &ray, hit);
-                let (m, bsdf) = (
-                    &scene.materials[material as usize],
-                    &bsdfs[material as usize],
-                );
-                colour[p] += state.weight * m.emission;
-                let u = |k: u32| uniform(seed, state.index, base + k);
-
-                // Next-event estimation for the non-delta lobes: one point on each light.
-                if matches!(bsdf, Bsdf::Opaque { .. }) {
-                    let (s, t) = (u(LIGHT), u(LIGHT + 1));
-                    for (light, query) in scene.lights.iter().zip(&mut shadows) {
-                        let Some(ls) = sample_light(light, surface.p, surface.n, s, t) else {
-                            continue;
+            let ray_of = |i: usize| current.batch.ray(i);
+            // Per ray of the batch, what the filter stages leave for the ones after: the surface
+            // it hit (with the triangle's normal and the material), its next ray; and the
+            // next-event samples as (ray, light, sample, colour if visible).
+            let mut surfaces: Vec<Option<(SurfacePoint, Vec3, u32)>> = vec![None; hits.len()];
+            let mut scattered: Vec<Option<Ray>> = vec![None; hits.len()];
+            let mut nee: Vec<(usize, usize, [f32; 2], Vec3)> = Vec::new();
+            let mut shade = ShadeCounts::new(settings.shade.width);
+            let all: Vec<usize> = (0..hits.len()).collect();
+            for stream in all.chunks(settings.shade.stream) {
+                // Fig. 4's filter stack, in order: light hits (rays after the camera or a
+                // specular bounce that cross a quad light) …
+                if has_quad_light {
+                    let lit: Vec<usize> = stream
+                        .iter()
+                        .copied()
+                        .filter(|&i| paths[current.served[i]].specular)
+                        .collect();
+                    for &i in shade.filter(&lit) {
+                        let (p, ray) = (current.served[i], ray_of(i));
+                        let t_max = if hits[i].is_hit() {
+                            hits[i].t
+                        } else {
+                            ray.tmax
                         };
-                        let wi = (ls.point - surface.p).normalize_or_zero();
-                        let carries =
-                            state.weight * bsdf.eval(surface.n, -ray.dir, wi) * ls.incident;
-                        if carries.max_element() > 0.0 {
-                            query.push(&surface, [s, t], p, &state, carries);
+                        colour[p] += paths[p].weight * light_hits(&scene.lights, &ray, t_max);
+                    }
+                }
+                // … misses …
+                let (missed, hit): (Vec<usize>, Vec<usize>) =
+                    stream.iter().partition(|&&i| !hits[i].is_hit());
+                for &i in shade.filter(&missed) {
+                    let p = current.served[i];
+                    colour[p] += paths[p].weight * BACKGROUND;
+                }
+                // … the surfaces hit and their emission …
+                for &i in shade.filter(&hit) {
+                    let (p, ray) = (current.served[i], ray_of(i));
+                    let (triangle, material) = geometry.triangle(hits[i].prim, ray.time);
+                    let surface = SurfacePoint::on_triangle(&triangle, &ray, &hits[i]);
+                    colour[p] += paths[p].weight * scene.materials[material as usize].emission;
+                    surfaces[i] = Some((surface, triangle.normal(), material));
+                }
+                // … then the material's own split: each shader's rays shaded together.
+                for shader in Shader::ALL {
+                    let of_shader: Vec<usize> = hit
+                        .iter()
+                        .copied()
+                        .filter(|&i| {
+                            surfaces[i]
+                                .is_some_and(|(_, _, m)| bsdfs[m as usize].shader() == shader)
+                        })
+                        .collect();
+                    // Next-event estimation for the non-delta lobes: one point on each light.
+                    if shader != Shader::Dielectric {
+                        for &i in shade.filter(&of_shader) {
+                            let Some((surface, _, material)) = surfaces[i] else {
+                                continue;
+                            };
+                            let (p, ray) = (current.served[i], ray_of(i));
+                            let index = paths[p].index;
+                            let u = |k: u32| uniform(seed, index, base + k);
+                            let (s, t) = (u(LIGHT), u(LIGHT + 1));
+                            for (l, light) in scene.lights.iter().enumerate() {
+                                let Some(ls) = sample_light(light, surface.p, surface.n, s, t)
+                                else {
+                                    continue;
+                                };
+                                let wi = (ls.point - surface.p).normalize_or_zero();
+                                let f = bsdfs[material as usize].eval(surface.n, -ray.dir, wi);
+                                let carries = paths[p].weight * f * ls.incident;
+                                if carries.max_element() > 0.0 {
+                                    nee.push((i, l, [s, t], carries));
+                                }
+                            }
                         }
                     }
-                }
-
-                if depth == settings.max_depth {
-                    continue;
-                }
-                let Some(scatter) = sample_bsdf(
-                    bsdf,
-                    ray.dir,
-                    surface.n,
-                    triangle.normal(),
-                    u(LOBE),
-                    u(SUB_LOBE),
-                    (u(DIRECTION), u(DIRECTION + 1)),
-                ) else {
-                    continue;
-                };
-                let mut weight = state.weight * scatter.weight;
-                if depth + 1 >= RR_DEPTH {
-                    let survive = weight.max_element().min(1.0);
-                    if u(ROULETTE) >= survive {
+                    if depth == settings.max_depth {
                         continue;
                     }
-                    weight /= survive;
+                    for &i in shade.filter(&of_shader) {
+                        let Some((surface, geometric, material)) = surfaces[i] else {
+                            continue;
+                        };
+                        let (p, ray) = (current.served[i], ray_of(i));
+                        let state = paths[p];
+                        let u = |k: u32| uniform(seed, state.index, base + k);
+                        let Some(scatter) = sample_bsdf(
+                            &bsdfs[material as usize],
+                            ray.dir,
+                            surface.n,
+                            geometric,
+                            u(LOBE),
+                            u(SUB_LOBE),
+                            (u(DIRECTION), u(DIRECTION + 1)),
+                        ) else {
+                            continue;
+                        };
+                        let mut weight = state.weight * scatter.weight;
+                        if depth + 1 >= RR_DEPTH {
+                            let survive = weight.max_element().min(1.0);
+                            if u(ROULETTE) >= survive {
+                                continue;
+                            }
+                            weight /= survive;
+                        }
+                        if !weight.is_finite() || weight.max_element() <= 0.0 {
+                            continue;
+                        }
+                        paths[p] = PathState {
+                            weight,
+                            specular: scatter.specular,
+                            ..state
+                        };
+                        scattered[i] = Some(match scatter.transmitted {
+                            true => refraction_ray(&surface, scatter.dir),
+                            false => reflection_ray(&surface, scatter.dir),
+                        });
+                    }
                 }
-                if !weight.is_finite() || weight.max_element() <= 0.0 {
-                    continue;
+            }
+            if tracing == Tracing::Counted {
+                records.count(depth, BatchKind::Rays(kind), &shade.counters);
+            }
+            // The next batch and the shadow queries in the batch's order (pixels together).
+            let mut next = Generation::new(RayKind::Diffuse);
+            for (i, ray) in scattered.iter().enumerate() {
+                if let Some(ray) = ray {
+                    let p = current.served[i];
+                    next.push(*ray, p, &paths[p]);
                 }
-                paths[p] = PathState {
-                    weight,
-                    specular: scatter.specular,
-                    ..state
-                };
-                let ray = match scatter.transmitted {
-                    true => refraction_ray(&surface, scatter.dir),
-                    false => reflection_ray(&surface, scatter.dir),
-                };
-                next.push(ray, p, &paths[p]);
+            }
+            nee.sort_by_key(|&(i, l, _, _)| (i, l));
+            let mut shadows: Vec<LightQuery> =
+                scene.lights.iter().map(|_| LightQuery::default()).collect();
+            for (i, l, sample, carries) in nee {
+                if let Some((surface, _, _)) = &surfaces[i] {
+                    let p = current.served[i];
+                    shadows[l].push(surface, sample, p, &paths[p], carries);
+                }
             }
             for (light, query) in scene.lights.iter().zip(&mut shadows) {
                 if query.points.is_empty() {
