@@ -1,7 +1,8 @@
 //! The path tracer (Gribble & Ramani 2008 §4; `render::path`): every tracer renders the same
 //! image from the same rays and samples; energy tests with closed enclosures of known radiance
 //! (white furnace, glass slab); next-event estimation agrees with hitting an emitting surface;
-//! the error against a high-sample image falls as 1/√spp.
+//! the error against a high-sample image falls as 1/√spp; shading runs as a counted filter stack
+//! that does not change the image.
 
 use glam::Vec3;
 use raylab::geometry::Triangle;
