@@ -12,9 +12,10 @@ use raylab::experiment::{run_experiment, RunOverrides};
 use raylab::geometry::ray_file::{hits_csv, occlusion_csv, read_rays};
 use raylab::geometry::RayKind;
 use raylab::render::assembly::Assembly;
-use raylab::render::distribution::{render_distribution, DrtSettings, FrameGeometry, DRT_KINDS};
+use raylab::render::distribution::{render_sampled, DrtSettings, FrameGeometry, Integrator};
 use raylab::render::image::Image;
 use raylab::render::motion::MovingMesh;
+use raylab::render::path::ShadeStreams;
 use raylab::render::raycast::render_raycast;
 use raylab::render::wavefront::Tracing;
 use raylab::render::whitted::{
@@ -92,7 +93,7 @@ enum Command {
         #[arg(long, value_enum, default_value_t = Renderer::Raycast)]
         renderer: Renderer,
         /// Whitted: deepest reflection/refraction generation (default 5; 0 = ray casting with
-        /// shadows). Distribution: reflection bounces (default 2).
+        /// shadows). Distribution: reflection bounces (default 2). Path: bounces (default 5).
         #[arg(long)]
         max_depth: Option<u32>,
         #[command(flatten)]
@@ -171,6 +172,9 @@ enum Renderer {
     Whitted,
     /// Distribution ray tracing (Boulos 2007 §4): depth of field, glossy, soft shadows, motion blur.
     Distribution,
+    /// Monte Carlo path tracing (Gribble & Ramani 2008 §4): Lambertian, dielectric and coupled
+    /// glossy (Ashikhmin–Shirley) materials, thin lens, next-event estimation, Russian roulette.
+    Path,
 }
 
 /// Whitted ray tracing options of `render --renderer whitted`.
@@ -205,7 +209,7 @@ struct WhittedArgs {
 /// Distribution ray tracing options of `render --renderer distribution`.
 #[derive(clap::Args)]
 struct DrtArgs {
-    /// Distribution: samples per pixel (a perfect square).
+    /// Distribution: samples per pixel (a perfect square). Path: samples per pixel (any ≥ 1).
     #[arg(long, default_value_t = 16)]
     spp: u32,
     /// Distribution: lens radius (default: the camera's; 0 = pinhole).
@@ -287,7 +291,7 @@ fn execute(command: Command) -> Result<bool> {
         } => {
             check_frame(frame, frames)?;
             let samples = match renderer {
-                Renderer::Distribution => drt.spp as u64,
+                Renderer::Distribution | Renderer::Path => drt.spp as u64,
                 _ => 1,
             };
             let rays = width as u64 * height as u64 * samples;
@@ -316,14 +320,23 @@ fn execute(command: Command) -> Result<bool> {
                         &whitted,
                     )?
                 }
-                Renderer::Distribution => {
+                Renderer::Distribution | Renderer::Path => {
+                    let integrator = match renderer {
+                        Renderer::Path => Integrator::Path,
+                        _ => Integrator::Distribution,
+                    };
+                    let default_depth = match integrator {
+                        Integrator::Path => raylab::render::path::PATH_DEFAULT_DEPTH,
+                        Integrator::Distribution => DrtSettings::default().max_depth,
+                    };
                     let settings = DrtSettings {
+                        integrator,
                         width,
                         height,
                         spp: drt.spp,
                         aperture: drt.aperture,
                         focus_distance: drt.focus,
-                        max_depth: max_depth.unwrap_or(DrtSettings::default().max_depth),
+                        max_depth: max_depth.unwrap_or(default_depth),
                         ..DrtSettings::default()
                     };
                     render_drt(&scene, &frame, (&tracer, &params), &settings, drt.shutter)?
@@ -496,7 +509,7 @@ fn render_whitted_cli(
     Ok(out.image)
 }
 
-/// Renders a distribution frame with tracer `(name, params)`, over the geometry moving during
+/// Renders a distribution or path-traced frame with tracer `(name, params)`, over the geometry moving during
 /// `shutter` seconds from the frame's time when given (motion blur).
 fn render_drt(
     scene: &Scene,
@@ -510,8 +523,14 @@ fn render_drt(
         None => None,
     };
     let geometry = FrameGeometry::of(frame, moving.as_ref());
-    let tracer = geometry.tracer(tracer, params)?;
-    let drt = render_distribution(
+    let built = geometry.tracer(tracer, params)?;
+    // Path tracing shades in the stream tracer's streams (counters only).
+    let settings = &DrtSettings {
+        shade: ShadeStreams::of_tracer(tracer, params, built.chunk_rays()),
+        ..*settings
+    };
+    let tracer = built;
+    let drt = render_sampled(
         scene,
         frame,
         geometry,
@@ -519,7 +538,7 @@ fn render_drt(
         settings,
         Tracing::Timed,
     )?;
-    for kind in DRT_KINDS {
+    for kind in settings.integrator.kinds() {
         let t = drt.totals(kind);
         println!(
             "{:<10} {:>11} rays {:>9} packets {:>9.3} s",

@@ -46,10 +46,19 @@ pub enum Event {
     /// SIMD lanes intersection issues: the SIMD width per group and triangle.
     /// `IntersectionLanesActive / IntersectionLanesIssued` = intersection's SIMD utilisation.
     IntersectionLanesIssued,
+    /// Shading filters run by the path renderer (`render::path`, Gribble & Ramani 2008 Fig. 4):
+    /// one per non-empty sub-stream a shading operation runs over. Recorded on the bounce's
+    /// closest-hit batch. `ShadeLanesActive / ShadeFilters` = the mean shading stream length.
+    ShadeFilters,
+    /// Rays in the shading filters' sub-streams.
+    ShadeLanesActive,
+    /// SIMD lanes shading issues: each sub-stream rounded up to whole groups of the SIMD width.
+    /// `ShadeLanesActive / ShadeLanesIssued` = shading's SIMD utilisation.
+    ShadeLanesIssued,
 }
 
 impl Event {
-    pub const ALL: [Event; 13] = [
+    pub const ALL: [Event; 16] = [
         Event::Packets,
         Event::MailboxHits,
         Event::TrianglesCulled,
@@ -63,6 +72,9 @@ impl Event {
         Event::TraversalLanesIssued,
         Event::IntersectionLanesActive,
         Event::IntersectionLanesIssued,
+        Event::ShadeFilters,
+        Event::ShadeLanesActive,
+        Event::ShadeLanesIssued,
     ];
     pub const COUNT: usize = Event::ALL.len();
 
@@ -82,6 +94,9 @@ impl Event {
             Event::TraversalLanesIssued => "traversal_lanes_issued",
             Event::IntersectionLanesActive => "intersection_lanes_active",
             Event::IntersectionLanesIssued => "intersection_lanes_issued",
+            Event::ShadeFilters => "shade_filters",
+            Event::ShadeLanesActive => "shade_lanes_active",
+            Event::ShadeLanesIssued => "shade_lanes_issued",
         }
     }
 }

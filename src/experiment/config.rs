@@ -86,7 +86,7 @@ use toml::Spanned;
 use crate::accel::AccelKind;
 use crate::error::{Error, Result};
 use crate::geometry::RayKind;
-use crate::render::distribution::DrtSettings;
+use crate::render::distribution::{DrtSettings, Integrator};
 use crate::render::interleaved::SampleTable;
 use crate::render::whitted::WhittedSettings;
 use crate::tracers::visibility::LightSamples;
@@ -155,14 +155,18 @@ pub enum RenderWorkload {
     Distribution(DistributionWorkload),
 }
 
-/// A distribution ray tracing workload (Boulos et al. 2007 §4). Its `settings` carry no image
-/// size: the runner renders at the experiment's resolution.
+/// A distribution ray tracing workload (Boulos et al. 2007 §4) or, with `settings.integrator`
+/// `Path`, a path tracing one (Gribble & Ramani 2008 §4). Its `settings` carry no image size: the
+/// runner renders at the experiment's resolution.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct DistributionWorkload {
     pub settings: DrtSettings,
     /// Shutter interval in seconds of the scene's animation from the frame's time (motion blur);
     /// the tracers then run over the moving geometry (`render::motion`).
     pub shutter: Option<f32>,
+    /// Whether frame rows carry the RMSE against the cached high-spp reference image (`rmse =
+    /// false` in the `render` table skips the reference, for workloads measured for speed only).
+    pub rmse: bool,
 }
 
 impl DistributionWorkload {
@@ -172,7 +176,9 @@ impl DistributionWorkload {
             spp: 0,
             ..w.settings
         };
-        with_spp(self) == with_spp(other) && self.shutter == other.shutter
+        with_spp(self) == with_spp(other)
+            && self.shutter == other.shutter
+            && self.rmse == other.rmse
     }
 }
 
@@ -198,10 +204,12 @@ impl fmt::Display for RenderWorkload {
             ),
             RenderWorkload::Distribution(w) => write!(
                 f,
-                "renderer=distribution;aperture={};focus={};max_depth={};shutter={};spp={}",
+                "renderer={};aperture={};focus={};max_depth={}{};shutter={};spp={}",
+                w.settings.integrator.name(),
                 camera(w.settings.aperture),
                 camera(w.settings.focus_distance),
                 w.settings.max_depth,
+                if w.rmse { "" } else { ";rmse=false" },
                 w.shutter.map_or("none".to_string(), |s| s.to_string()),
                 w.settings.spp
             ),
@@ -209,9 +217,9 @@ impl fmt::Display for RenderWorkload {
     }
 }
 
-/// One combination of a distribution `render` grid: the renderer's settings and the workload's
-/// shutter interval (motion blur), or what is wrong with them.
-fn distribution_workload(params: &Params) -> Result<DistributionWorkload> {
+/// One combination of a distribution or path `render` grid: the renderer's settings and the
+/// workload's shutter interval (motion blur), or what is wrong with them.
+fn distribution_workload(integrator: Integrator, params: &Params) -> Result<DistributionWorkload> {
     let mut settings = params.clone();
     let shutter = match settings.0.remove("shutter") {
         None => None,
@@ -224,9 +232,19 @@ fn distribution_workload(params: &Params) -> Result<DistributionWorkload> {
             }
         },
     };
+    let rmse = match settings.0.remove("rmse").as_deref() {
+        None | Some("true") => true,
+        Some("false") => false,
+        Some(value) => {
+            return Err(Error::usage(format!(
+                "render rmse = {value:?} is not valid (true or false)"
+            )))
+        }
+    };
     Ok(DistributionWorkload {
-        settings: DrtSettings::from_params(&settings, &["shutter"])?,
+        settings: DrtSettings::from_params(integrator, &settings, &["shutter", "rmse"])?,
         shutter,
+        rmse,
     })
 }
 
@@ -912,13 +930,17 @@ fn expand_render_grid(
         Some([name]) if name == "whitted" => {
             |params| WhittedSettings::from_params(params).map(RenderWorkload::Whitted)
         }
-        Some([name]) if name == "distribution" => {
-            |params| distribution_workload(params).map(RenderWorkload::Distribution)
-        }
+        Some([name]) if name == "distribution" => |params| {
+            distribution_workload(Integrator::Distribution, params)
+                .map(RenderWorkload::Distribution)
+        },
+        Some([name]) if name == "path" => |params| {
+            distribution_workload(Integrator::Path, params).map(RenderWorkload::Distribution)
+        },
         _ => {
             return Err(src.usage_error(
                 &table.span(),
-                "render needs renderer = \"whitted\" or \"distribution\"",
+                "render needs renderer = \"whitted\", \"distribution\" or \"path\"",
             ))
         }
     };
@@ -1219,7 +1241,7 @@ mod tests {
         assert_eq!(whitted(&exp, 0).materials, Some(Preset::Glass));
 
         for (bad, word) in [
-            ("render = { renderer = \"path\" }", "renderer"),
+            ("render = { renderer = \"bidirectional\" }", "renderer"),
             (
                 "render = { renderer = \"whitted\", assembly = \"octants\" }",
                 "octants",
@@ -1326,6 +1348,49 @@ mod tests {
         ] {
             let text = format!(
                 "{BASE}tracers = [\"reference\"]\nrender = {{ renderer = \"distribution\", {bad} }}\n"
+            );
+            let msg = usage_message(parse(&text).unwrap_err());
+            assert!(
+                msg.starts_with("exp.toml:6:") && msg.contains(word),
+                "{msg}"
+            );
+        }
+    }
+
+    #[test]
+    fn a_path_grid_is_a_sampled_workload_with_its_own_limits() {
+        let text = format!(
+            "{BASE}tracers = [\"reference\"]\nrender = {{ renderer = \"path\", spp = [1, 3], aperture = 0.1 }}\n"
+        );
+        let exp = parse(&text).unwrap();
+        let labels: Vec<String> = exp.renders.iter().map(|r| r.to_string()).collect();
+        assert_eq!(
+            labels,
+            [
+                "renderer=path;aperture=0.1;focus=camera;max_depth=5;shutter=none;spp=1",
+                "renderer=path;aperture=0.1;focus=camera;max_depth=5;shutter=none;spp=3"
+            ]
+        );
+        let RenderWorkload::Distribution(w) = exp.renders[1] else {
+            panic!("a sampled workload")
+        };
+        assert_eq!((w.settings.integrator, w.rmse), (Integrator::Path, true));
+        let text = format!(
+            "{BASE}tracers = [\"reference\"]\nrender = {{ renderer = \"path\", rmse = false }}\n"
+        );
+        let exp = parse(&text).unwrap();
+        assert_eq!(
+            exp.renders[0].to_string(),
+            "renderer=path;aperture=camera;focus=camera;max_depth=5;rmse=false;shutter=none;spp=16"
+        );
+        for (bad, word) in [
+            ("spp = 0", "spp"),
+            ("max_depth = 65", "max_depth"),
+            ("rmse = 1", "rmse"),
+            ("packet = 4", "packet"),
+        ] {
+            let text = format!(
+                "{BASE}tracers = [\"reference\"]\nrender = {{ renderer = \"path\", {bad} }}\n"
             );
             let msg = usage_message(parse(&text).unwrap_err());
             assert!(

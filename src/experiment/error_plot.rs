@@ -1,9 +1,9 @@
-//! `error_vs_time.png`: distribution ray tracing's image error against its run time, log-log, one
-//! line per tracer through its sample counts (each point labelled with its spp). Lower left is
-//! better: less error for the time spent.
+//! `error_vs_time.png`: distribution ray tracing's or path tracing's image error against its run
+//! time, log-log, one line per tracer through its sample counts (each point labelled with its
+//! spp). Lower left is better: less error for the time spent.
 //!
-//! In an experiment run (`write_error_plots`), each group of distribution workloads that differ
-//! only in `spp` (at least two sample counts) gives one plot and its `.csv` per scene, from frame
+//! In an experiment run (`write_error_plots`), each group of distribution (or path) workloads that
+//! differ only in `spp` (at least two sample counts) gives one plot and its `.csv` per scene, from frame
 //! 0's `frame` rows at the widest thread count: time = the fastest frame, trace time = the sum of
 //! the fastest passes of its batches, error = the runs.csv `rmse`.
 
@@ -78,6 +78,9 @@ fn spp_groups(exp: &Experiment) -> Vec<Vec<usize>> {
         let RenderWorkload::Distribution(w) = workload else {
             continue;
         };
+        if !w.rmse {
+            continue;
+        }
         let same = |&&i: &&usize| matches!(&exp.renders[i], RenderWorkload::Distribution(v) if v.same_but_spp(w));
         match groups
             .iter_mut()

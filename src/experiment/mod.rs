@@ -571,6 +571,60 @@ mod tests {
         fs::remove_dir_all(&out).unwrap();
     }
 
+    /// A path workload (Gribble & Ramani 2008 §4) is measured like a distribution one: a row per
+    /// (bounce, kind) batch with its `bounce_depth`, a frame row with the RMSE against the cached
+    /// reference image, and the error-vs-time plot.
+    #[test]
+    fn a_path_workload_gives_rows_per_bounce_and_an_rmse_that_falls_with_spp() {
+        let out = scratch("path");
+        let text = "name = \"t\"\nscenes = [\"room-area-light\"]\ntracers = [\"reference\", \"stream\"]\n\
+                    render = { renderer = \"path\", spp = [1, 16], max_depth = 2 }\n\
+                    resolution = { width = 12, height = 12 }\nthreads = [1]\nwarmup = 0\nrepeats = 1\n";
+        let load = |spec: &SceneSpec| crate::scene::library::load_scene(&spec.name, spec.size);
+        let dir = run_text(text, &out, &load);
+        let (_, runs) = read_csv(&dir.join(output::RUNS_CSV));
+        let mut rmse = BTreeMap::new();
+        for tracer in ["reference", "stream"] {
+            for spp in [1u32, 16] {
+                let rows: Vec<_> = runs
+                    .iter()
+                    .filter(|r| {
+                        r["tracer"] == tracer && r["render"].ends_with(&format!(";spp={spp}"))
+                    })
+                    .collect();
+                let kinds: Vec<(&str, &str)> = rows
+                    .iter()
+                    .map(|r| (r["ray_kind"].as_str(), r["bounce_depth"].as_str()))
+                    .collect();
+                assert_eq!(
+                    kinds,
+                    [
+                        ("primary", "0"),
+                        ("shadow", "1"),
+                        ("diffuse", "1"),
+                        ("shadow", "2"),
+                        ("diffuse", "2"),
+                        ("shadow", "3"),
+                        ("frame", "")
+                    ],
+                    "{tracer} {spp}"
+                );
+                assert_eq!(rows[0]["rays"], (144 * spp).to_string());
+                assert!(rows[0]["render"].starts_with("renderer=path;"));
+                rmse.insert((tracer, spp), rows[6]["rmse"].parse::<f64>().unwrap());
+            }
+        }
+        assert!(
+            rmse[&("reference", 16)] < rmse[&("reference", 1)],
+            "{rmse:?}"
+        );
+        assert_eq!(rmse[&("reference", 16)], rmse[&("stream", 16)]);
+        let (_, points) = read_csv(&dir.join("error_vs_time.csv"));
+        assert_eq!(points.len(), 4);
+        assert!(dir.join("error_vs_time.png").is_file());
+        fs::remove_dir_all(&out).unwrap();
+    }
+
     #[test]
     fn every_committed_experiment_parses() {
         let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments");

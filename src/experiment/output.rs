@@ -5,7 +5,8 @@
 //! Counts a tracer cannot measure (Embree's box and triangle tests) are empty cells, not zeros.
 //! `build_plus_trace_seconds` is the frame's build (or refit) time of the row's structure plus
 //! the row's fastest pass: "rebuild + render" for that ray kind (0 build when reused).
-//! `rmse`: a distribution frame row's RMSE against its high-spp reference image (empty elsewhere).
+//! `rmse`: a distribution or path frame row's RMSE against its high-spp reference image (empty
+//! elsewhere, and with `rmse = false`).
 //! `embree_best_*`: the fastest Embree row on the same work in the same run (`embree_best`), its
 //! configuration, and `x_embree_best` = its seconds / this row's (> 1: faster than Embree at its
 //! best); the same for build + trace. Empty when the run measured no Embree row for that work.

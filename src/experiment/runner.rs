@@ -24,9 +24,10 @@ use crate::random::mix64;
 use crate::render::area_light::soft_shadow_points;
 use crate::render::assembly::BatchKind;
 use crate::render::convergence::reference_image;
-use crate::render::distribution::{render_distribution, DrtSettings, FrameGeometry};
+use crate::render::distribution::{render_sampled, DrtSettings, FrameGeometry};
 use crate::render::image::Image;
 use crate::render::motion::{tracer_for_motion, MovingMesh};
+use crate::render::path::ShadeStreams;
 use crate::render::rays::{diffuse_rays, primary_rays, shadow_rays};
 use crate::render::specular::specular_rays;
 use crate::render::wavefront::{BatchRecord, Tracing, Work};
@@ -369,6 +370,11 @@ impl Measure<'_> {
             tracer: motion_tracer.as_deref().unwrap_or(self.tracer),
             exp: self.exp,
             workload,
+            shade: ShadeStreams::of_tracer(
+                instance.info.name,
+                &instance.params,
+                self.tracer.chunk_rays(),
+            ),
         };
         let timed = self
             .at_every_pool(&label, |pool| job.time(pool))
@@ -432,14 +438,17 @@ struct RenderJob<'a> {
     tracer: &'a dyn Tracer,
     exp: &'a Experiment,
     workload: &'a RenderWorkload,
+    /// How a path workload groups its shading: the stream tracer's own streams and width.
+    shade: ShadeStreams,
 }
 
 impl RenderJob<'_> {
-    /// A distribution workload's settings at the experiment's resolution.
+    /// A distribution or path workload's settings at the experiment's resolution.
     fn drt_settings(&self, w: &DistributionWorkload) -> DrtSettings {
         DrtSettings {
             width: self.exp.width,
             height: self.exp.height,
+            shade: self.shade,
             ..w.settings
         }
     }
@@ -463,7 +472,7 @@ impl RenderJob<'_> {
                 })
             }
             RenderWorkload::Distribution(w) => {
-                let out = render_distribution(
+                let out = render_sampled(
                     self.scene,
                     self.frame,
                     FrameGeometry::of(self.frame, self.moving),
@@ -513,13 +522,16 @@ impl RenderJob<'_> {
         Ok((out, start.elapsed().as_secs_f64()))
     }
 
-    /// A distribution frame's RMSE against the reference image of the same settings, cached
+    /// A distribution or path frame's RMSE against the reference image of the same settings, cached
     /// under the results root (rendered with the reference tracer on first use); `None` for
     /// other renderers.
     fn rmse(&self, image: &Image) -> Result<Option<f64>> {
         let RenderWorkload::Distribution(w) = self.workload else {
             return Ok(None);
         };
+        if !w.rmse {
+            return Ok(None);
+        }
         let (reference, _) = reference_image(
             self.scene,
             self.frame,

@@ -1,5 +1,6 @@
-//! Error against run time for distribution ray tracing (issue item 9): each sample count's image
-//! is compared with a high-sample reference image by RMSE, next to the time it took.
+//! Error against run time for distribution ray tracing (issue item 9) and path tracing (Gribble &
+//! Ramani 2008 §4): each sample count's image is compared with a high-sample reference image of
+//! the same integrator by RMSE, next to the time it took.
 //!
 //! The reference (`REFERENCE_SPP` samples per pixel, reference tracer) is expensive, so it is
 //! rendered once and cached on disk under `<results root>/cache/drt-reference/`. The cache key is
@@ -14,9 +15,10 @@ use std::path::{Path, PathBuf};
 
 use crate::error::{Error, Result};
 use crate::random::mix64;
-use crate::render::distribution::{render_distribution, DrtFrame, DrtSettings, FrameGeometry};
+use crate::render::distribution::{render_sampled, DrtFrame, DrtSettings, FrameGeometry};
 use crate::render::image::Image;
 use crate::render::motion::MovingMesh;
+use crate::render::path::ShadeStreams;
 use crate::render::wavefront::Tracing;
 use crate::scene::{Frame, Mesh, Scene};
 use crate::tracers::{Params, Tracer};
@@ -65,6 +67,7 @@ pub fn reference_key(
         frame.camera,
         DrtSettings {
             spp: REFERENCE_SPP,
+            shade: ShadeStreams::default(),
             ..*settings
         }
     );
@@ -131,7 +134,7 @@ pub fn reference_image(
         spp: REFERENCE_SPP,
         ..*settings
     };
-    let image = render_distribution(
+    let image = render_sampled(
         scene,
         frame,
         geometry,
@@ -212,7 +215,7 @@ pub fn error_against_time(
     spps.iter()
         .map(|&spp| {
             let run = DrtSettings { spp, ..*settings };
-            let rendered = render_distribution(
+            let rendered = render_sampled(
                 scene,
                 frame,
                 FrameGeometry::of(frame, motion),

@@ -30,11 +30,15 @@ use crate::render::glossy::sample_phong_lobe;
 use crate::render::image::Image;
 use crate::render::interleaved::{SampleTable, DIMENSION_PAIRS};
 use crate::render::motion::{tracer_for_motion, MovingMesh};
+use crate::render::path::{
+    render_path, ShadeStreams, PATH_DEFAULT_DEPTH, PATH_KINDS, PATH_MAX_DEPTH,
+};
 use crate::render::rays::{morton_decode, CameraProjection, SurfacePoint, TILE};
 use crate::render::shading::{specular_response, AMBIENT, BACKGROUND};
 use crate::render::specular::{reflect, reflection_ray};
 use crate::render::wavefront::{trace, Answers, BatchRecord, Tracing, Work};
 use crate::scene::{Camera, Frame, Scene};
+use crate::stats::Counters;
 use crate::tracers::visibility::{LightSamples, QuadLight, ShadingPoint, ShadingPoints};
 use crate::tracers::{tracer_for_mesh, Params, Tracer, VisibilityQuery};
 
@@ -52,8 +56,48 @@ const PAIRS_PER_BOUNCE: usize = 3;
 /// The most reflection bounces the sample table has dimensions for.
 pub const MAX_DEPTH: u32 = ((DIMENSION_PAIRS - PAIRS_BEFORE_BOUNCES) / PAIRS_PER_BOUNCE - 1) as u32;
 
+/// Which estimator a sampled frame uses: Boulos et al.'s distribution ray tracing (this file) or
+/// Monte Carlo path tracing (Gribble & Ramani 2008 §4, `render::path`). Both share these settings,
+/// the frame record, the cached reference image and the error-vs-time measurement.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Integrator {
+    #[default]
+    Distribution,
+    Path,
+}
+
+impl Integrator {
+    /// The `renderer` name of an experiment's `render` table and of `raylab render`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Integrator::Distribution => "distribution",
+            Integrator::Path => "path",
+        }
+    }
+
+    /// The kinds of rays its frames trace.
+    pub fn kinds(self) -> [RayKind; 3] {
+        match self {
+            Integrator::Distribution => DRT_KINDS,
+            Integrator::Path => PATH_KINDS,
+        }
+    }
+
+    /// The most bounces this integrator renders.
+    pub fn max_depth(self) -> u32 {
+        match self {
+            Integrator::Distribution => MAX_DEPTH,
+            Integrator::Path => PATH_MAX_DEPTH,
+        }
+    }
+}
+
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct DrtSettings {
+    pub integrator: Integrator,
+    /// Path tracing: how shading is grouped into streams (counters only; set by the runner from
+    /// the stream tracer's parameters).
+    pub shade: ShadeStreams,
     pub width: u32,
     pub height: u32,
     /// Samples per pixel: a perfect square (1, 4, 16, 64, ...).
@@ -71,6 +115,8 @@ pub struct DrtSettings {
 impl Default for DrtSettings {
     fn default() -> Self {
         DrtSettings {
+            integrator: Integrator::Distribution,
+            shade: ShadeStreams::default(),
             width: 256,
             height: 256,
             spp: 16,
@@ -86,11 +132,18 @@ impl DrtSettings {
     /// The keys of an experiment's distribution `render` table besides `renderer`.
     pub const KEYS: [&str; 4] = ["spp", "aperture", "focus", "max_depth"];
 
-    /// Settings from one combination of an experiment's `render` grid (defaults for the keys it
-    /// does not give), checked; `also` names the workload's own keys, for the message on an
-    /// unknown one.
-    pub fn from_params(params: &Params, also: &[&str]) -> Result<Self> {
-        let mut s = DrtSettings::default();
+    /// Settings of `integrator` from one combination of an experiment's `render` grid (defaults
+    /// for the keys it does not give), checked; `also` names the workload's own keys, for the
+    /// message on an unknown one.
+    pub fn from_params(integrator: Integrator, params: &Params, also: &[&str]) -> Result<Self> {
+        let mut s = DrtSettings {
+            integrator,
+            max_depth: match integrator {
+                Integrator::Distribution => DrtSettings::default().max_depth,
+                Integrator::Path => PATH_DEFAULT_DEPTH,
+            },
+            ..DrtSettings::default()
+        };
         for (key, value) in &params.0 {
             let bad = || Error::usage(format!("render {key} = {value:?} is not valid"));
             let number = || value.parse::<f32>().map_err(|_| bad());
@@ -102,24 +155,36 @@ impl DrtSettings {
                 _ => {
                     let known: Vec<&str> = Self::KEYS.iter().chain(also).copied().collect();
                     return Err(Error::usage(format!(
-                        "unknown distribution render key {key:?} (known: renderer, {})",
+                        "unknown {} render key {key:?} (known: renderer, {})",
+                        integrator.name(),
                         known.join(", ")
                     )));
                 }
             }
         }
         s.check()?;
-        SampleTable::new(s.spp, s.seed)
-            .map_err(|e| Error::usage(format!("render spp = {}: {e}", s.spp)))?;
+        if integrator == Integrator::Distribution {
+            SampleTable::new(s.spp, s.seed)
+                .map_err(|e| Error::usage(format!("render spp = {}: {e}", s.spp)))?;
+        }
         Ok(s)
     }
 
     pub fn check(&self) -> Result<()> {
         let lens_ok = self.aperture.is_none_or(|a| a.is_finite() && a >= 0.0)
             && self.focus_distance.is_none_or(|f| f.is_finite() && f > 0.0);
-        if self.width == 0 || self.height == 0 || !lens_ok || self.max_depth > MAX_DEPTH {
+        let max_depth = self.integrator.max_depth();
+        if self.width == 0
+            || self.height == 0
+            || self.spp == 0
+            || self.shade.stream == 0
+            || self.shade.width == 0
+            || !lens_ok
+            || self.max_depth > max_depth
+        {
             return Err(Error::usage(format!(
-                "distribution settings out of range: width, height ≥ 1, aperture ≥ 0, focus > 0, max_depth ≤ {MAX_DEPTH} (got {self:?})"
+                "{} settings out of range: width, height, spp ≥ 1, aperture ≥ 0, focus > 0, max_depth ≤ {max_depth} (got {self:?})",
+                self.integrator.name()
             )));
         }
         Ok(())
@@ -186,7 +251,7 @@ impl DrtFrame {
 
 /// The frame's batch records under construction, keyed by (depth, kind).
 #[derive(Default)]
-struct Records {
+pub(crate) struct Records {
     batches: BTreeMap<(u32, BatchKind), BatchRecord>,
     packets: [u64; RayKind::ALL.len()],
 }
@@ -194,7 +259,7 @@ struct Records {
 impl Records {
     /// Traces `work`, a wavefront of `kind` at bounce `depth` in `packets` explicit packets, and
     /// books it.
-    fn trace(
+    pub(crate) fn trace(
         &mut self,
         tracer: &dyn Tracer,
         work: Work<'_>,
@@ -226,6 +291,35 @@ impl Records {
         let work = Work::of_batch(batch);
         self.trace(tracer, work, generation.kind, packets, depth, tracing)
     }
+
+    /// Adds `counters` (the shading filters') to the record of `kind` at `depth`.
+    pub(crate) fn count(&mut self, depth: u32, kind: BatchKind, counters: &Counters) {
+        if let Some(record) = self.batches.get_mut(&(depth, kind)) {
+            record.counters.merge(counters);
+        }
+    }
+
+    /// The finished frame: `sum` (per pixel, over `spp` samples) averaged into its image.
+    pub(crate) fn finish(
+        self,
+        width: u32,
+        height: u32,
+        sum: &[Vec3],
+        spp: u32,
+        start: Instant,
+    ) -> DrtFrame {
+        let mut image = Image::new(width, height);
+        let scale = 1.0 / spp as f32;
+        for (p, s) in image.pixels.iter_mut().zip(sum) {
+            *p = *s * scale;
+        }
+        DrtFrame {
+            image,
+            batches: self.batches.into_values().collect(),
+            packets: self.packets,
+            seconds: start.elapsed().as_secs_f64(),
+        }
+    }
 }
 
 /// The geometry a frame is rendered against: the frame's mesh, moving to another mesh over the
@@ -255,7 +349,7 @@ impl<'a> FrameGeometry<'a> {
     }
 
     /// The triangle `prim` as a ray at `time` sees it, and its material.
-    fn triangle(&self, prim: u32, time: f32) -> (Triangle, u32) {
+    pub(crate) fn triangle(&self, prim: u32, time: f32) -> (Triangle, u32) {
         match self {
             FrameGeometry::Static(mesh) => (
                 mesh.triangles[prim as usize],
@@ -268,7 +362,7 @@ impl<'a> FrameGeometry<'a> {
         }
     }
 
-    fn is_moving(&self) -> bool {
+    pub(crate) fn is_moving(&self) -> bool {
         matches!(self, FrameGeometry::Moving(_))
     }
 }
@@ -349,6 +443,24 @@ impl LightQuery {
         self.points.push(point, new_pixel);
         self.samples.push(sample);
         self.served.push((path_index, carries));
+    }
+}
+
+/// Renders `frame` of `scene` with the settings' integrator (distribution or path tracing) and
+/// `tracer`, which must have been built over `geometry`.
+pub fn render_sampled(
+    scene: &Scene,
+    frame: &Frame,
+    geometry: FrameGeometry<'_>,
+    tracer: &dyn Tracer,
+    settings: &DrtSettings,
+    tracing: Tracing,
+) -> Result<DrtFrame> {
+    match settings.integrator {
+        Integrator::Distribution => {
+            render_distribution(scene, frame, geometry, tracer, settings, tracing)
+        }
+        Integrator::Path => render_path(scene, frame, geometry, tracer, settings, tracing),
     }
 }
 
@@ -494,17 +606,7 @@ pub fn render_distribution(
             sum[path.pixel as usize] += *c;
         }
     }
-    let mut image = Image::new(settings.width, settings.height);
-    let scale = 1.0 / settings.spp as f32;
-    for (p, s) in image.pixels.iter_mut().zip(&sum) {
-        *p = *s * scale;
-    }
-    Ok(DrtFrame {
-        image,
-        batches: records.batches.into_values().collect(),
-        packets: records.packets,
-        seconds: start.elapsed().as_secs_f64(),
-    })
+    Ok(records.finish(settings.width, settings.height, &sum, settings.spp, start))
 }
 
 /// The camera ray of sample `sample` of pixel `(x, y)`: its image position jittered in the pixel

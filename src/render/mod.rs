@@ -9,6 +9,7 @@ pub mod image;
 pub mod interleaved;
 pub mod motion;
 pub mod offset;
+pub mod path;
 pub mod raycast;
 pub mod rays;
 pub mod sampling;
