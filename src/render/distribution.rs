@@ -29,6 +29,7 @@ use crate::render::assembly::BatchKind;
 use crate::render::glossy::sample_phong_lobe;
 use crate::render::image::Image;
 use crate::render::interleaved::{SampleTable, DIMENSION_PAIRS};
+use crate::render::light_query::LightQueries;
 use crate::render::motion::{tracer_for_motion, MovingMesh};
 use crate::render::path::{
     render_path, ShadeStreams, PATH_DEFAULT_DEPTH, PATH_KINDS, PATH_MAX_DEPTH,
@@ -39,8 +40,7 @@ use crate::render::specular::{reflect, reflection_ray};
 use crate::render::wavefront::{trace, Answers, BatchRecord, Tracing, Work};
 use crate::scene::{Camera, Frame, Scene};
 use crate::stats::Counters;
-use crate::tracers::visibility::{LightSamples, QuadLight, ShadingPoint, ShadingPoints};
-use crate::tracers::{tracer_for_mesh, Params, Tracer, VisibilityQuery};
+use crate::tracers::{tracer_for_mesh, Params, Tracer};
 
 /// A wave holds at least this many camera rays (whole tiles), so each traced batch spreads over
 /// many `tracers::batch` chunks and every core has work even at 1 sample per pixel.
@@ -411,41 +411,6 @@ impl Generation {
     }
 }
 
-/// One light's shadow query under construction: a shading point per sample path that sees the
-/// light, each with its own light sample (`set` = its index), one packet per pixel.
-#[derive(Default)]
-struct LightQuery {
-    points: ShadingPoints,
-    samples: Vec<[f32; 2]>,
-    /// Per point: its path and the colour it adds when the light sample is visible.
-    served: Vec<(usize, Vec3)>,
-    last_pixel: Option<u32>,
-}
-
-impl LightQuery {
-    fn push(
-        &mut self,
-        surface: &SurfacePoint,
-        sample: [f32; 2],
-        path_index: usize,
-        path: &Path,
-        carries: Vec3,
-    ) {
-        let point = ShadingPoint {
-            position: surface.p,
-            normal: surface.n,
-            origin: surface.ray_origin(),
-            time: path.time,
-            set: self.samples.len() as u32,
-        };
-        let new_pixel = self.last_pixel != Some(path.pixel);
-        self.last_pixel = Some(path.pixel);
-        self.points.push(point, new_pixel);
-        self.samples.push(sample);
-        self.served.push((path_index, carries));
-    }
-}
-
 /// Renders `frame` of `scene` with the settings' integrator (distribution or path tracing) and
 /// `tracer`, which must have been built over `geometry`.
 pub fn render_sampled(
@@ -531,8 +496,7 @@ pub fn render_distribution(
             else {
                 unreachable!("camera and reflection rays are traced for closest hits")
             };
-            let mut shadows: Vec<LightQuery> =
-                scene.lights.iter().map(|_| LightQuery::default()).collect();
+            let mut shadows = LightQueries::new(scene);
             let mut reflections = Generation::new(RayKind::Reflection);
             let pairs = PAIRS_BEFORE_BOUNCES + PAIRS_PER_BOUNCE * depth as usize;
             for (i, hit) in hits.iter().enumerate() {
@@ -553,10 +517,11 @@ pub fn render_distribution(
                 // light-visibility query (one sample per shading point).
                 if m.diffuse != Vec3::ZERO {
                     let (s, t) = sample(pairs);
-                    for (light, query) in scene.lights.iter().zip(&mut shadows) {
+                    for (l, light) in scene.lights.iter().enumerate() {
                         if let Some(ls) = sample_light(light, surface.p, surface.n, s, t) {
                             let carries = path.weight * m.diffuse * ls.incident;
-                            query.push(&surface, [s, t], path_index, &path, carries);
+                            let (pixel, time) = (path.pixel, path.time);
+                            shadows.push(l, &surface, [s, t], path_index, pixel, time, carries);
                         }
                     }
                 }
@@ -578,28 +543,7 @@ pub fn render_distribution(
                     reflections.push(next, path_index, &paths, Vec3::ZERO);
                 }
             }
-            for (light, query) in scene.lights.iter().zip(&mut shadows) {
-                if query.points.is_empty() {
-                    continue;
-                }
-                let samples = LightSamples::new(1, std::mem::take(&mut query.samples))?;
-                let work = VisibilityQuery::new(&query.points, QuadLight::of(light), &samples)?;
-                let packets = query.points.packet_start.iter().filter(|s| **s).count();
-                let answers = records.trace(
-                    tracer,
-                    Work::LightVisibility(work),
-                    RayKind::Shadow,
-                    packets,
-                    depth + 1,
-                    tracing,
-                );
-                for (i, &(path, carries)) in query.served.iter().enumerate() {
-                    // One sample per point: sample i is point i's.
-                    if !answers.blocked(i) {
-                        colour[path] += carries;
-                    }
-                }
-            }
+            shadows.trace(scene, tracer, &mut records, depth, tracing, &mut colour)?;
             current = reflections;
         }
         for (path, c) in paths.iter().zip(&colour) {

@@ -7,6 +7,7 @@ pub mod distribution;
 pub mod glossy;
 pub mod image;
 pub mod interleaved;
+pub mod light_query;
 pub mod motion;
 pub mod offset;
 pub mod path;

@@ -47,6 +47,7 @@ use crate::geometry::{Ray, RayBatch, RayKind};
 use crate::render::area_light::sample_light;
 use crate::render::assembly::BatchKind;
 use crate::render::distribution::{DrtFrame, DrtSettings, FrameGeometry, Records};
+use crate::render::light_query::LightQueries;
 use crate::render::rays::{morton_decode, CameraProjection, SurfacePoint, TILE};
 use crate::render::sampling::{cosine_hemisphere, uniform};
 use crate::render::shading::{fresnel_dielectric, BACKGROUND};
@@ -55,8 +56,7 @@ use crate::render::wavefront::{Answers, Tracing, Work};
 use crate::scene::{Frame, Light, Material, Scene};
 use crate::stats::{Counters, Event, Stats};
 use crate::tracers::stream::{StreamConfig, StreamSize};
-use crate::tracers::visibility::{LightSamples, QuadLight, ShadingPoint, ShadingPoints};
-use crate::tracers::{Params, Tracer, VisibilityQuery};
+use crate::tracers::{Params, Tracer};
 
 /// The kinds of rays a path-traced frame traces: camera rays, shadow rays (next-event
 /// estimation) and path rays (every bounce after the camera, whatever lobe sampled it).
@@ -122,17 +122,6 @@ impl Generation {
         }
         self.served.push(path);
     }
-}
-
-/// One light's next-event query under construction: a shading point per path vertex, each with
-/// its own light sample, one packet per pixel.
-#[derive(Default)]
-struct LightQuery {
-    points: ShadingPoints,
-    samples: Vec<[f32; 2]>,
-    /// Per point: its path and the colour it adds when the light sample is visible.
-    served: Vec<(usize, Vec3)>,
-    last_pixel: Option<u32>,
 }
 
 /// The material shaders of §4, each a filter of the stack (Fig. 4: "the remaining rays are then
@@ -656,35 +645,15 @@ pub fn render_path(
                 }
             }
             nee.sort_by_key(|&(i, l, _, _)| (i, l));
-            let mut shadows: Vec<LightQuery> =
-                scene.lights.iter().map(|_| LightQuery::default()).collect();
+            let mut shadows = LightQueries::new(scene);
             for (i, l, sample, carries) in nee {
                 if let Some((surface, _, _)) = &surfaces[i] {
                     let p = current.served[i];
-                    shadows[l].push(surface, sample, p, &paths[p], carries);
+                    let (pixel, time) = (paths[p].pixel, paths[p].time);
+                    shadows.push(l, surface, sample, p, pixel, time, carries);
                 }
             }
-            for (light, query) in scene.lights.iter().zip(&mut shadows) {
-                if query.points.is_empty() {
-                    continue;
-                }
-                let samples = LightSamples::new(1, std::mem::take(&mut query.samples))?;
-                let work = VisibilityQuery::new(&query.points, QuadLight::of(light), &samples)?;
-                let packets = query.points.packet_start.iter().filter(|s| **s).count();
-                let answers = records.trace(
-                    tracer,
-                    Work::LightVisibility(work),
-                    RayKind::Shadow,
-                    packets,
-                    depth + 1,
-                    tracing,
-                );
-                for (i, &(path, carries)) in query.served.iter().enumerate() {
-                    if !answers.blocked(i) {
-                        colour[path] += carries;
-                    }
-                }
-            }
+            shadows.trace(scene, tracer, &mut records, depth, tracing, &mut colour)?;
             current = next;
         }
         for (state, c) in paths.iter().zip(&colour) {
@@ -692,30 +661,6 @@ pub fn render_path(
         }
     }
     Ok(records.finish(settings.width, settings.height, &sum, settings.spp, start))
-}
-
-impl LightQuery {
-    fn push(
-        &mut self,
-        surface: &SurfacePoint,
-        sample: [f32; 2],
-        path: usize,
-        state: &PathState,
-        carries: Vec3,
-    ) {
-        let point = ShadingPoint {
-            position: surface.p,
-            normal: surface.n,
-            origin: surface.ray_origin(),
-            time: state.time,
-            set: self.samples.len() as u32,
-        };
-        let new_pixel = self.last_pixel != Some(state.pixel);
-        self.last_pixel = Some(state.pixel);
-        self.points.push(point, new_pixel);
-        self.samples.push(sample);
-        self.served.push((path, carries));
-    }
 }
 
 #[cfg(test)]
