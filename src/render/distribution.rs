@@ -129,6 +129,18 @@ impl Default for DrtSettings {
 }
 
 impl DrtSettings {
+    /// The image's camera projection, its 32×32 tiles in row-major order, and how many tiles
+    /// make one wave of about `WAVE_RAYS` camera rays.
+    pub(crate) fn tile_waves(&self, camera: &Camera) -> (CameraProjection, Vec<(u32, u32)>, usize) {
+        let projection = CameraProjection::new(&self.camera(camera), self.width, self.height);
+        let (tiles_x, tiles_y) = projection.tiles();
+        let per_wave = WAVE_RAYS.div_ceil((TILE * TILE * self.spp) as usize).max(1);
+        let tiles = (0..tiles_y)
+            .flat_map(|ty| (0..tiles_x).map(move |tx| (tx, ty)))
+            .collect();
+        (projection, tiles, per_wave)
+    }
+
     /// The keys of an experiment's distribution `render` table besides `renderer`.
     pub const KEYS: [&str; 4] = ["spp", "aperture", "focus", "max_depth"];
 
@@ -442,18 +454,7 @@ pub fn render_distribution(
     settings.check()?;
     let start = Instant::now();
     let table = SampleTable::new(settings.spp, settings.seed)?;
-    let projection = CameraProjection::new(
-        &settings.camera(&frame.camera),
-        settings.width,
-        settings.height,
-    );
-    let (tiles_x, tiles_y) = projection.tiles();
-    let tiles_per_wave = WAVE_RAYS
-        .div_ceil((TILE * TILE * settings.spp) as usize)
-        .max(1);
-    let tiles: Vec<(u32, u32)> = (0..tiles_y)
-        .flat_map(|ty| (0..tiles_x).map(move |tx| (tx, ty)))
-        .collect();
+    let (projection, tiles, tiles_per_wave) = settings.tile_waves(&frame.camera);
 
     let mut sum = vec![Vec3::ZERO; (settings.width * settings.height) as usize];
     let mut records = Records::default();

@@ -48,7 +48,7 @@ use crate::render::area_light::sample_light;
 use crate::render::assembly::BatchKind;
 use crate::render::distribution::{DrtFrame, DrtSettings, FrameGeometry, Records};
 use crate::render::light_query::LightQueries;
-use crate::render::rays::{morton_decode, CameraProjection, SurfacePoint, TILE};
+use crate::render::rays::{morton_decode, SurfacePoint, TILE};
 use crate::render::sampling::{cosine_hemisphere, uniform};
 use crate::render::shading::{fresnel_dielectric, BACKGROUND};
 use crate::render::specular::{reflect, reflection_ray, refract, refraction_ray, relative_ior};
@@ -67,9 +67,6 @@ pub const PATH_MAX_DEPTH: u32 = 64;
 pub const PATH_DEFAULT_DEPTH: u32 = 5;
 /// Russian roulette decides on paths from this bounce on.
 pub const RR_DEPTH: u32 = 3;
-
-/// A wave holds at least this many camera rays (whole tiles), as in `distribution`.
-const WAVE_RAYS: usize = 1 << 16;
 
 /// Sample dimensions: image position (2), lens (2), time (1); then per bounce: light position
 /// (2), lobe choice (1), direction (2), Russian roulette (1), sub-lobe choice (1).
@@ -447,18 +444,7 @@ pub fn render_path(
     let start = Instant::now();
     let seed = settings.seed;
     let spp = settings.spp as u64;
-    let projection = CameraProjection::new(
-        &settings.camera(&frame.camera),
-        settings.width,
-        settings.height,
-    );
-    let (tiles_x, tiles_y) = projection.tiles();
-    let tiles_per_wave = WAVE_RAYS
-        .div_ceil((TILE * TILE * settings.spp) as usize)
-        .max(1);
-    let tiles: Vec<(u32, u32)> = (0..tiles_y)
-        .flat_map(|ty| (0..tiles_x).map(move |tx| (tx, ty)))
-        .collect();
+    let (projection, tiles, tiles_per_wave) = settings.tile_waves(&frame.camera);
     let bsdfs: Vec<Bsdf> = scene.materials.iter().map(Bsdf::of).collect();
     let has_quad_light = scene.quad_light().is_some();
 
