@@ -78,25 +78,21 @@ pub fn axis_component(x: [f32; 3], k: usize) -> f32 {
     }
 }
 
-/// Below this ratio of |U + V + W| to the magnitude of the products the edge functions are
-/// differences of, a ray that passes inside every edge has lost more than 10 of f32's 24 bits to
-/// cancellation: a needle-thin triangle (aspect ratio ≳ 10³) or a grazing ray. There the f32 edge
-/// functions put the hit distance off by up to 2·10⁻⁴ relative, or on the wrong side of the
-/// origin (the stability suite's slivers; an exact rational check confirmed Embree's robust
+/// Below this ratio of |U + V + W| to the magnitude of the edge functions' first products
+/// (`edge_product_scale`), a ray that passes inside every edge has lost more than 10 of f32's 24
+/// bits to cancellation: a needle-thin triangle (aspect ratio ≳ 10³) or a grazing ray. There the
+/// f32 edge functions put the hit distance off by up to 2·10⁻⁴ relative, or on the wrong side of
+/// the origin (the stability suite's slivers; an exact rational check confirmed Embree's robust
 /// answer and the f64 one), while f64 edge functions from the same sheared coordinates are
 /// accurate to ~10⁻⁸.
-const ILL_CONDITIONED: f32 = 1.0 / 1024.0;
+const ILL_CONDITIONED: f32 = 1.0 / 2048.0;
 
-/// The sum of |products| the three edge functions are differences of: the scale of their
-/// rounding errors.
+/// |cx·by| + |ax·cy| + |bx·ay|: one product of each edge function (U = cx·by − cy·bx, …). Where
+/// an edge function cancels, its two products are nearly equal, so this is half the scale of
+/// their rounding errors — at half the cost of summing all six.
 #[inline(always)]
 pub fn edge_product_scale(a: [f32; 2], b: [f32; 2], c: [f32; 2]) -> f32 {
-    (c[0] * b[1]).abs()
-        + (c[1] * b[0]).abs()
-        + (a[0] * c[1]).abs()
-        + (a[1] * c[0]).abs()
-        + (b[0] * a[1]).abs()
-        + (b[1] * a[0]).abs()
+    (c[0] * b[1]).abs() + (a[0] * c[1]).abs() + (b[0] * a[1]).abs()
 }
 
 /// Whether the f32 edge functions `u, v, w` (of product scale `scale`) must be redone in f64:
