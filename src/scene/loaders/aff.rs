@@ -32,7 +32,7 @@ use super::keyframes::{self, TransformTrack};
 use super::nff::{self, View};
 use super::scene_graph::{Clock, Morph, SceneGraph};
 use super::tokens::Tokens;
-use super::{default_camera, require_triangles, scene_name, triangulate, LoadOptions};
+use super::{default_camera, require_triangles, scene_name, triangulate, Files, LoadOptions};
 use crate::error::{Error, Result};
 use crate::geometry::Triangle;
 use crate::scene::{CameraKey, CameraPath, Light, Material, Scene};
@@ -52,9 +52,22 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene> {
 }
 
 pub fn load_dialect(path: &Path, options: &LoadOptions, dialect: Dialect) -> Result<Scene> {
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    parse(path, &bytes, options, dialect, &|file| std::fs::read(file))
+}
+
+/// The file `bytes` (named `path` in errors); included files are read through `files`.
+pub fn parse(
+    path: &Path,
+    bytes: &[u8],
+    options: &LoadOptions,
+    dialect: Dialect,
+    files: Files,
+) -> Result<Scene> {
     let mut reader = Reader {
         options,
         dialect,
+        files,
         materials: Vec::new(),
         current_material: None,
         lights: Vec::new(),
@@ -64,7 +77,7 @@ pub fn load_dialect(path: &Path, options: &LoadOptions, dialect: Dialect) -> Res
         animation: None,
         detail_level: 0,
     };
-    reader.read_file(path, &mut Vec::new())?;
+    reader.read_file(path, bytes, &mut Vec::new())?;
     reader.into_scene(path)
 }
 
@@ -76,9 +89,10 @@ struct AnimationRange {
     frames: usize,
 }
 
-struct Reader<'o> {
-    options: &'o LoadOptions,
+struct Reader<'a> {
+    options: &'a LoadOptions,
     dialect: Dialect,
+    files: Files<'a>,
     materials: Vec<Material>,
     current_material: Option<u32>,
     lights: Vec<Light>,
@@ -91,10 +105,9 @@ struct Reader<'o> {
 
 impl Reader<'_> {
     /// Reads one file; `chain` holds the files that include it, to catch cycles.
-    fn read_file(&mut self, path: &Path, chain: &mut Vec<PathBuf>) -> Result<()> {
-        let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    fn read_file(&mut self, path: &Path, bytes: &[u8], chain: &mut Vec<PathBuf>) -> Result<()> {
         // Comments may hold Latin-1 text; commands are ASCII.
-        let text = String::from_utf8_lossy(&bytes);
+        let text = String::from_utf8_lossy(bytes);
         let mut t = Tokens::new(path, &text);
         chain.push(path.canonicalize().unwrap_or_else(|_| path.to_path_buf()));
         // Lines of the blocks opened in this file and not yet closed.
@@ -338,17 +351,17 @@ impl Reader<'_> {
             return Ok(());
         }
         let file = t.path().parent().unwrap_or(Path::new("")).join(name);
-        if let Err(e) = std::fs::metadata(&file) {
-            return Err(t.error(format!(
-                "included file {} cannot be read: {e}",
-                file.display()
-            )));
-        }
         let canonical = file.canonicalize().unwrap_or_else(|_| file.clone());
         if chain.contains(&canonical) || chain.len() >= MAX_INCLUDE_DEPTH {
             return Err(t.error(format!("include cycle through {}", file.display())));
         }
-        self.read_file(&file, chain)
+        let bytes = (self.files)(&file).map_err(|e| {
+            t.error(format!(
+                "included file {} cannot be read: {e}",
+                file.display()
+            ))
+        })?;
+        self.read_file(&file, &bytes, chain)
     }
 
     fn into_scene(self, path: &Path) -> Result<Scene> {

@@ -11,13 +11,19 @@ use std::path::Path;
 
 use glam::Vec3;
 
-use super::{mtl, still_mesh_scene, triangulate};
+use super::{mtl, still_mesh_scene, triangulate, Files};
 use crate::error::{Error, Result};
 use crate::geometry::Triangle;
 use crate::scene::{Material, Mesh, Scene};
 
 pub fn load(path: &Path) -> Result<Scene> {
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    parse(path, &bytes, &|library| std::fs::read(library))
+}
+
+/// The OBJ file `bytes` (named `path` in errors); material libraries are read through `files`,
+/// relative to `path`'s directory.
+pub fn parse(path: &Path, bytes: &[u8], files: Files) -> Result<Scene> {
     let dir = path.parent().unwrap_or(Path::new("")).to_path_buf();
 
     // Materials of every library that loaded, in the order tobj numbers them, and the first
@@ -26,7 +32,7 @@ pub fn load(path: &Path) -> Result<Scene> {
     let broken_library: RefCell<Option<Error>> = RefCell::new(None);
     let load_library = |name: &Path| -> tobj::MTLLoadResult {
         let file = dir.join(name);
-        let text = match std::fs::read(&file) {
+        let text = match files(&file) {
             Ok(bytes) => String::from_utf8_lossy(&bytes).into_owned(),
             Err(e) => {
                 eprintln!(
@@ -66,13 +72,13 @@ pub fn load(path: &Path) -> Result<Scene> {
         ignore_points: true,
         ignore_lines: true,
     };
-    let loaded = tobj::load_obj_buf(&mut Cursor::new(&bytes), &options, load_library);
+    let loaded = tobj::load_obj_buf(&mut Cursor::new(bytes), &options, load_library);
     if let Some(e) = broken_library.into_inner() {
         return Err(e);
     }
     let (models, _) = match loaded {
         Ok(loaded) => loaded,
-        Err(e) => return Err(locate_problem(path, &bytes, &e.to_string())),
+        Err(e) => return Err(locate_problem(path, bytes, &e.to_string())),
     };
     let mut materials = materials.into_inner();
 
@@ -81,7 +87,7 @@ pub fn load(path: &Path) -> Result<Scene> {
     for model in &models {
         let m = &model.mesh;
         if m.positions.iter().any(|x| !x.is_finite()) {
-            return Err(locate_problem(path, &bytes, "non-finite vertex position"));
+            return Err(locate_problem(path, bytes, "non-finite vertex position"));
         }
         let material = match m.material_id {
             Some(id) if id < materials.len() => id as u32,

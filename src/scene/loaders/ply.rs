@@ -17,19 +17,24 @@ use crate::scene::{Material, Mesh, Scene};
 
 pub fn load(path: &Path) -> Result<Scene> {
     let raw = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    parse(path, &raw)
+}
+
+/// The PLY file `raw` (named `path` in errors), inflated first when `path` ends in `.gz`.
+pub fn parse(path: &Path, raw: &[u8]) -> Result<Scene> {
     let gzipped = path
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("gz"));
     let data = if gzipped {
         let mut data = Vec::new();
-        flate2::read::GzDecoder::new(raw.as_slice())
+        flate2::read::GzDecoder::new(raw)
             .read_to_end(&mut data)
             .map_err(|e| Error::input(path, None, format!("cannot inflate gzip data: {e}")))?;
-        data
+        std::borrow::Cow::Owned(data)
     } else {
-        raw
+        std::borrow::Cow::Borrowed(raw)
     };
-    let mesh = parse(path, &data)?;
+    let mesh = parse_mesh(path, &data)?;
     still_mesh_scene(path, mesh, vec![Material::default()])
 }
 
@@ -268,7 +273,7 @@ impl Body<'_> {
     }
 }
 
-fn parse(path: &Path, data: &[u8]) -> Result<Mesh> {
+fn parse_mesh(path: &Path, data: &[u8]) -> Result<Mesh> {
     let header = parse_header(path, data)?;
     let vertex_count = header
         .elements
