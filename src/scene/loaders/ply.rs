@@ -335,7 +335,13 @@ fn parse_mesh(path: &Path, data: &[u8]) -> Result<Mesh> {
         if xyz.is_some() {
             vertices.reserve(element.count.min(data.len()));
         }
-        for instance in 0..element.count {
+        // An element without properties has nothing in the body, whatever its count says.
+        let count = if element.properties.is_empty() {
+            0
+        } else {
+            element.count
+        };
+        for instance in 0..count {
             let mut position = [0.0f64; 3];
             for (p, (_, property)) in element.properties.iter().enumerate() {
                 match property {
@@ -497,6 +503,18 @@ mod tests {
             scene.mesh.triangles,
             [Triangle::new(Vec3::Y, Vec3::X, Vec3::ZERO)]
         );
+    }
+
+    /// Fuzzing found a hang: an element without properties claiming 10⁹ instances was read
+    /// instance by instance, though it has no data.
+    #[test]
+    fn elements_without_properties_take_no_time() {
+        let text = "ply\nformat binary_little_endian 1.0\nelement edge 1000000000000\n\
+                    element face 0\nproperty list uchar int vertex_indices\nend_header\n";
+        let start = std::time::Instant::now();
+        let scene = parse(Path::new("empty.ply"), text.as_bytes());
+        assert!(scene.unwrap_err().to_string().contains("no triangles"));
+        assert!(start.elapsed().as_secs_f64() < 0.1);
     }
 
     #[test]
