@@ -44,6 +44,10 @@ pub enum Dialect {
     Aff,
 }
 
+/// BART's animations have at most a few thousand frames; a camera key for each of a count a
+/// typo made huge would take gigabytes.
+const MAX_FRAMES: i64 = 100_000;
+
 /// Includes nested deeper than this are taken for a cycle the path check missed.
 const MAX_INCLUDE_DEPTH: usize = 64;
 
@@ -227,6 +231,12 @@ impl Reader<'_> {
                     return Err(t.error(format!(
                         "animation range {start}..{end} with {frames} frames: frames must be at \
                          least 1 and the range must be non-empty when there are several"
+                    )));
+                }
+                if frames > MAX_FRAMES {
+                    return Err(t.error(format!(
+                        "{frames} frames are more than {MAX_FRAMES} (the camera path has a key \
+                         at every frame)"
                     )));
                 }
                 self.animation = Some(AnimationRange {
@@ -668,6 +678,28 @@ i 0 inner.aff
         assert!((c.up - Vec3::Y).length() < 1e-6);
         assert_eq!(c.fov_y_deg, 50.0);
         assert_eq!(scene.camera, path.keys[0].camera);
+    }
+
+    #[test]
+    fn huge_frame_counts_are_refused() {
+        // With a camera track, `a 0 1 100000000` asked for 10⁸ camera keys (seconds, gigabytes).
+        let text = "a 0 1 100000000\np 3\n0 0 0\n1 0 0\n0 1 0\nk camera\n{\ntransl 4\n\
+                    -1 0 0 1 0 0 0\n0 0 0 1 0 0 0\n1 0 0 1 0 0 0\n2 0 0 1 0 0 0\n}\n";
+        let no_files: Files = &|_| Err(std::io::ErrorKind::NotFound.into());
+        let options = LoadOptions::default();
+        let err = parse(
+            Path::new("long.aff"),
+            text.as_bytes(),
+            &options,
+            Dialect::Aff,
+            no_files,
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            err.starts_with("long.aff:1:") && err.contains("more than 100000"),
+            "{err}"
+        );
     }
 
     #[test]
