@@ -795,7 +795,11 @@ impl<'t> Mutator<'t> {
             }
             4 => {
                 let at = ws.get(below(rng, ws.len() + 1)).map_or(len, |w| w.0);
-                let sep: &[u8] = if rng.next_u64() % 2 == 0 { b" " } else { b"\n" };
+                let sep: &[u8] = if rng.next_u64().is_multiple_of(2) {
+                    b" "
+                } else {
+                    b"\n"
+                };
                 let word = [pick(rng, &self.dictionary).as_slice(), sep].concat();
                 splice(out, (at, at), &word);
             }
@@ -1040,7 +1044,7 @@ fn fuzz(name: &'static str) {
         let input = match seeds.next() {
             Some(seed) => seed.clone(),
             None => {
-                let parent = if accepted_pool.is_empty() || rng.next_u64() % 2 == 0 {
+                let parent = if accepted_pool.is_empty() || rng.next_u64().is_multiple_of(2) {
                     pick(&mut rng, &target.seeds)
                 } else {
                     pick(&mut rng, &accepted_pool)
