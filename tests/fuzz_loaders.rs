@@ -416,15 +416,15 @@ fn repository_files(dir: &str, suffix: &str) -> Vec<Vec<u8>> {
     files.iter().filter_map(|p| std::fs::read(p).ok()).collect()
 }
 
-/// The first kilobytes (cut at a line end) of up to 8 shared scene files ending in `suffix`,
-/// inflated when gzip-compressed; none without `$RAYLAB_SCENES`.
+/// The first kilobytes (cut at a line end) of up to 8 files ending in `suffix` under the
+/// `$RAYLAB_SCENES` directories, inflated when gzip-compressed; none without it.
 fn shared_snippets(suffix: &str) -> Vec<Vec<u8>> {
     const SNIPPET: usize = 4 << 10;
-    let Some(root) = std::env::var_os("RAYLAB_SCENES") else {
+    let Some(roots) = std::env::var_os("RAYLAB_SCENES") else {
         return Vec::new();
     };
     let mut found = Vec::new();
-    let mut dirs = vec![PathBuf::from(root)];
+    let mut dirs: Vec<PathBuf> = std::env::split_paths(&roots).collect();
     while let Some(dir) = dirs.pop() {
         let Ok(entries) = std::fs::read_dir(&dir) else {
             continue;
