@@ -832,7 +832,11 @@ fn expand_tracers(src: &Source, file: &ExperimentFile) -> Result<Vec<TracerInsta
                 axes.entry(key.clone()).or_insert_with(|| values.clone());
             }
         }
-        for params in cartesian(&axes) {
+        let grid = cartesian(src, &entry.span(), &axes)?;
+        if instances.len() + grid.len() > MAX_COMBINATIONS {
+            return Err(too_many(src, &entry.span()));
+        }
+        for params in grid {
             let instance = TracerInstance { info, params };
             if instances
                 .iter()
@@ -908,7 +912,11 @@ fn expand_renders(src: &Source, render: &Spanned<toml::Value>) -> Result<Vec<Ren
     let mut workloads: Vec<RenderWorkload> = Vec::new();
     for table in tables {
         let grid = table.iter().map(|(k, v)| (k.clone(), v.clone())).collect();
-        for workload in expand_render_grid(src, &Spanned::new(span.clone(), grid))? {
+        let grid = expand_render_grid(src, &Spanned::new(span.clone(), grid))?;
+        if workloads.len() + grid.len() > MAX_COMBINATIONS {
+            return Err(too_many(src, &span));
+        }
+        for workload in grid {
             if workloads.contains(&workload) {
                 return Err(
                     src.usage_error(&span, format!("render workload {workload} is listed twice"))
@@ -944,21 +952,43 @@ fn expand_render_grid(
             ))
         }
     };
-    cartesian(&axes)
+    cartesian(src, &table.span(), &axes)?
         .iter()
         .map(|params| workload(params).map_err(|e| src.usage_error(&table.span(), e)))
         .collect()
 }
 
-/// All combinations of one value per key, the first key varying slowest.
-fn cartesian(axes: &BTreeMap<String, Vec<String>>) -> Vec<Params> {
-    axes.iter()
+/// More tracer instances or render workloads than this is a typo, not an experiment (the
+/// committed ones have at most 36): a few short lists multiply to millions, each checked against
+/// the others for repeats.
+const MAX_COMBINATIONS: usize = 1000;
+
+fn too_many(src: &Source, span: &Range<usize>) -> Error {
+    src.input_error(
+        span,
+        format!("the parameter lists make more than {MAX_COMBINATIONS} combinations"),
+    )
+}
+
+/// All combinations of one value per key, the first key varying slowest; refused (at `span`)
+/// when there are more than `MAX_COMBINATIONS`.
+fn cartesian(
+    src: &Source,
+    span: &Range<usize>,
+    axes: &BTreeMap<String, Vec<String>>,
+) -> Result<Vec<Params>> {
+    let count = axes.values().fold(1usize, |n, v| n.saturating_mul(v.len()));
+    if count > MAX_COMBINATIONS {
+        return Err(too_many(src, span));
+    }
+    Ok(axes
+        .iter()
         .fold(vec![Params::new()], |partial, (key, values)| {
             partial
                 .iter()
                 .flat_map(|p| values.iter().map(move |v| p.clone().with(key, v)))
                 .collect()
-        })
+        }))
 }
 
 #[cfg(test)]
@@ -974,6 +1004,35 @@ mod tests {
     }
 
     const BASE: &str = "name = \"t\"\nscenes = [\"room\"]\nrays = [\"primary\"]\nresolution = { width = 8, height = 4 }\n";
+
+    #[test]
+    fn parameter_grids_are_bounded() {
+        // Three lists of 39 values asked for 59,319 instances, checked pairwise for repeats:
+        // a minute of parsing for 600 bytes.
+        let values = (1..40)
+            .map(|i| i.to_string())
+            .collect::<Vec<_>>()
+            .join(", ");
+        let text = format!(
+            "{BASE}tracers = [{{ name = \"reference\", params = {{ leaf_size = [{values}], \
+             max_depth = [{values}], bins = [{values}] }} }}]\n"
+        );
+        let err = parse(&text).unwrap_err();
+        assert_eq!(err.exit_code(), 2);
+        assert!(err.to_string().starts_with("exp.toml:5:"), "{err}");
+        assert!(
+            err.to_string().contains("more than 1000 combinations"),
+            "{err}"
+        );
+        let renders = "[[render]]\nrenderer = \"whitted\"\nmax_reflection_depth = [1, 2, 3, 4, 5, 6, 7, 8, 9, 10, \
+                       11]\nmax_depth = [1, 2, 3, 4, 5, 6, 7, 8, 9, 10]\nmax_refraction_depth = [1, 2, 3, 4, 5, 6, \
+                       7, 8, 9, 10]\n";
+        let err = parse(&format!("{BASE}tracers = [\"reference\"]\n{renders}")).unwrap_err();
+        assert!(
+            err.to_string().contains("more than 1000 combinations"),
+            "{err}"
+        );
+    }
 
     #[test]
     fn embree_best_sweeps_every_entry_point_context_and_quality() {

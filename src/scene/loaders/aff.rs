@@ -32,7 +32,7 @@ use super::keyframes::{self, TransformTrack};
 use super::nff::{self, View};
 use super::scene_graph::{Clock, Morph, SceneGraph};
 use super::tokens::Tokens;
-use super::{default_camera, require_triangles, scene_name, triangulate, LoadOptions};
+use super::{default_camera, require_triangles, scene_name, triangulate, Files, LoadOptions};
 use crate::error::{Error, Result};
 use crate::geometry::Triangle;
 use crate::scene::{CameraKey, CameraPath, Light, Material, Scene};
@@ -44,6 +44,10 @@ pub enum Dialect {
     Aff,
 }
 
+/// BART's animations have at most a few thousand frames; a camera key for each of a count a
+/// typo made huge would take gigabytes.
+const MAX_FRAMES: i64 = 100_000;
+
 /// Includes nested deeper than this are taken for a cycle the path check missed.
 const MAX_INCLUDE_DEPTH: usize = 64;
 
@@ -52,9 +56,22 @@ pub fn load(path: &Path, options: &LoadOptions) -> Result<Scene> {
 }
 
 pub fn load_dialect(path: &Path, options: &LoadOptions, dialect: Dialect) -> Result<Scene> {
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    parse(path, &bytes, options, dialect, &|file| std::fs::read(file))
+}
+
+/// The file `bytes` (named `path` in errors); included files are read through `files`.
+pub fn parse(
+    path: &Path,
+    bytes: &[u8],
+    options: &LoadOptions,
+    dialect: Dialect,
+    files: Files,
+) -> Result<Scene> {
     let mut reader = Reader {
         options,
         dialect,
+        files,
         materials: Vec::new(),
         current_material: None,
         lights: Vec::new(),
@@ -64,7 +81,7 @@ pub fn load_dialect(path: &Path, options: &LoadOptions, dialect: Dialect) -> Res
         animation: None,
         detail_level: 0,
     };
-    reader.read_file(path, &mut Vec::new())?;
+    reader.read_file(path, bytes, &mut Vec::new())?;
     reader.into_scene(path)
 }
 
@@ -76,9 +93,10 @@ struct AnimationRange {
     frames: usize,
 }
 
-struct Reader<'o> {
-    options: &'o LoadOptions,
+struct Reader<'a> {
+    options: &'a LoadOptions,
     dialect: Dialect,
+    files: Files<'a>,
     materials: Vec<Material>,
     current_material: Option<u32>,
     lights: Vec<Light>,
@@ -91,10 +109,9 @@ struct Reader<'o> {
 
 impl Reader<'_> {
     /// Reads one file; `chain` holds the files that include it, to catch cycles.
-    fn read_file(&mut self, path: &Path, chain: &mut Vec<PathBuf>) -> Result<()> {
-        let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    fn read_file(&mut self, path: &Path, bytes: &[u8], chain: &mut Vec<PathBuf>) -> Result<()> {
         // Comments may hold Latin-1 text; commands are ASCII.
-        let text = String::from_utf8_lossy(&bytes);
+        let text = String::from_utf8_lossy(bytes);
         let mut t = Tokens::new(path, &text);
         chain.push(path.canonicalize().unwrap_or_else(|_| path.to_path_buf()));
         // Lines of the blocks opened in this file and not yet closed.
@@ -214,6 +231,12 @@ impl Reader<'_> {
                     return Err(t.error(format!(
                         "animation range {start}..{end} with {frames} frames: frames must be at \
                          least 1 and the range must be non-empty when there are several"
+                    )));
+                }
+                if frames > MAX_FRAMES {
+                    return Err(t.error(format!(
+                        "{frames} frames are more than {MAX_FRAMES} (the camera path has a key \
+                         at every frame)"
                     )));
                 }
                 self.animation = Some(AnimationRange {
@@ -338,17 +361,17 @@ impl Reader<'_> {
             return Ok(());
         }
         let file = t.path().parent().unwrap_or(Path::new("")).join(name);
-        if let Err(e) = std::fs::metadata(&file) {
-            return Err(t.error(format!(
-                "included file {} cannot be read: {e}",
-                file.display()
-            )));
-        }
         let canonical = file.canonicalize().unwrap_or_else(|_| file.clone());
         if chain.contains(&canonical) || chain.len() >= MAX_INCLUDE_DEPTH {
             return Err(t.error(format!("include cycle through {}", file.display())));
         }
-        self.read_file(&file, chain)
+        let bytes = (self.files)(&file).map_err(|e| {
+            t.error(format!(
+                "included file {} cannot be read: {e}",
+                file.display()
+            ))
+        })?;
+        self.read_file(&file, &bytes, chain)
     }
 
     fn into_scene(self, path: &Path) -> Result<Scene> {
@@ -655,6 +678,28 @@ i 0 inner.aff
         assert!((c.up - Vec3::Y).length() < 1e-6);
         assert_eq!(c.fov_y_deg, 50.0);
         assert_eq!(scene.camera, path.keys[0].camera);
+    }
+
+    #[test]
+    fn huge_frame_counts_are_refused() {
+        // With a camera track, `a 0 1 100000000` asked for 10⁸ camera keys (seconds, gigabytes).
+        let text = "a 0 1 100000000\np 3\n0 0 0\n1 0 0\n0 1 0\nk camera\n{\ntransl 4\n\
+                    -1 0 0 1 0 0 0\n0 0 0 1 0 0 0\n1 0 0 1 0 0 0\n2 0 0 1 0 0 0\n}\n";
+        let no_files: Files = &|_| Err(std::io::ErrorKind::NotFound.into());
+        let options = LoadOptions::default();
+        let err = parse(
+            Path::new("long.aff"),
+            text.as_bytes(),
+            &options,
+            Dialect::Aff,
+            no_files,
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            err.starts_with("long.aff:1:") && err.contains("more than 100000"),
+            "{err}"
+        );
     }
 
     #[test]

@@ -3,7 +3,8 @@
 //! transform hierarchies and keyframe animation).
 //!
 //! Every loader returns one `Error` naming the file and, where known, the line for bad input;
-//! none panics. Degenerate (zero-area) triangles are kept: real scenes have them (conference has
+//! none panics, hangs or allocates for counts the data does not back (`tests/fuzz_loaders.rs`
+//! and the cargo-fuzz targets in `fuzz/` check it). Degenerate (zero-area) triangles are kept: real scenes have them (conference has
 //! 52,670) and tracers must cope.
 
 mod aff;
@@ -53,12 +54,7 @@ pub fn load(path: &Path) -> Result<Scene> {
 }
 
 pub fn load_with(path: &Path, options: &LoadOptions) -> Result<Scene> {
-    if options.sphere_segments < 4 || options.cone_segments < 3 {
-        return Err(Error::usage(format!(
-            "tessellation needs at least 4 sphere segments and 3 cone segments (got {} and {})",
-            options.sphere_segments, options.cone_segments
-        )));
-    }
+    check_options(options)?;
     let name = path
         .file_name()
         .map(|n| n.to_string_lossy().to_lowercase())
@@ -78,6 +74,50 @@ pub fn load_with(path: &Path, options: &LoadOptions) -> Result<Scene> {
             "unknown scene file type (expected .obj, .ply, .ply.gz, .nff or .aff)",
         ))
     }
+}
+
+fn check_options(options: &LoadOptions) -> Result<()> {
+    if options.sphere_segments < 4 || options.cone_segments < 3 {
+        return Err(Error::usage(format!(
+            "tessellation needs at least 4 sphere segments and 3 cone segments (got {} and {})",
+            options.sphere_segments, options.cone_segments
+        )));
+    }
+    Ok(())
+}
+
+/// Where a loader reads the files that a file names (OBJ material libraries, AFF includes):
+/// the filesystem for `load`; for the `parse_*` entry points, whatever the caller provides.
+pub type Files<'a> = &'a dyn Fn(&Path) -> std::io::Result<Vec<u8>>;
+
+// In-memory entry points (fuzzing, tests): the file's contents and the path its errors name.
+
+/// An OBJ file; its material libraries come from `files`.
+pub fn parse_obj(path: &Path, bytes: &[u8], files: Files) -> Result<Scene> {
+    obj::parse(path, bytes, files)
+}
+
+/// An MTL library's materials.
+pub fn parse_mtl(path: &Path, bytes: &[u8]) -> Result<Vec<Material>> {
+    mtl::parse(path, &String::from_utf8_lossy(bytes))
+}
+
+/// A PLY file, gzip-compressed when `path` ends in `.gz`.
+pub fn parse_ply(path: &Path, bytes: &[u8]) -> Result<Scene> {
+    ply::parse(path, bytes)
+}
+
+/// An NFF file.
+pub fn parse_nff(path: &Path, bytes: &[u8], options: &LoadOptions) -> Result<Scene> {
+    check_options(options)?;
+    let no_files: Files = &|_| Err(std::io::ErrorKind::NotFound.into());
+    aff::parse(path, bytes, options, aff::Dialect::Nff, no_files)
+}
+
+/// An AFF file; the files it includes come from `files`.
+pub fn parse_aff(path: &Path, bytes: &[u8], options: &LoadOptions, files: Files) -> Result<Scene> {
+    check_options(options)?;
+    aff::parse(path, bytes, options, aff::Dialect::Aff, files)
 }
 
 /// A view for files that carry none: the bounds' centre seen from above the (+x, +y, +z)

@@ -11,13 +11,19 @@ use std::path::Path;
 
 use glam::Vec3;
 
-use super::{mtl, still_mesh_scene, triangulate};
+use super::{mtl, still_mesh_scene, triangulate, Files};
 use crate::error::{Error, Result};
 use crate::geometry::Triangle;
 use crate::scene::{Material, Mesh, Scene};
 
 pub fn load(path: &Path) -> Result<Scene> {
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    parse(path, &bytes, &|library| std::fs::read(library))
+}
+
+/// The OBJ file `bytes` (named `path` in errors); material libraries are read through `files`,
+/// relative to `path`'s directory.
+pub fn parse(path: &Path, bytes: &[u8], files: Files) -> Result<Scene> {
     let dir = path.parent().unwrap_or(Path::new("")).to_path_buf();
 
     // Materials of every library that loaded, in the order tobj numbers them, and the first
@@ -26,7 +32,7 @@ pub fn load(path: &Path) -> Result<Scene> {
     let broken_library: RefCell<Option<Error>> = RefCell::new(None);
     let load_library = |name: &Path| -> tobj::MTLLoadResult {
         let file = dir.join(name);
-        let text = match std::fs::read(&file) {
+        let text = match files(&file) {
             Ok(bytes) => String::from_utf8_lossy(&bytes).into_owned(),
             Err(e) => {
                 eprintln!(
@@ -66,13 +72,16 @@ pub fn load(path: &Path) -> Result<Scene> {
         ignore_points: true,
         ignore_lines: true,
     };
-    let loaded = tobj::load_obj_buf(&mut Cursor::new(&bytes), &options, load_library);
+    if let Some(problem) = overflowing_index(path, bytes) {
+        return Err(problem);
+    }
+    let loaded = tobj::load_obj_buf(&mut Cursor::new(bytes), &options, load_library);
     if let Some(e) = broken_library.into_inner() {
         return Err(e);
     }
     let (models, _) = match loaded {
         Ok(loaded) => loaded,
-        Err(e) => return Err(locate_problem(path, &bytes, &e.to_string())),
+        Err(e) => return Err(locate_problem(path, bytes, &e.to_string())),
     };
     let mut materials = materials.into_inner();
 
@@ -81,7 +90,7 @@ pub fn load(path: &Path) -> Result<Scene> {
     for model in &models {
         let m = &model.mesh;
         if m.positions.iter().any(|x| !x.is_finite()) {
-            return Err(locate_problem(path, &bytes, "non-finite vertex position"));
+            return Err(locate_problem(path, bytes, "non-finite vertex position"));
         }
         let material = match m.material_id {
             Some(id) if id < materials.len() => id as u32,
@@ -155,6 +164,47 @@ fn locate_problem(path: &Path, bytes: &[u8], fallback: &str) -> Error {
     Error::input(path, None, fallback)
 }
 
+/// The first face corner whose index would overflow tobj's index arithmetic (a panic in builds
+/// with overflow checks): a relative index reaching before the first element, or an index larger
+/// than the file could define.
+fn overflowing_index(path: &Path, bytes: &[u8]) -> Option<Error> {
+    let mut counts = [0u64; 3];
+    for (index, raw) in bytes.split(|&b| b == b'\n').enumerate() {
+        // tobj refuses lines that are not UTF-8 itself.
+        let Ok(line) = std::str::from_utf8(raw) else {
+            continue;
+        };
+        let mut words = line.split_whitespace();
+        match words.next() {
+            Some("v") => counts[0] += 1,
+            Some("vt") => counts[1] += 1,
+            Some("vn") => counts[2] += 1,
+            Some("f") => {
+                for corner in words {
+                    for (k, part) in corner.split('/').take(3).enumerate() {
+                        let Ok(i) = part.parse::<i64>() else {
+                            continue;
+                        };
+                        let n = i.unsigned_abs();
+                        if (i < 0 && n > counts[k]) || n > bytes.len() as u64 {
+                            return Some(Error::at_line(
+                                path,
+                                index + 1,
+                                format!(
+                                    "{} index {i} is out of range ({} defined so far)",
+                                    KINDS[k], counts[k]
+                                ),
+                            ));
+                        }
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+    None
+}
+
 fn finite(word: &str) -> bool {
     word.parse::<f32>().is_ok_and(|x| x.is_finite())
 }
@@ -188,10 +238,11 @@ fn check_numbers(what: &str, args: &[&str], n: usize) -> Option<String> {
     }
 }
 
+const KINDS: [&str; 3] = ["vertex", "texture coordinate", "normal"];
+
 /// One face corner `v`, `v/vt`, `v//vn` or `v/vt/vn`: 1-based, or negative counting back from
 /// the last element defined so far.
 fn check_corner(corner: &str, counts: [usize; 3]) -> Option<String> {
-    const KINDS: [&str; 3] = ["vertex", "texture coordinate", "normal"];
     let parts: Vec<&str> = corner.split('/').collect();
     if parts.len() > 3 || parts[0].is_empty() {
         return Some(format!("malformed face corner '{corner}'"));
@@ -314,6 +365,26 @@ mod tests {
             assert!(err.contains("bad.obj"), "{err}");
             assert!(err.contains(&format!(":{line}: ")), "{err}");
             assert!(err.contains(what), "{err}");
+        }
+        // Found by cargo fuzz with overflow checks: a relative index before the first element
+        // or a huge one made tobj's index arithmetic overflow.
+        let no_files: Files = &|_| Err(std::io::ErrorKind::NotFound.into());
+        for (text, at, what) in [
+            (
+                &b"v 0 0 0\nvt 0 0\nf 1/-12 1/1 1/1\n"[..],
+                "overflow.obj:3:",
+                "texture coordinate index -12",
+            ),
+            (
+                b"v 0 0 0\nf 1 1 9223372036854775807\n",
+                "overflow.obj:2:",
+                "vertex index 9223372036854775807",
+            ),
+        ] {
+            let err = parse(Path::new("overflow.obj"), text, no_files)
+                .unwrap_err()
+                .to_string();
+            assert!(err.starts_with(at) && err.contains(what), "{err}");
         }
         let empty = temp_file("empty.obj", b"# nothing\nv 0 0 0\n");
         assert!(load(&empty)

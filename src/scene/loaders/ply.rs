@@ -17,19 +17,24 @@ use crate::scene::{Material, Mesh, Scene};
 
 pub fn load(path: &Path) -> Result<Scene> {
     let raw = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    parse(path, &raw)
+}
+
+/// The PLY file `raw` (named `path` in errors), inflated first when `path` ends in `.gz`.
+pub fn parse(path: &Path, raw: &[u8]) -> Result<Scene> {
     let gzipped = path
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("gz"));
     let data = if gzipped {
         let mut data = Vec::new();
-        flate2::read::GzDecoder::new(raw.as_slice())
+        flate2::read::GzDecoder::new(raw)
             .read_to_end(&mut data)
             .map_err(|e| Error::input(path, None, format!("cannot inflate gzip data: {e}")))?;
-        data
+        std::borrow::Cow::Owned(data)
     } else {
-        raw
+        std::borrow::Cow::Borrowed(raw)
     };
-    let mesh = parse(path, &data)?;
+    let mesh = parse_mesh(path, &data)?;
     still_mesh_scene(path, mesh, vec![Material::default()])
 }
 
@@ -268,7 +273,7 @@ impl Body<'_> {
     }
 }
 
-fn parse(path: &Path, data: &[u8]) -> Result<Mesh> {
+fn parse_mesh(path: &Path, data: &[u8]) -> Result<Mesh> {
     let header = parse_header(path, data)?;
     let vertex_count = header
         .elements
@@ -330,7 +335,13 @@ fn parse(path: &Path, data: &[u8]) -> Result<Mesh> {
         if xyz.is_some() {
             vertices.reserve(element.count.min(data.len()));
         }
-        for instance in 0..element.count {
+        // An element without properties has nothing in the body, whatever its count says.
+        let count = if element.properties.is_empty() {
+            0
+        } else {
+            element.count
+        };
+        for instance in 0..count {
             let mut position = [0.0f64; 3];
             for (p, (_, property)) in element.properties.iter().enumerate() {
                 match property {
@@ -492,6 +503,18 @@ mod tests {
             scene.mesh.triangles,
             [Triangle::new(Vec3::Y, Vec3::X, Vec3::ZERO)]
         );
+    }
+
+    /// Fuzzing found a hang: an element without properties claiming 10⁹ instances was read
+    /// instance by instance, though it has no data.
+    #[test]
+    fn elements_without_properties_take_no_time() {
+        let text = "ply\nformat binary_little_endian 1.0\nelement edge 1000000000000\n\
+                    element face 0\nproperty list uchar int vertex_indices\nend_header\n";
+        let start = std::time::Instant::now();
+        let scene = parse(Path::new("empty.ply"), text.as_bytes());
+        assert!(scene.unwrap_err().to_string().contains("no triangles"));
+        assert!(start.elapsed().as_secs_f64() < 0.1);
     }
 
     #[test]
