@@ -18,11 +18,20 @@ use crate::tracers::{Tracer, VisibilityQuery};
 /// that a 1024² batch gives 256 chunks for load balancing.
 pub const CHUNK_RAYS: usize = 4096;
 
-/// The chunks of `rays`: runs of `chunk_rays`, or, when the batch has explicit packets, runs of
-/// whole packets each ending at the first packet start at or past `chunk_rays` rays, so that no
-/// packet is split between two chunks.
+/// Fewest chunks a batch is cut into when the tracer asks for chunks longer than `CHUNK_RAYS`: a
+/// stream tracer asking for 65,536-ray chunks would otherwise get a renderer's 65,536-ray wave
+/// as one chunk, on one thread. A constant, not the thread count, so the chunks (and a stream
+/// tracer's streams and counters) are the same at every thread count.
+const MIN_CHUNKS: usize = 8;
+
+/// The chunks of `rays`: runs of `chunk_rays` (shortened, not below `CHUNK_RAYS` and in whole
+/// 1024-ray blocks, so a batch makes `MIN_CHUNKS` of them), or, when the batch has explicit
+/// packets, runs of whole packets each ending at the first packet start at or past that length,
+/// so that no packet is split between two chunks.
 fn chunk_ranges(rays: Rays<'_>, chunk_rays: usize) -> Vec<Range<usize>> {
-    packet_chunks(rays.len(), rays.packet_start, chunk_rays)
+    let share = rays.len().div_ceil(MIN_CHUNKS).next_multiple_of(1024);
+    let length = chunk_rays.min(share.max(CHUNK_RAYS));
+    packet_chunks(rays.len(), rays.packet_start, length)
 }
 
 /// Runs of `len` items, at least `at_least` long (but the last), each ending at a packet start
@@ -179,6 +188,21 @@ mod tests {
             .map(|r| r.len())
             .collect();
         assert_eq!(lens, vec![CHUNK_RAYS, CHUNK_RAYS, 5]);
+    }
+
+    #[test]
+    fn long_chunks_are_shortened_so_a_batch_makes_eight() {
+        let lens = |n: usize, chunk_rays: usize| -> Vec<usize> {
+            chunk_ranges(batch(n, None).view(), chunk_rays)
+                .iter()
+                .map(|r| r.len())
+                .collect()
+        };
+        // A 65,536-ray wave asked in 65,536-ray chunks: 8 of 8192, not 1.
+        assert_eq!(lens(65_536, 65_536), vec![8192; 8]);
+        // A million rays keep the asked length; short batches keep CHUNK_RAYS.
+        assert_eq!(lens(1 << 20, 65_536), vec![65_536; 16]);
+        assert_eq!(lens(3 * CHUNK_RAYS, 65_536), vec![CHUNK_RAYS; 3]);
     }
 
     #[test]
