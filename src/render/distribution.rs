@@ -141,6 +141,21 @@ impl DrtSettings {
         (projection, tiles, per_wave)
     }
 
+    /// The pixels `(x, y)` of a wave's tiles inside the image, each tile in Morton order.
+    pub(crate) fn wave_pixels<'a>(
+        &self,
+        wave: &'a [(u32, u32)],
+    ) -> impl Iterator<Item = (u32, u32)> + 'a {
+        let (width, height) = (self.width, self.height);
+        wave.iter().flat_map(move |&(tx, ty)| {
+            (0..TILE * TILE).filter_map(move |code| {
+                let (dx, dy) = morton_decode(code);
+                let (x, y) = (tx * TILE + dx, ty * TILE + dy);
+                (x < width && y < height).then_some((x, y))
+            })
+        })
+    }
+
     /// The keys of an experiment's distribution `render` table besides `renderer`.
     pub const KEYS: [&str; 4] = ["spp", "aperture", "focus", "max_depth"];
 
@@ -461,30 +476,23 @@ pub fn render_distribution(
     for wave in tiles.chunks(tiles_per_wave) {
         let mut paths = Vec::new();
         let mut camera = Generation::new(RayKind::Primary);
-        for &(tx, ty) in wave {
-            for code in 0..TILE * TILE {
-                let (dx, dy) = morton_decode(code);
-                let (x, y) = (tx * TILE + dx, ty * TILE + dy);
-                if x >= settings.width || y >= settings.height {
-                    continue;
-                }
-                for sample in 0..settings.spp {
-                    let time = if geometry.is_moving() {
-                        table.get(x, y, sample, PAIR_TIME).0
-                    } else {
-                        0.0
-                    };
-                    paths.push(Path {
-                        pixel: y * settings.width + x,
-                        x,
-                        y,
-                        sample,
-                        time,
-                        weight: Vec3::ONE,
-                    });
-                    let ray = camera_ray(&projection, &table, x, y, sample);
-                    camera.push(ray, paths.len() - 1, &paths, Vec3::ONE);
-                }
+        for (x, y) in settings.wave_pixels(wave) {
+            for sample in 0..settings.spp {
+                let time = if geometry.is_moving() {
+                    table.get(x, y, sample, PAIR_TIME).0
+                } else {
+                    0.0
+                };
+                paths.push(Path {
+                    pixel: y * settings.width + x,
+                    x,
+                    y,
+                    sample,
+                    time,
+                    weight: Vec3::ONE,
+                });
+                let ray = camera_ray(&projection, &table, x, y, sample);
+                camera.push(ray, paths.len() - 1, &paths, Vec3::ONE);
             }
         }
         let mut colour = vec![Vec3::ZERO; paths.len()];

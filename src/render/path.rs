@@ -48,7 +48,7 @@ use crate::render::area_light::sample_light;
 use crate::render::assembly::BatchKind;
 use crate::render::distribution::{DrtFrame, DrtSettings, FrameGeometry, Records};
 use crate::render::light_query::LightQueries;
-use crate::render::rays::{morton_decode, SurfacePoint, TILE};
+use crate::render::rays::SurfacePoint;
 use crate::render::sampling::{cosine_hemisphere, uniform};
 use crate::render::shading::{fresnel_dielectric, BACKGROUND};
 use crate::render::specular::{reflect, reflection_ray, refract, refraction_ray, relative_ior};
@@ -453,36 +453,29 @@ pub fn render_path(
     for wave in tiles.chunks(tiles_per_wave) {
         let mut paths = Vec::new();
         let mut current = Generation::new(RayKind::Primary);
-        for &(tx, ty) in wave {
-            for code in 0..TILE * TILE {
-                let (dx, dy) = morton_decode(code);
-                let (x, y) = (tx * TILE + dx, ty * TILE + dy);
-                if x >= settings.width || y >= settings.height {
-                    continue;
-                }
-                let pixel = y * settings.width + x;
-                for sample in 0..spp {
-                    let index = pixel as u64 * spp + sample;
-                    let u = |dim: u32| uniform(seed, index, dim);
-                    let state = PathState {
-                        pixel,
-                        index,
-                        time: if geometry.is_moving() {
-                            u(DIM_TIME)
-                        } else {
-                            0.0
-                        },
-                        weight: Vec3::ONE,
-                        specular: true,
-                    };
-                    let ray = projection.ray(
-                        x as f32 + u(DIM_PIXEL),
-                        y as f32 + u(DIM_PIXEL + 1),
-                        (u(DIM_LENS), u(DIM_LENS + 1)),
-                    );
-                    paths.push(state);
-                    current.push(ray, paths.len() - 1, &state);
-                }
+        for (x, y) in settings.wave_pixels(wave) {
+            let pixel = y * settings.width + x;
+            for sample in 0..spp {
+                let index = pixel as u64 * spp + sample;
+                let u = |dim: u32| uniform(seed, index, dim);
+                let state = PathState {
+                    pixel,
+                    index,
+                    time: if geometry.is_moving() {
+                        u(DIM_TIME)
+                    } else {
+                        0.0
+                    },
+                    weight: Vec3::ONE,
+                    specular: true,
+                };
+                let ray = projection.ray(
+                    x as f32 + u(DIM_PIXEL),
+                    y as f32 + u(DIM_PIXEL + 1),
+                    (u(DIM_LENS), u(DIM_LENS + 1)),
+                );
+                paths.push(state);
+                current.push(ray, paths.len() - 1, &state);
             }
         }
         let mut colour = vec![Vec3::ZERO; paths.len()];
