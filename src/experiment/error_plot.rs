@@ -12,6 +12,7 @@ use std::path::{Path, PathBuf};
 
 use plotters::prelude::*;
 
+use crate::accel::AccelKind;
 use crate::error::Result;
 use crate::render::convergence::{write_error_csv, ErrorPoint};
 
@@ -94,7 +95,9 @@ fn spp_groups(exp: &Experiment) -> Vec<Vec<usize>> {
     groups
 }
 
-/// One point per tracer instance and workload of `group` on frame 0 of `scene`.
+/// One point per tracer instance and workload of `group` on frame 0 of `scene`; the Embree
+/// instances are one line, "Embree best": at each sample count the fastest of them (every ratio is
+/// against Embree at its best, and twenty configurations would bury the plot).
 fn error_points(
     exp: &Experiment,
     plan: &Plan,
@@ -131,17 +134,33 @@ fn error_points(
             })
             .filter_map(at)
             .sum();
-        points.push(ErrorPoint {
-            tracer: plan.instances[frame.instance].label.clone(),
+        let instance = &plan.instances[frame.instance];
+        let embree = instance.structure.kind == AccelKind::Embree;
+        let point = ErrorPoint {
+            tracer: match embree {
+                true => EMBREE_BEST_LINE.to_string(),
+                false => instance.label.clone(),
+            },
             spp: w.settings.spp,
             seconds,
             trace_seconds,
             rays: frame.rays as u64,
             rmse,
+        };
+        let slower_embree = points.iter().position(|p: &ErrorPoint| {
+            embree && p.tracer == EMBREE_BEST_LINE && p.spp == point.spp
         });
+        match slower_embree {
+            Some(i) if points[i].seconds <= point.seconds => {}
+            Some(i) => points[i] = point,
+            None => points.push(point),
+        }
     }
     points
 }
+
+/// The label of the Embree line.
+const EMBREE_BEST_LINE: &str = "Embree best";
 
 /// Draws RMSE against wall-clock seconds per frame for `points` into `path`.
 pub fn plot_error_vs_time(path: &Path, title: &str, points: &[ErrorPoint]) -> Result<()> {

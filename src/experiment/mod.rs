@@ -577,7 +577,7 @@ mod tests {
     #[test]
     fn a_path_workload_gives_rows_per_bounce_and_an_rmse_that_falls_with_spp() {
         let out = scratch("path");
-        let text = "name = \"t\"\nscenes = [\"room-area-light\"]\ntracers = [\"reference\", \"stream\"]\n\
+        let text = "name = \"t\"\nscenes = [\"room-area-light\"]\ntracers = [\"reference\", \"stream\", \"embree1\", \"embree16\"]\n\
                     render = { renderer = \"path\", spp = [1, 16], max_depth = 2 }\n\
                     resolution = { width = 12, height = 12 }\nthreads = [1]\nwarmup = 0\nrepeats = 1\n";
         let load = |spec: &SceneSpec| crate::scene::library::load_scene(&spec.name, spec.size);
@@ -619,8 +619,26 @@ mod tests {
             "{rmse:?}"
         );
         assert_eq!(rmse[&("reference", 16)], rmse[&("stream", 16)]);
+        // A line per tracer of ours and one for Embree: at each spp its fastest configuration.
         let (_, points) = read_csv(&dir.join("error_vs_time.csv"));
-        assert_eq!(points.len(), 4);
+        assert_eq!(points.len(), 6);
+        let frame_seconds = |tracer: &str, spp: u32| {
+            runs.iter()
+                .filter(|r| r["tracer"] == tracer && r["ray_kind"] == "frame")
+                .find(|r| r["render"].ends_with(&format!(";spp={spp}")))
+                .map(|r| r["seconds_min"].parse::<f64>().unwrap())
+                .unwrap()
+        };
+        for spp in [1u32, 16] {
+            let embree: Vec<_> = points
+                .iter()
+                .filter(|p| p["tracer"] == "Embree best" && p["spp"] == spp.to_string())
+                .collect();
+            assert_eq!(embree.len(), 1, "{points:?}");
+            let fastest = frame_seconds("embree1", spp).min(frame_seconds("embree16", spp));
+            let plotted: f64 = embree[0]["seconds"].parse().unwrap();
+            assert!((plotted - fastest).abs() < 2e-6, "{plotted} vs {fastest}");
+        }
         assert!(dir.join("error_vs_time.png").is_file());
         fs::remove_dir_all(&out).unwrap();
     }
@@ -847,8 +865,10 @@ series = "scene"
     #[test]
     fn the_boulos07_experiments_parse_and_select_their_own_workloads() {
         for (file, instances, renders, tables, figures) in [
-            ("boulos07.toml", 8, 13, 3, 2),
-            ("boulos07-drt.toml", 5, 8, 2, 1),
+            // embree-best: 5 entry points × 2 contexts × 2 build qualities.
+            ("boulos07.toml", 26, 12, 3, 1),
+            ("boulos07-drt.toml", 23, 8, 2, 1),
+            ("boulos07-fig8.toml", 1, 2, 1, 2),
         ] {
             let exp = Experiment::load(
                 &Path::new(env!("CARGO_MANIFEST_DIR"))

@@ -21,6 +21,7 @@
 //!   { label = "total", sum = ["build", "trace"] },   # sum of columns of the row
 //!   { label = "best", min = ["low", "refit"] },      # smallest of columns of the row
 //!   { label = "fps", inverse = "total", scale = 1000 },  # scale / column (ms → frames/s)
+//!   { label = "Embree best", text = "embree_best_config" },  # a field's values, as written
 //! ]
 //! ```
 //!
@@ -90,6 +91,9 @@ pub struct ColumnSpec {
     pub sum: Option<Vec<String>>,
     pub min: Option<Vec<String>>,
     pub inverse: Option<String>,
+    /// A runs.csv field shown as written (e.g. which Embree configuration was the best): the
+    /// distinct values of the matching rows, joined by " / ".
+    pub text: Option<String>,
 }
 
 impl ColumnSpec {
@@ -124,11 +128,15 @@ impl TableSpec {
                 c.sum.is_some(),
                 c.min.is_some(),
                 c.inverse.is_some(),
+                c.text.is_some(),
             ];
             if kinds.iter().filter(|&&k| k).count() > 1 {
                 return Err(Error::usage(format!(
-                    "{what}: give at most one of paper, ratio, sum, min, inverse"
+                    "{what}: give at most one of paper, ratio, sum, min, inverse, text"
                 )));
+            }
+            if let Some(field) = &c.text {
+                check_field(field, &what)?;
             }
             let refs = c
                 .ratio
@@ -144,7 +152,7 @@ impl TableSpec {
                     )));
                 }
             }
-            if kinds == [false; 5] {
+            if kinds == [false; 6] {
                 match c.metric.as_ref().or(self.metric.as_ref()) {
                     Some(m) => check_field(m, &what)?,
                     None => return Err(Error::usage(format!("{what}: no metric"))),
@@ -181,15 +189,25 @@ impl TableSpec {
         out.push_str(&"---:|".repeat(self.columns.len()));
         out.push('\n');
         for (label, row_filter) in &table_rows {
-            let values = self.row_values(rows, &self.filter.and(row_filter));
+            let filter = self.filter.and(row_filter);
+            let values = self.row_values(rows, &filter);
             let _ = write!(out, "| {label} |");
             for (c, value) in self.columns.iter().zip(&values) {
-                let text = match (&c.paper, value) {
-                    (Some(paper), _) => paper.get(label).map_or("–".to_string(), paper_text),
-                    (None, Some(v)) => {
+                let text = match (&c.paper, &c.text, value) {
+                    (Some(paper), _, _) => paper.get(label).map_or("–".to_string(), paper_text),
+                    (None, Some(field), _) => {
+                        let shown = distinct(rows, &filter.and(&c.filter), field);
+                        let shown: Vec<String> =
+                            shown.into_iter().filter(|v| !v.is_empty()).collect();
+                        match shown.is_empty() {
+                            true => "–".to_string(),
+                            false => shown.join(" / "),
+                        }
+                    }
+                    (None, None, Some(v)) => {
                         format!("{v:.*}", c.decimals.or(self.decimals).unwrap_or(2))
                     }
-                    (None, None) => "–".to_string(),
+                    (None, None, None) => "–".to_string(),
                 };
                 let _ = write!(out, " {text} |");
             }
@@ -204,7 +222,7 @@ impl TableSpec {
             .columns
             .iter()
             .map(|c| {
-                if c.paper.is_some() || c.derived() {
+                if c.paper.is_some() || c.text.is_some() || c.derived() {
                     return None;
                 }
                 let measure = Measure {
@@ -294,5 +312,56 @@ mod tests {
         let bad =
             table("[[tables]]\ntitle = \"t\"\nrows = \"scene\"\ncolumns = [{ label = \"a\" }]\n");
         assert!(bad.check().unwrap_err().to_string().contains("no metric"));
+    }
+
+    #[test]
+    fn text_columns_show_the_field_as_written_beside_the_numbers() {
+        let spec = table(
+            "[[tables]]\ntitle = \"t\"\nrows = \"scene\"\nmetric = \"seconds_min\"\nscale = 1000\ncolumns = [\n\
+             { label = \"ours\", where = { tracer = \"packet\" } },\n\
+             { label = \"best\", metric = \"embree_best_seconds\", where = { tracer = \"packet\" } },\n\
+             { label = \"config\", text = \"embree_best_config\", where = { tracer = \"packet\" } },\n\
+             { label = \"x\", ratio = [\"best\", \"ours\"] },\n]\n",
+        );
+        spec.check().unwrap();
+        let row = |scene: &str, seconds: &str, best: &str, config: &str| -> Row {
+            [
+                ("scene", scene),
+                ("tracer", "packet"),
+                ("frame", "0"),
+                ("seconds_min", seconds),
+                ("embree_best_seconds", best),
+                ("embree_best_config", config),
+            ]
+            .iter()
+            .map(|(k, v)| (k.to_string(), v.to_string()))
+            .collect()
+        };
+        let rows = [
+            row(
+                "room",
+                "0.010",
+                "0.020",
+                "embree16 context=coherent quality=high",
+            ),
+            row("hall", "0.040", "", ""),
+        ];
+        let text = spec.render(&rows);
+        assert!(
+            text.contains(
+                "| room | 10.00 | 20.00 | embree16 context=coherent quality=high | 2.00 |"
+            ),
+            "{text}"
+        );
+        // A run without an Embree row for the group: dashes, not an empty config.
+        assert!(text.contains("| hall | 40.00 | – | – | – |"), "{text}");
+        let both = table(
+            "[[tables]]\ntitle = \"t\"\nrows = \"scene\"\ncolumns = [{ label = \"a\", text = \"tracer\", ratio = [\"a\", \"a\"] }]\n",
+        );
+        assert!(both
+            .check()
+            .unwrap_err()
+            .to_string()
+            .contains("at most one"));
     }
 }
