@@ -196,7 +196,7 @@ mod tests {
     #[test]
     fn parts_are_disjoint_cover_the_plan_and_balance_by_cost() {
         let exp = experiment(
-            "scenes = [\"lit\", \"dark\", \"moving\"]\ntracers = [\"reference\", \"obvhs\", \"embree1\"]\n",
+            "scenes = [\"lit\", \"dark\", \"moving\"]\ntracers = [\"reference\", \"obvhs\", \"embree1\"]\nrays = [\"primary\"]\n",
         );
         let plan = Plan::derive(&exp, &load_quads).unwrap();
         let parts: Vec<Part> = (0..3)
