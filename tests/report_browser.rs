@@ -129,7 +129,7 @@ fn chromium_renders_the_reports_tables_and_images() {
         })
         .count();
     assert!(pngs >= 2, "the run drew {pngs} plots");
-    let page = report::write(&[dir.clone()], false, None).unwrap();
+    let page = report::write(std::slice::from_ref(&dir), false, None).unwrap();
     let html = std::fs::read_to_string(&page).unwrap();
     let probe_page = work.join("probe.html");
     std::fs::write(

@@ -18,6 +18,9 @@ img{max-width:100%;border:1px solid #ccc}figure{margin:.6em 0}\
 .holds{color:#176117;font-weight:bold}.differs{color:#a31515;font-weight:bold}\
 .cannot-be-tested{color:#7a5b00;font-weight:bold}pre{background:#f4f4f4;padding:.5em;overflow-x:auto}";
 
+/// Writes one run's part of a section.
+type Section = fn(&mut String, &Results);
+
 /// The page for `runs`; `command` is how it was made (shown at the top).
 pub fn page(runs: &[Results], command: &str) -> String {
     let title = match runs {
@@ -37,7 +40,7 @@ pub fn page(runs: &[Results], command: &str) -> String {
         "<div class=\"runs\" style=\"grid-template-columns:repeat({},minmax(0,1fr))\">",
         runs.len()
     );
-    let sections: [(&str, fn(&mut String, &Results)); 6] = [
+    let sections: [(&str, Section); 6] = [
         ("Plan", plan),
         ("Verdicts", verdicts),
         ("Summary", |out, r| blocks(out, &r.summary)),
@@ -48,9 +51,9 @@ pub fn page(runs: &[Results], command: &str) -> String {
     for (heading, section) in sections {
         let _ = write!(out, "<h2>{}</h2>\n{columns}\n", esc(heading));
         for run in runs {
-            let _ = write!(
+            let _ = writeln!(
                 out,
-                "<div class=\"run\"><h3>{}</h3>\n",
+                "<div class=\"run\"><h3>{}</h3>",
                 esc(&run.dir.display().to_string())
             );
             let before = out.len();

@@ -357,7 +357,7 @@ mod tests {
         assert_eq!(markdown::report(&Results::read(&dir).unwrap()), md);
         fs::write(dir.join(RUNS_CSV), "scene,rays\nroom,1025\n").unwrap();
         assert_ne!(Results::read(&dir).unwrap().digest, run.digest);
-        let written = write(&[dir.clone()], true, None).unwrap();
+        let written = write(std::slice::from_ref(&dir), true, None).unwrap();
         assert_eq!(written, dir.join(REPORT_MD));
         // The report itself is not among its sources.
         let again = Results::read(&dir).unwrap();
