@@ -383,6 +383,16 @@ mod tests {
             serde_json::from_str(&fs::read_to_string(merged.join(META_JSON)).unwrap()).unwrap();
         assert_eq!(merged_meta["merged_from"].as_array().unwrap().len(), 3);
         assert_eq!(merged_meta["merged_from"][1]["shard"], "1/3");
+        // Reports show where each part was measured.
+        let facts = crate::experiment::report::Results::read(&merged)
+            .unwrap()
+            .facts();
+        let (_, parts) = facts
+            .iter()
+            .find(|(l, _)| *l == "merged from shards")
+            .unwrap();
+        assert_eq!(parts.matches(" on ").count(), 3, "{parts}");
+        assert!(parts.starts_with("0/3 on "), "{parts}");
         let _ = fs::remove_dir_all(&out);
     }
 

@@ -31,7 +31,7 @@ pub fn report(run: &Results) -> String {
         run.run_command()
     );
     out.push_str("## Measured on\n\n| | |\n|---|---|\n");
-    for (label, value) in run.facts() {
+    for (label, value) in run.facts().into_iter().filter(|(_, v)| !v.is_empty()) {
         let _ = writeln!(out, "| {label} | {} |", cell(&value));
     }
     if let Some(v) = &run.verdicts {

@@ -154,8 +154,27 @@ impl Results {
             .unwrap_or_else(|| format!("{}: reproduction report", self.text("/experiment")))
     }
 
-    /// The machine and build facts, as (label, value) rows, the same for every run.
+    /// The machine and build facts, as (label, value) rows, the same labels for every run (values
+    /// may be empty). A merged sweep also lists the shards: where and when each part was measured.
     pub fn facts(&self) -> Vec<(&'static str, String)> {
+        let shards = match self.meta.get("merged_from") {
+            Some(Value::Array(shards)) => shards
+                .iter()
+                .map(|s| {
+                    let field = |k: &str| s.get(k).and_then(Value::as_str).unwrap_or_default();
+                    format!(
+                        "{} on {} ({}), {}, commit {}",
+                        field("shard"),
+                        field("hostname"),
+                        field("cpu"),
+                        field("date"),
+                        field("commit")
+                    )
+                })
+                .collect::<Vec<_>>()
+                .join("; "),
+            _ => String::new(),
+        };
         let dirty = match self.meta.pointer("/commit/dirty") {
             Some(Value::Bool(true)) => " (uncommitted changes)",
             _ => "",
@@ -180,6 +199,7 @@ impl Results {
             ("ISA detected", self.text("/cpu/features_detected")),
             ("threads", self.text("/threads")),
             ("versions", versions),
+            ("merged from shards", shards),
         ]
     }
 
