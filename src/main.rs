@@ -8,6 +8,7 @@ use clap::{Parser, Subcommand};
 
 use raylab::error::{Error, Result};
 use raylab::experiment::results_dir::PendingResults;
+use raylab::experiment::shard::Shard;
 use raylab::experiment::{run_experiment, RunOverrides};
 use raylab::geometry::ray_file::{hits_csv, occlusion_csv, read_rays};
 use raylab::geometry::RayKind;
@@ -65,6 +66,32 @@ enum Command {
         /// the results directory (binary ray files, for `trace`, `verify --rays`, `rays = [{ file }]`).
         #[arg(long)]
         dump_rays: bool,
+        /// Measure only part i of n (`i/n`, 0 ≤ i < n) of the sweep, split by (scene, tracer)
+        /// and balanced by estimated cost; `raylab merge` joins the n results directories.
+        #[arg(long, value_parser = parse_shard)]
+        shard: Option<Shard>,
+    },
+    /// Join the results directories of a sharded sweep (`run --shard i/n`, every i once) into one
+    /// results directory with the rows, plots and tables of an unsharded run.
+    Merge {
+        #[arg(required = true)]
+        dirs: Vec<PathBuf>,
+        /// Results root (default: the experiment's, else `results/`).
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
+    /// Report on results directories: a self-contained HTML page (several directories side by
+    /// side), or with --markdown the reproduction report REPORT.md of one directory, its verdicts
+    /// from verdicts.toml there.
+    Report {
+        #[arg(required = true)]
+        dirs: Vec<PathBuf>,
+        /// Write DIR/REPORT.md (markdown, one directory) instead of an HTML page.
+        #[arg(long)]
+        markdown: bool,
+        /// Where to write (default: DIR/report.html, report.html for several, DIR/REPORT.md).
+        #[arg(long, short)]
+        output: Option<PathBuf>,
     },
     /// Render a frame to a PNG: ray casting with point-light shadows and Lambert shading, or
     /// Whitted ray tracing (mirror reflection, Fresnel refraction, packet-assembled batches).
@@ -229,6 +256,10 @@ fn parse_assembly(s: &str) -> std::result::Result<Assembly, String> {
         .ok_or_else(|| format!("unknown assembly {s:?} (known: {})", Assembly::names()))
 }
 
+fn parse_shard(s: &str) -> std::result::Result<Shard, String> {
+    Shard::parse(s).map_err(|e| e.to_string())
+}
+
 fn parse_param(s: &str) -> std::result::Result<(String, String), String> {
     s.split_once('=')
         .map(|(k, v)| (k.trim().to_string(), v.trim().to_string()))
@@ -261,6 +292,7 @@ fn execute(command: Command) -> Result<bool> {
             warmup,
             repeats,
             dump_rays,
+            shard,
         } => {
             let overrides = RunOverrides {
                 output: out,
@@ -270,9 +302,23 @@ fn execute(command: Command) -> Result<bool> {
                 warmup,
                 repeats,
                 dump_rays,
+                shard,
             };
             let dir = run_experiment(&experiment, &overrides)?;
             println!("results: {}", dir.display());
+        }
+        Command::Merge { dirs, out } => {
+            let load = |spec: &raylab::experiment::SceneSpec| load_scene(&spec.name, spec.size);
+            let dir = raylab::experiment::merge::merge(&dirs, out.as_deref(), &load)?;
+            println!("results: {}", dir.display());
+        }
+        Command::Report {
+            dirs,
+            markdown,
+            output,
+        } => {
+            let path = raylab::experiment::report::write(&dirs, markdown, output.as_deref())?;
+            println!("report: {}", path.display());
         }
         Command::Render {
             scene,

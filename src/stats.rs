@@ -122,7 +122,7 @@ impl Stats for NoStats {
 /// Exact counts for one tracer on one ray kind. Depth-indexed vectors grow on demand; depth is the
 /// BVH depth of the node whose box is tested (the root is depth 0) or of the leaf holding the
 /// triangle.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Counters {
     pub rays: u64,
     pub nodes_visited: u64,

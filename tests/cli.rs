@@ -457,3 +457,60 @@ fn ill_formed_rays_are_traced_without_aborting() {
         }
     }
 }
+
+#[test]
+fn shards_merge_and_reports_refuse_bad_input() {
+    let dir = scratch("shards");
+    let exp = experiment(
+        &dir,
+        "tiny.toml",
+        "name = \"tiny\"\nscenes = [{ name = \"room\", size = 1 }]\n\
+         tracers = [\"reference\", \"obvhs\"]\nrays = [\"primary\"]\n\
+         resolution = { width = 16, height = 16 }\nthreads = [1]\nwarmup = 0\nrepeats = 1\n",
+    );
+    for bad in ["2/2", "1", "x/3"] {
+        fails_with(&dir, &["run", &exp, "--shard", bad], bad);
+    }
+    no_results(&dir);
+    for i in 0..2 {
+        let out = format!("s{i}");
+        let (code, stderr) = raylab(
+            &dir,
+            &["run", &exp, "--shard", &format!("{i}/2"), "--out", &out],
+        );
+        assert_eq!(code, 0, "{stderr}");
+    }
+    let s0 = only_run(&dir.join("s0"), "tiny");
+    let s1 = only_run(&dir.join("s1"), "tiny");
+    let (s0, s1) = (s0.to_str().unwrap(), s1.to_str().unwrap());
+    fails_with(&dir, &["merge", s0], "shard 1/2 missing");
+    fails_with(&dir, &["merge", s0, s1, s1], "shard 1/2 given twice");
+    no_results(&dir);
+    let (code, stderr) = raylab(&dir, &["merge", s1, s0]);
+    assert_eq!(code, 0, "{stderr}");
+    let merged = only_run(&dir.join("results"), "tiny");
+    // One row per tracer, both in the merged runs.csv, in plan order.
+    let runs = std::fs::read_to_string(merged.join("runs.csv")).unwrap();
+    let tracers: Vec<&str> = runs
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').nth(4).unwrap())
+        .collect();
+    assert_eq!(tracers, ["reference", "obvhs"]);
+    fails_with(&dir, &["report", "no-such-dir"], "no-such-dir");
+    fails_with(
+        &dir,
+        &["report", "--markdown", s0, s1],
+        "one results directory",
+    );
+    std::fs::write(
+        merged.join("verdicts.toml"),
+        "[[verdicts]]\nconclusion = 1\n",
+    )
+    .unwrap();
+    fails_with(
+        &dir,
+        &["report", merged.to_str().unwrap()],
+        "verdicts.toml:2",
+    );
+}

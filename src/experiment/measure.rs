@@ -11,7 +11,7 @@ use crate::render::wavefront::{answer, Answers, Work};
 use crate::stats::Counters;
 use crate::tracers::Tracer;
 
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Timing {
     pub threads: usize,
     pub seconds_min: f64,
@@ -19,7 +19,7 @@ pub struct Timing {
 }
 
 /// What one counting pass found.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Counted {
     pub counters: Counters,
     /// Rays that hit something (closest hit) or were occluded (shadow rays).

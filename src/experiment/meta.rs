@@ -8,6 +8,7 @@ use std::process::Command;
 use serde::Serialize;
 
 use super::plan::Plan;
+use super::shard::ShardMeta;
 use super::utc::UtcTime;
 use super::RunOverrides;
 
@@ -30,6 +31,24 @@ pub struct Meta<'a> {
     /// The plan of a scenes × ray kinds run (a stability run has none).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub plan: Option<&'a Plan>,
+    /// A sharded run's part of the sweep (`raylab run --shard`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub shard: Option<ShardMeta>,
+    /// A merged run's shards (`raylab merge`), in shard order: where and when each was measured.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub merged_from: Vec<MergedShard>,
+}
+
+/// One shard of a merged run, from its meta.json.
+#[derive(Debug, Serialize)]
+pub struct MergedShard {
+    pub shard: String,
+    pub directory: String,
+    pub run_id: String,
+    pub date: String,
+    pub hostname: String,
+    pub commit: String,
+    pub cpu: String,
 }
 
 #[derive(Debug, Serialize)]
@@ -86,6 +105,8 @@ pub fn gather<'a>(
         },
         overrides,
         plan,
+        shard: None,
+        merged_from: Vec::new(),
     }
 }
 

@@ -4,24 +4,28 @@
 //! paper-vs-ours tables (tables.md, see `tables`) and line figures (see `figures`).
 
 pub mod config;
+pub mod digest;
 pub mod embree_best;
 pub mod error_plot;
 pub mod figures;
 pub mod measure;
+pub mod merge;
 pub mod meta;
 pub mod output;
 pub mod plan;
 pub mod plots;
+pub mod report;
 pub mod results_dir;
 pub mod runner;
 pub mod selection;
+pub mod shard;
 pub mod stability;
 pub mod tables;
 pub mod utc;
 
 use std::path::{Path, PathBuf};
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
 use crate::scene::library::load_scene;
@@ -34,7 +38,7 @@ pub const RAYS_DIR: &str = "rays";
 
 /// Command-line replacements for experiment settings, for quick or scaled-down runs. Recorded in
 /// meta.json, since they change what the numbers mean.
-#[derive(Clone, Debug, Default, Serialize)]
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
 pub struct RunOverrides {
     pub output: Option<PathBuf>,
     pub threads: Option<Vec<usize>>,
@@ -46,6 +50,9 @@ pub struct RunOverrides {
     /// Not a setting: also write every generated ray batch to `rays/` in the results directory
     /// (`runner::dump_name`), for replay with `trace`, `verify --rays` or `rays = [{ file }]`.
     pub dump_rays: bool,
+    /// Measure only this part of the plan (see `shard`); `raylab merge` joins the parts.
+    #[serde(default)]
+    pub shard: Option<shard::Shard>,
 }
 
 impl RunOverrides {
@@ -111,6 +118,12 @@ pub fn run(
         crate::memory::for_rays(exp.largest_batch()),
     )?;
     if let Some(settings) = &exp.stability {
+        if let Some(shard) = overrides.shard {
+            return Err(Error::usage(format!(
+                "--shard {shard}: the stability suite of {} is not sharded (run it whole)",
+                exp.path.display()
+            )));
+        }
         return stability::run(exp, settings, file_text, overrides);
     }
     // A missing font would otherwise only show after the whole run.
@@ -118,40 +131,42 @@ pub fn run(
     let started = utc::UtcTime::now();
     let plan = Plan::derive(exp, load)?;
     println!("{plan}");
-    let results = results_dir::PendingResults::create(&exp.output, &exp.name, &started.compact())?;
+    let part = match overrides.shard {
+        Some(shard) => {
+            let part = shard::Part::of(&plan, shard);
+            let units: Vec<String> = part
+                .units()
+                .iter()
+                .map(|&(s, i)| format!("{} × {}", plan.scenes[s].name, plan.instances[i].label))
+                .collect();
+            println!(
+                "shard {shard}: {} of {} (scene × tracer) units: {}",
+                units.len(),
+                plan.scenes.len() * plan.instances.len(),
+                if units.is_empty() {
+                    "none".to_string()
+                } else {
+                    units.join(", ")
+                }
+            );
+            part
+        }
+        None => shard::Part::whole(&plan),
+    };
+    let run_id = match overrides.shard {
+        Some(s) => format!("{}-shard{}of{}", started.compact(), s.index, s.count),
+        None => started.compact(),
+    };
+    let results = results_dir::PendingResults::create(&exp.output, &exp.name, &run_id)?;
 
-    let progress = runner::progress_bar(plan.measurements());
+    let progress = runner::progress_bar(part.measurements(&plan));
     let dump = overrides.dump_rays.then(|| results.dir().join(RAYS_DIR));
-    let cases = runner::run_plan(exp, &plan, load, &progress, dump.as_deref());
+    let cases = runner::run_plan(exp, &plan, &part, load, &progress, dump.as_deref());
     progress.finish_and_clear();
     let cases = cases?;
 
     let dir = results.dir();
-    output::write_runs(&dir.join(output::RUNS_CSV), &plan, &cases)?;
-    output::write_histograms(&dir.join(output::HISTOGRAMS_CSV), &plan, &cases)?;
-    plots::write_plots(dir, &plan, &cases)?;
-    error_plot::write_error_plots(dir, exp, &plan, &cases)?;
-    if !exp.tables.is_empty() || !exp.figures.is_empty() {
-        let rows = selection::read_rows(&dir.join(output::RUNS_CSV))?;
-        if !exp.tables.is_empty() {
-            let path = dir.join(tables::TABLES_MD);
-            tables::write_tables(&path, &exp.name, &exp.tables, &rows)?;
-        }
-        let mut histograms = None;
-        for figure in &exp.figures {
-            match figure.data {
-                figures::DataFile::Runs => figure.draw(dir, &rows)?,
-                figures::DataFile::Histograms => {
-                    if histograms.is_none() {
-                        let path = dir.join(output::HISTOGRAMS_CSV);
-                        histograms = Some(selection::read_rows(&path)?);
-                    }
-                    figure.draw(dir, histograms.as_deref().unwrap_or_default())?
-                }
-            }
-        }
-    }
-    let meta = meta::gather(
+    let mut meta = meta::gather(
         &plan.experiment,
         Some(&plan),
         &exp.threads,
@@ -160,8 +175,54 @@ pub fn run(
         (&exp.path, file_text),
         overrides,
     );
+    match overrides.shard {
+        // A part's plots and tables would show a part: `raylab merge` draws them for the whole.
+        Some(shard) => {
+            output::write_runs(&dir.join(output::RUNS_CSV), &plan, &cases)?;
+            output::write_histograms(&dir.join(output::HISTOGRAMS_CSV), &plan, &cases)?;
+            merge::write_cases(&dir.join(shard::CASES_JSON), &cases)?;
+            meta.shard = Some(shard::ShardMeta {
+                index: shard.index,
+                count: shard.count,
+                sweep: shard::sweep_key(file_text, overrides),
+                units: part.units(),
+            });
+        }
+        None => write_outputs(dir, exp, &plan, &cases)?,
+    }
     meta::write(dir, &meta)?;
     results.commit()
+}
+
+/// Everything a run writes from its cases except meta.json: runs.csv, histograms.csv, the plots,
+/// the error plots, and the experiment's tables and figures. A merged sweep writes the same.
+fn write_outputs(dir: &Path, exp: &Experiment, plan: &Plan, cases: &[runner::Case]) -> Result<()> {
+    output::write_runs(&dir.join(output::RUNS_CSV), plan, cases)?;
+    output::write_histograms(&dir.join(output::HISTOGRAMS_CSV), plan, cases)?;
+    plots::write_plots(dir, plan, cases)?;
+    error_plot::write_error_plots(dir, exp, plan, cases)?;
+    if exp.tables.is_empty() && exp.figures.is_empty() {
+        return Ok(());
+    }
+    let rows = selection::read_rows(&dir.join(output::RUNS_CSV))?;
+    if !exp.tables.is_empty() {
+        let path = dir.join(tables::TABLES_MD);
+        tables::write_tables(&path, &exp.name, &exp.tables, &rows)?;
+    }
+    let mut histograms = None;
+    for figure in &exp.figures {
+        match figure.data {
+            figures::DataFile::Runs => figure.draw(dir, &rows)?,
+            figures::DataFile::Histograms => {
+                if histograms.is_none() {
+                    let path = dir.join(output::HISTOGRAMS_CSV);
+                    histograms = Some(selection::read_rows(&path)?);
+                }
+                figure.draw(dir, histograms.as_deref().unwrap_or_default())?
+            }
+        }
+    }
+    Ok(())
 }
 
 #[cfg(test)]
@@ -959,6 +1020,7 @@ series = "scene"
             warmup: Some(2),
             repeats: Some(5),
             dump_rays: false,
+            shard: None,
         };
         overrides.apply(&mut exp).unwrap();
         assert_eq!(

@@ -40,9 +40,10 @@ use crate::tracers::{build_tracer, Params, Tracer, TracerInfo, VisibilityQuery};
 use super::config::{DistributionWorkload, Experiment, RenderWorkload, SceneSpec, StructureKey};
 use super::measure::{count_pass, time_passes, timing_of, Counted, Timing};
 use super::plan::{secondary_ray_structure, Plan, SceneLoader, ScenePlan, SECONDARY_RAY_TRACER};
+use super::shard::Part;
 
 /// What a case measured.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 pub enum Traced {
     /// A batch of one ray kind, traced on its own.
     Batch(RayKind),
@@ -90,8 +91,8 @@ impl Traced {
 
 /// One tracer instance on one ray kind (or one batch of a rendered frame, or a whole frame) of one
 /// frame of one scene: its counts and its timing at every thread count. One row of runs.csv per
-/// timing.
-#[derive(Clone, Debug)]
+/// timing. Serialized (cases.json) by a sharded run, for `raylab merge`.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct Case {
     /// Index into `Plan::scenes`.
     pub scene: usize,
@@ -123,8 +124,8 @@ struct Built {
 /// The structures and tracers of the current frame (or of frame 0, for static scenes).
 struct FrameTracers {
     structures: BTreeMap<StructureKey, Built>,
-    /// One per plan instance.
-    tracers: Vec<Box<dyn Tracer>>,
+    /// One per plan instance; `None` for those another shard measures.
+    tracers: Vec<Option<Box<dyn Tracer>>>,
     /// The reference tracer that finds where secondary rays start, when any are needed.
     secondary: Option<Box<dyn Tracer>>,
 }
@@ -148,12 +149,13 @@ pub fn progress_bar(measurements: usize) -> ProgressBar {
     bar
 }
 
-/// Runs every measurement of `plan`, loading each scene with `load` when its turn comes. With
-/// `dump_rays`, every generated ray batch is also written there as a binary ray file
-/// (`dump_name`).
+/// Runs the measurements of `plan` that belong to `part`, loading each scene with `load` when its
+/// turn comes (scenes with nothing to measure are not loaded). With `dump_rays`, every generated
+/// ray batch is also written there as a binary ray file (`dump_name`).
 pub fn run_plan(
     exp: &Experiment,
     plan: &Plan,
+    part: &Part,
     load: SceneLoader,
     progress: &ProgressBar,
     dump_rays: Option<&Path>,
@@ -195,6 +197,10 @@ pub fn run_plan(
 
     let mut cases = Vec::new();
     for (scene_index, (spec, scene_plan)) in exp.scenes.iter().zip(&plan.scenes).enumerate() {
+        if !part.measures_scene(scene_index) {
+            continue;
+        }
+        let measured = |instance: usize| part.measures(scene_index, instance);
         let scene = load(spec)?;
         if scene.triangle_count() != scene_plan.triangles {
             return Err(Error::runtime(format!(
@@ -212,7 +218,7 @@ pub fn run_plan(
                 // The previous frame's structures go to the next build: refitted in place where
                 // configured (Embree `quality = "refit"`), freed before building otherwise.
                 let previous = current.take().map(|t| t.structures).unwrap_or_default();
-                current = Some(build_frame(exp, scene_plan, &frame, previous)?);
+                current = Some(build_frame(exp, scene_plan, &frame, previous, &measured)?);
             }
             let frame_tracers = current.as_ref().expect("built above");
             let workloads =
@@ -226,6 +232,9 @@ pub fn run_plan(
                 }
             }
             for (i, tracer) in frame_tracers.tracers.iter().enumerate() {
+                let Some(tracer) = tracer else {
+                    continue;
+                };
                 let measure = Measure {
                     exp,
                     pools: &pools,
@@ -543,7 +552,8 @@ impl RenderJob<'_> {
     }
 }
 
-/// Builds the plan's structures over `frame`'s geometry, timing each, and the tracers over them.
+/// Builds the plan's structures over `frame`'s geometry that the `measured` instances traverse or
+/// that generate secondary rays, timing each, and the measured instances' tracers over them.
 /// `previous` holds the last frame's structures (their tracers already dropped, so each is
 /// unshared): a refittable one is updated in place and the update timed as this frame's build.
 fn build_frame(
@@ -551,11 +561,16 @@ fn build_frame(
     scene_plan: &ScenePlan,
     frame: &Frame,
     mut previous: BTreeMap<StructureKey, Built>,
+    measured: &dyn Fn(usize) -> bool,
 ) -> Result<FrameTracers> {
     // Free what will be built anew before building anything.
     previous.retain(|key, _| key.kind.refits(&key.params));
     let mut structures = BTreeMap::new();
-    for s in &scene_plan.structures {
+    let needed = scene_plan
+        .structures
+        .iter()
+        .filter(|s| s.generates_secondary_rays || s.used_by.iter().any(|&i| measured(i)));
+    for s in needed {
         let old = previous.remove(&s.key).map(|b| b.accel);
         let start = Instant::now();
         let accel = s.key.kind.rebuild(old, &frame.mesh, &s.key.params)?;
@@ -565,12 +580,17 @@ fn build_frame(
     let tracers = exp
         .instances
         .iter()
-        .map(|instance| {
-            build_tracer(
-                instance.info,
-                &instance.params,
-                &structures[&instance.structure()].accel,
-            )
+        .enumerate()
+        .map(|(i, instance)| {
+            measured(i)
+                .then(|| {
+                    build_tracer(
+                        instance.info,
+                        &instance.params,
+                        &structures[&instance.structure()].accel,
+                    )
+                })
+                .transpose()
         })
         .collect::<Result<Vec<_>>>()?;
     let secondary = match scene_plan.needs_secondary_rays() {

@@ -50,7 +50,9 @@ impl Ray {
 }
 
 /// What a batch of rays is for; counters and CSV rows are kept per kind.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[derive(
+    Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize, serde::Deserialize,
+)]
 pub enum RayKind {
     Primary,
     Shadow,

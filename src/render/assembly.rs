@@ -66,7 +66,9 @@ impl fmt::Display for Assembly {
 
 /// Which batch an outgoing packet joins: the batch of its ray kind, or the one mixed batch of
 /// blind assembly.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[derive(
+    Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize, serde::Deserialize,
+)]
 pub enum BatchKind {
     Rays(RayKind),
     Blind,
