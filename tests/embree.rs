@@ -477,7 +477,8 @@ fn refit_rejects_a_different_triangle_count() {
         quality: BuildQuality::Refit,
         robust: false,
     };
-    let mut scene = EmbreeScene::build(Device::shared().unwrap(), &mesh, config).unwrap();
+    let mut scene: EmbreeScene =
+        EmbreeScene::build(Device::shared().unwrap(), &mesh, config).unwrap();
     let fewer = mesh_of(mesh.triangles[..12].to_vec());
     let err = scene.refit(&fewer).unwrap_err();
     assert!(err.to_string().contains("14 triangles, got 12"), "{err}");

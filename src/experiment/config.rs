@@ -887,7 +887,7 @@ fn tracer_entries<'f>(src: &Source, file: &'f ExperimentFile) -> Result<Vec<Trac
     for entry in file.tracers.get_ref() {
         let name = &entry.get_ref().0.name;
         if name == EMBREE_BEST {
-            let embree = TRACERS.iter().filter(|t| t.accel == AccelKind::Embree);
+            let embree = TRACERS.iter().filter(|t| t.accel.is_embree());
             entries.extend(embree.map(|info| (entry, info, EMBREE_BEST_AXES)));
         } else {
             let info = TracerInfo::find(name).map_err(|e| src.usage_error(&entry.span(), e))?;

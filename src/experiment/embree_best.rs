@@ -1,13 +1,13 @@
 //! "Embree at its best": for every runs.csv row, the fastest Embree row measured on the same work
 //! in the same run — same scene (and size), frame, ray kind (or render batch and bounce depth, or
-//! whole frame) and thread count — whatever its entry point (1/4/8/16/stream), context and build
-//! quality. Every ratio raylab publishes is against it (`x_embree_best`), never against one
+//! whole frame) and thread count — whatever its Embree version (3 or 4), entry point
+//! (1/4/8/16/stream), context and build quality; its configuration names the tracer, and so the
+//! version (`embree3-16`, `embree4-1`, ...). Every ratio raylab publishes is against it (`x_embree_best`), never against one
 //! Embree configuration that happens to be slow. Groups the run did not measure with Embree get
 //! empty cells.
 
 use std::collections::HashMap;
 
-use crate::accel::AccelKind;
 use crate::geometry::RayKind;
 use crate::render::assembly::BatchKind;
 use crate::tracers::embree::Coherence;
@@ -40,7 +40,7 @@ impl EmbreeBest {
         let mut best = EmbreeBest::default();
         for case in cases {
             let instance = &plan.instances[case.instance];
-            if instance.structure.kind != AccelKind::Embree {
+            if !instance.structure.kind.is_embree() {
                 continue;
             }
             let config = config(instance, case.traced);
