@@ -4,7 +4,7 @@
 
 #[cfg(embree4)]
 use crate::accel::embree::Embree4;
-use crate::accel::embree::{Embree3, EMBREE4_HINT};
+use crate::accel::embree::{Embree3, EMBREE4_BUILT, EMBREE4_HINT};
 use crate::accel::{Accel, AccelKind};
 use crate::error::{Error, Result};
 use crate::geometry::{Hit, Rays};
@@ -84,6 +84,20 @@ pub const ALIASES: &[(&str, &str)] = &[
     ("embree16", "embree3-16"),
     ("embree-stream", "embree3-stream"),
 ];
+
+/// The name rows carry for a tracer called `name`: the new name of an alias, else `name`.
+pub fn canonical_name(name: &str) -> &str {
+    ALIASES
+        .iter()
+        .find(|(alias, _)| *alias == name)
+        .map_or(name, |(_, canonical)| canonical)
+}
+
+/// Whether `name` is a tracer this build lacks but another build has: Embree 4's, when
+/// `build.rs` did not find Embree 4.
+pub fn not_built(name: &str) -> bool {
+    !EMBREE4_BUILT && EMBREE4_TRACERS.contains(&name)
+}
 
 /// The Embree 4 tracers, which a build without Embree 4 lacks (`accel::embree::EMBREE4_HINT`).
 const EMBREE4_TRACERS: &[&str] = &["embree4-1", "embree4-4", "embree4-8", "embree4-16"];
@@ -207,14 +221,11 @@ pub const TRACERS: &[TracerInfo] = &[
 impl TracerInfo {
     /// The tracer `name` names, directly or through one of its `ALIASES`.
     pub fn find(name: &str) -> Result<&'static TracerInfo> {
-        let canonical = ALIASES
-            .iter()
-            .find(|(alias, _)| *alias == name)
-            .map_or(name, |(_, canonical)| canonical);
+        let canonical = canonical_name(name);
         if let Some(info) = TRACERS.iter().find(|t| t.name == canonical) {
             return Ok(info);
         }
-        if EMBREE4_TRACERS.contains(&name) {
+        if not_built(name) {
             return Err(Error::usage(format!("tracer {name:?}: {EMBREE4_HINT}")));
         }
         let known: Vec<&str> = TRACERS.iter().map(|t| t.name).collect();
@@ -319,7 +330,6 @@ impl Tracer for Registered {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::accel::embree::EMBREE4_BUILT;
 
     #[test]
     fn aliases_resolve_to_the_embree_3_tracers() {
