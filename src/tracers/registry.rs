@@ -351,23 +351,18 @@ mod tests {
     #[test]
     fn embree_4_tracers_exist_exactly_when_it_was_built() {
         for name in EMBREE4_TRACERS {
-            match TracerInfo::find(name) {
-                Ok(info) => {
-                    assert!(EMBREE4_BUILT);
-                    assert_eq!(info.name, *name);
-                }
+            let found = TracerInfo::find(name);
+            assert_eq!(found.is_ok(), EMBREE4_BUILT, "{name}");
+            assert_eq!(not_built(name), !EMBREE4_BUILT, "{name}");
+            match found {
+                Ok(info) => assert_eq!((info.name, info.accel.is_embree()), (*name, true)),
                 Err(err) => {
-                    assert!(!EMBREE4_BUILT);
                     assert!(matches!(err, Error::Usage(_)), "{err}");
                     assert!(err.to_string().contains(".ci/fetch-embree4"), "{err}");
                 }
             }
         }
-        #[cfg(embree4)]
-        assert_eq!(
-            TracerInfo::find("embree4-16").unwrap().accel,
-            AccelKind::Embree4
-        );
+        assert!(!not_built("embree3-16") && !not_built("no-such-tracer"));
     }
 
     #[test]
