@@ -1,21 +1,44 @@
-//! The Embree baseline against hand-worked hits and against the reference tracer: every
-//! submission (single, packets of 4/8/16, streams), every build quality, robust or not, both
-//! context hints.
-
-use std::sync::Arc;
+//! The Embree baselines — Embree 3 and, when this build has it, Embree 4 — against hand-worked
+//! hits and against the reference tracer: every submission (single, packets of 4/8/16, Embree 3's
+//! streams), every build quality, robust or not, both context hints; refits, ill-formed rays.
 
 use glam::Vec3;
-use raylab::accel::embree::{BuildQuality, Device, EmbreeConfig, EmbreeScene};
+use raylab::accel::embree::{
+    BuildQuality, Device, EmbreeConfig, EmbreeScene, EMBREE4_BUILT, EMBREE4_HINT,
+};
 use raylab::accel::{Accel, AccelKind};
 use raylab::geometry::{Hit, Ray, RayBatch, RayKind, Triangle};
 use raylab::scene::Mesh;
 use raylab::stats::Counters;
 use raylab::test_util::Soup;
 use raylab::tracers::embree::STREAM_LENGTH;
+use raylab::tracers::registry::TRACERS;
 use raylab::tracers::{build_tracer, Params, Tracer, TracerInfo};
+use raylab::verify::stability::cases::ill_formed_variants;
 
-const EMBREE_TRACERS: [&str; 5] = ["embree1", "embree4", "embree8", "embree16", "embree-stream"];
 const QUALITIES: [&str; 4] = ["low", "medium", "high", "refit"];
+
+/// Every Embree tracer of this build, by the structure it traverses: Embree 3's five, and Embree
+/// 4's four when the build has it (`.ci/setup` fetches it, so CI always does; without it the
+/// Embree 4 half of the test is skipped, and says so).
+fn embree_tracers() -> Vec<(AccelKind, Vec<&'static str>)> {
+    let mut by_kind: Vec<(AccelKind, Vec<&'static str>)> = Vec::new();
+    for t in TRACERS.iter().filter(|t| t.accel.is_embree()) {
+        match by_kind.iter_mut().find(|(kind, _)| *kind == t.accel) {
+            Some((_, names)) => names.push(t.name),
+            None => by_kind.push((t.accel, vec![t.name])),
+        }
+    }
+    let versions = if EMBREE4_BUILT { 2 } else { 1 };
+    assert_eq!(by_kind.len(), versions);
+    assert_eq!(by_kind[0].1.len(), 5, "Embree 3: 1, 4, 8, 16, stream");
+    if EMBREE4_BUILT {
+        assert_eq!(by_kind[1].1.len(), 4, "Embree 4: 1, 4, 8, 16");
+    } else {
+        println!("SKIPPED the Embree 4 tracers: {EMBREE4_HINT}");
+    }
+    by_kind
+}
 
 fn mesh_of(triangles: Vec<Triangle>) -> Mesh {
     let material_ids = vec![0; triangles.len()];
@@ -211,11 +234,13 @@ fn hand_worked_hits_in_every_lane_including_partial_packets() {
     let (hits, occluded) = trace(&*tracer("reference", &Params::new(), &reference), &rays);
     check("reference", &hits, &occluded);
     for config in embree_configs() {
-        let scene = accel(AccelKind::Embree, &mesh, &config);
-        for context in contexts() {
-            for name in EMBREE_TRACERS {
-                let (hits, occluded) = trace(&*tracer(name, &context, &scene), &rays);
-                check(&format!("{name} {config} {context}"), &hits, &occluded);
+        for (kind, names) in embree_tracers() {
+            let scene = accel(kind, &mesh, &config);
+            for context in contexts() {
+                for name in &names {
+                    let (hits, occluded) = trace(&*tracer(name, &context, &scene), &rays);
+                    check(&format!("{name} {config} {context}"), &hits, &occluded);
+                }
             }
         }
     }
@@ -288,51 +313,54 @@ fn random_soup_matches_the_reference_tracer() {
     assert!(occluded_count > 500, "{occluded_count}");
 
     let mut ties = 0;
+    let mut compared = 0;
     for config in embree_configs() {
-        let scene = accel(AccelKind::Embree, &mesh, &config);
-        for context in contexts() {
-            for name in EMBREE_TRACERS {
-                let who = format!("{name} {config} {context}");
-                let (got, got_occluded) = trace(&*tracer(name, &context, &scene), &rays);
-                for i in 0..rays.len() {
-                    let (g, w) = (got[i], want[i]);
-                    assert_eq!(
-                        g.is_hit(),
-                        w.is_hit(),
-                        "{who}: ray {i}: {g:?} vs reference {w:?}"
-                    );
-                    if w.is_hit() {
-                        assert!(
-                            relative_gap(g.t, w.t) <= 1e-4,
-                            "{who}: ray {i}: t {} vs {}",
-                            g.t,
-                            w.t
+        for (kind, names) in embree_tracers() {
+            let scene = accel(kind, &mesh, &config);
+            for context in contexts() {
+                for name in &names {
+                    compared += rays.len();
+                    let who = format!("{name} {config} {context}");
+                    let (got, got_occluded) = trace(&*tracer(name, &context, &scene), &rays);
+                    for i in 0..rays.len() {
+                        let (g, w) = (got[i], want[i]);
+                        assert_eq!(
+                            g.is_hit(),
+                            w.is_hit(),
+                            "{who}: ray {i}: {g:?} vs reference {w:?}"
                         );
-                        if g.prim == w.prim {
+                        if w.is_hit() {
                             assert!(
-                                (g.u - w.u).abs() < 1e-3 && (g.v - w.v).abs() < 1e-3,
-                                "{who}: ray {i}"
+                                relative_gap(g.t, w.t) <= 1e-4,
+                                "{who}: ray {i}: t {} vs {}",
+                                g.t,
+                                w.t
                             );
-                        } else {
-                            // A tie: two triangles at the same distance (within 1e-4); either
-                            // answer is right.
+                            if g.prim == w.prim {
+                                assert!(
+                                    (g.u - w.u).abs() < 1e-3 && (g.v - w.v).abs() < 1e-3,
+                                    "{who}: ray {i}"
+                                );
+                            } else {
+                                // A tie: two triangles at the same distance (within 1e-4); either
+                                // answer is right.
+                                ties += 1;
+                            }
+                        }
+                        if got_occluded[i] != want_occluded[i] {
+                            let at_tmax = relative_gap(unbounded[i].t, rays.tmax[i]) <= 1e-4;
+                            assert!(
+                                at_tmax,
+                                "{who}: ray {i}: occluded {} vs reference {}",
+                                got_occluded[i], want_occluded[i]
+                            );
                             ties += 1;
                         }
-                    }
-                    if got_occluded[i] != want_occluded[i] {
-                        let at_tmax = relative_gap(unbounded[i].t, rays.tmax[i]) <= 1e-4;
-                        assert!(
-                            at_tmax,
-                            "{who}: ray {i}: occluded {} vs reference {}",
-                            got_occluded[i], want_occluded[i]
-                        );
-                        ties += 1;
                     }
                 }
             }
         }
     }
-    let compared = 8 * 2 * EMBREE_TRACERS.len() * rays.len();
     println!("{ties} ties in {compared} comparisons");
     assert!(
         ties * 10_000 <= compared,
@@ -346,21 +374,19 @@ fn threads_trace_one_committed_scene_concurrently() {
     let mut rng = Lcg(77);
     let mesh = triangle_soup(2000, 77);
     let rays = soup_rays(4000, &mut rng);
-    let scene = accel(
-        AccelKind::Embree,
-        &mesh,
-        &Params::new().with("robust", true),
-    );
-    for name in EMBREE_TRACERS {
-        let t = tracer(name, &Params::new(), &scene);
-        let (want, _) = trace(&*t, &rays);
-        // Chunks of 100 (not a multiple of 16), each on whichever thread rayon picks.
-        let mut got = vec![Hit::MISS; rays.len()];
-        got.par_chunks_mut(100).enumerate().for_each(|(c, hits)| {
-            let first = c * 100;
-            t.intersect(rays.view().slice(first..first + hits.len()), hits);
-        });
-        assert_eq!(got, want, "{name}");
+    for (kind, names) in embree_tracers() {
+        let scene = accel(kind, &mesh, &Params::new().with("robust", true));
+        for name in names {
+            let t = tracer(name, &Params::new(), &scene);
+            let (want, _) = trace(&*t, &rays);
+            // Chunks of 100 (not a multiple of 16), each on whichever thread rayon picks.
+            let mut got = vec![Hit::MISS; rays.len()];
+            got.par_chunks_mut(100).enumerate().for_each(|(c, hits)| {
+                let first = c * 100;
+                t.intersect(rays.view().slice(first..first + hits.len()), hits);
+            });
+            assert_eq!(got, want, "{name}");
+        }
     }
 }
 
@@ -368,20 +394,22 @@ fn threads_trace_one_committed_scene_concurrently() {
 fn counters_count_rays_only() {
     let mesh = box_on_floor();
     let rays = batch(box_rays().into_iter().map(|e| e.ray));
-    let scene = accel(AccelKind::Embree, &mesh, &Params::new());
-    for name in EMBREE_TRACERS {
-        let t = tracer(name, &Params::new(), &scene);
-        assert!(!t.counts_internals(), "{name}");
-        let mut counters = Counters::default();
-        let mut hits = vec![Hit::MISS; rays.len()];
-        let mut occluded = vec![false; rays.len()];
-        t.intersect_counted(rays.view(), &mut hits, &mut counters);
-        t.occluded_counted(rays.view(), &mut occluded, &mut counters);
-        let expected = Counters {
-            rays: 2 * rays.len() as u64,
-            ..Counters::default()
-        };
-        assert_eq!(counters, expected, "{name}");
+    for (kind, names) in embree_tracers() {
+        let scene = accel(kind, &mesh, &Params::new());
+        for name in names {
+            let t = tracer(name, &Params::new(), &scene);
+            assert!(!t.counts_internals(), "{name}");
+            let mut counters = Counters::default();
+            let mut hits = vec![Hit::MISS; rays.len()];
+            let mut occluded = vec![false; rays.len()];
+            t.intersect_counted(rays.view(), &mut hits, &mut counters);
+            t.occluded_counted(rays.view(), &mut occluded, &mut counters);
+            let expected = Counters {
+                rays: 2 * rays.len() as u64,
+                ..Counters::default()
+            };
+            assert_eq!(counters, expected, "{name}");
+        }
     }
 }
 
@@ -389,18 +417,13 @@ fn counters_count_rays_only() {
 fn empty_mesh_builds_and_every_ray_misses() {
     let rays = batch(box_rays().into_iter().map(|e| e.ray));
     for config in embree_configs() {
-        let scene = EmbreeScene::build(
-            Device::shared().unwrap(),
-            &Mesh::default(),
-            EmbreeConfig::from_params(&config).unwrap(),
-        )
-        .unwrap();
-        assert_eq!(scene.triangle_count(), 0);
-        let scene = Accel::Embree(Arc::new(scene));
-        for name in EMBREE_TRACERS {
-            let (hits, occluded) = trace(&*tracer(name, &Params::new(), &scene), &rays);
-            assert!(hits.iter().all(|h| *h == Hit::MISS), "{name} {config}");
-            assert!(occluded.iter().all(|o| !o), "{name} {config}");
+        for (kind, names) in embree_tracers() {
+            let scene = accel(kind, &Mesh::default(), &config);
+            for name in names {
+                let (hits, occluded) = trace(&*tracer(name, &Params::new(), &scene), &rays);
+                assert!(hits.iter().all(|h| *h == Hit::MISS), "{name} {config}");
+                assert!(occluded.iter().all(|o| !o), "{name} {config}");
+            }
         }
     }
 }
@@ -433,38 +456,43 @@ fn refit_moves_the_hits_with_the_vertices() {
             })
             .collect(),
     );
-    for quality in [BuildQuality::Refit, BuildQuality::Medium] {
-        for robust in [false, true] {
-            let config = EmbreeConfig { quality, robust };
-            let mut scene = EmbreeScene::build(Device::shared().unwrap(), &mesh, config).unwrap();
-            scene.refit(&moved).unwrap();
-            assert!(scene.build_seconds > 0.0);
-            let accel = Accel::Embree(Arc::new(scene));
-            for name in EMBREE_TRACERS {
-                let t = tracer(name, &Params::new(), &accel);
-                // At the new place: the top face now at z = 3, so t = 2.
-                let (hits, _) = trace(&*t, &top_face_rays(lift - Vec3::Z * 2.0));
-                assert_eq!(
-                    hits.iter().map(|h| h.prim).collect::<Vec<_>>(),
-                    [10, 11],
-                    "{name} {quality}"
-                );
-                assert!(
-                    hits.iter().all(|h| (h.t - 2.0).abs() < 1e-5),
-                    "{name} {quality}: {hits:?}"
-                );
-                // Where the box was, only the floor remains (x > y: prim 12, x < y: prim 13) at
-                // z = −1, t = 6.
-                let (hits, _) = trace(&*t, &top_face_rays(Vec3::ZERO));
-                assert_eq!(
-                    hits.iter().map(|h| h.prim).collect::<Vec<_>>(),
-                    [12, 13],
-                    "{name} {quality}"
-                );
-                assert!(
-                    hits.iter().all(|h| (h.t - 6.0).abs() < 1e-5),
-                    "{name} {quality}: {hits:?}"
-                );
+    // As the runner does per frame: `rebuild` refits a scene of quality refit in place and
+    // builds any other anew.
+    for (kind, names) in embree_tracers() {
+        for quality in [BuildQuality::Refit, BuildQuality::Medium] {
+            for robust in [false, true] {
+                let params = Params::new()
+                    .with("quality", quality)
+                    .with("robust", robust);
+                let first = accel(kind, &mesh, &params);
+                let accel = kind.rebuild(Some(first), &moved, &params).unwrap();
+                assert!(accel.build_seconds() > 0.0);
+                for name in &names {
+                    let t = tracer(name, &Params::new(), &accel);
+                    // At the new place: the top face now at z = 3, so t = 2.
+                    let (hits, _) = trace(&*t, &top_face_rays(lift - Vec3::Z * 2.0));
+                    assert_eq!(
+                        hits.iter().map(|h| h.prim).collect::<Vec<_>>(),
+                        [10, 11],
+                        "{name} {quality}"
+                    );
+                    assert!(
+                        hits.iter().all(|h| (h.t - 2.0).abs() < 1e-5),
+                        "{name} {quality}: {hits:?}"
+                    );
+                    // Where the box was, only the floor remains (x > y: prim 12, x < y: prim 13) at
+                    // z = −1, t = 6.
+                    let (hits, _) = trace(&*t, &top_face_rays(Vec3::ZERO));
+                    assert_eq!(
+                        hits.iter().map(|h| h.prim).collect::<Vec<_>>(),
+                        [12, 13],
+                        "{name} {quality}"
+                    );
+                    assert!(
+                        hits.iter().all(|h| (h.t - 6.0).abs() < 1e-5),
+                        "{name} {quality}: {hits:?}"
+                    );
+                }
             }
         }
     }
@@ -477,7 +505,8 @@ fn refit_rejects_a_different_triangle_count() {
         quality: BuildQuality::Refit,
         robust: false,
     };
-    let mut scene = EmbreeScene::build(Device::shared().unwrap(), &mesh, config).unwrap();
+    let mut scene: EmbreeScene =
+        EmbreeScene::build(Device::shared().unwrap(), &mesh, config).unwrap();
     let fewer = mesh_of(mesh.triangles[..12].to_vec());
     let err = scene.refit(&fewer).unwrap_err();
     assert!(err.to_string().contains("14 triangles, got 12"), "{err}");
@@ -485,10 +514,32 @@ fn refit_rejects_a_different_triangle_count() {
 
 #[test]
 fn registry_lists_the_embree_tracers_and_checks_their_parameters() {
-    for name in EMBREE_TRACERS {
-        let info = TracerInfo::find(name).unwrap();
-        assert_eq!(info.accel, AccelKind::Embree);
-        assert_eq!(info.accepts(), ["context", "quality", "robust"]);
+    for (kind, names) in embree_tracers() {
+        for name in names {
+            let info = TracerInfo::find(name).unwrap();
+            assert_eq!(info.accel, kind);
+            assert_eq!(info.accepts(), ["context", "quality", "robust"]);
+            let version = if kind == AccelKind::Embree { "3" } else { "4" };
+            assert!(name.starts_with(&format!("embree{version}-")), "{name}");
+            assert!(
+                info.about
+                    .starts_with(&format!("Embree {version} baseline")),
+                "{name}"
+            );
+        }
+    }
+    // The old names of Embree 3's tracers are aliases of the new ones.
+    for (alias, name) in [
+        ("embree1", "embree3-1"),
+        ("embree4", "embree3-4"),
+        ("embree8", "embree3-8"),
+        ("embree16", "embree3-16"),
+        ("embree-stream", "embree3-stream"),
+    ] {
+        assert!(std::ptr::eq(
+            TracerInfo::find(alias).unwrap(),
+            TracerInfo::find(name).unwrap()
+        ));
     }
     let mesh = box_on_floor();
     let scene = accel(AccelKind::Embree, &mesh, &Params::new());
@@ -502,4 +553,39 @@ fn registry_lists_the_embree_tracers_and_checks_their_parameters() {
     let bvh = accel(AccelKind::Bvh, &mesh, &Params::new());
     assert!(build_tracer(info, &Params::new(), &bvh).is_err());
     assert!(scene.build_seconds() > 0.0);
+}
+
+/// Every ill-formed ray of the stability suite (NaN, infinite, zero direction, empty or negative
+/// intervals) is a miss and unoccluded for every Embree tracer, in every lane of a packet, beside
+/// good rays answered as if alone: Embree itself would abort the process on some of them.
+#[test]
+fn ill_formed_rays_miss_and_never_abort() {
+    let mesh = box_on_floor();
+    let good = box_rays()[0].ray;
+    let variants = ill_formed_variants(good);
+    // Good and ill-formed rays alternating, 3 times over: every lane position of a 16-packet sees
+    // both.
+    let mut rays = Vec::new();
+    for _ in 0..3 {
+        for (_, bad) in &variants {
+            rays.extend([good, *bad]);
+        }
+    }
+    let b = batch(rays.iter().copied());
+    for (kind, names) in embree_tracers() {
+        let scene = accel(kind, &mesh, &Params::new());
+        for name in names {
+            let (hits, occluded) = trace(&*tracer(name, &Params::new(), &scene), &b);
+            for i in 0..rays.len() {
+                let variant = variants[(i / 2) % variants.len()].0;
+                if i % 2 == 0 {
+                    assert_eq!((hits[i].prim, hits[i].t), (10, 4.0), "{name}: good ray {i}");
+                    assert!(occluded[i], "{name}: good ray {i}");
+                } else {
+                    assert_eq!(hits[i], Hit::MISS, "{name}: {variant}");
+                    assert!(!occluded[i], "{name}: {variant}");
+                }
+            }
+        }
+    }
 }

@@ -2,13 +2,16 @@
 //! with Embree (robust mode) on well over a million rays — primary, shadow and diffuse bounces —
 //! over three built-in scenes and two real ones (conference, bunny), with zero unexplained
 //! disagreements; and the reference, packet and stream tracers agree on Whitted's reflection and
-//! refraction rays. Ties are classified and
-//! printed, not hidden.
+//! refraction rays. Embree 4 agrees with both Embree 3 and the reference tracer. Ties are
+//! classified and printed, not hidden.
 
+use raylab::accel::embree::{EMBREE4_BUILT, EMBREE4_HINT};
 use raylab::geometry::RayKind;
 use raylab::scene::library::load_scene;
-use raylab::tracers::Params;
-use raylab::verify::{format_table, verify_frame, Tolerance};
+use raylab::tracers::{oracle_params, tracer_for_frame, Params, ORACLE};
+use raylab::verify::{
+    compare_batches, format_table, verification_batches, verify_frame, Tolerance,
+};
 
 const RESOLUTION: u32 = 512;
 const SEED: u64 = 2026;
@@ -30,16 +33,24 @@ fn agrees_with_embree(tracer: &str) {
 }
 
 fn agrees_with_embree_with(tracer: &str, params: &Params) {
+    agrees_with(tracer, params, ORACLE, &oracle_params());
+}
+
+/// `tracer` against `oracle` on the verification rays of every scene (those `raylab verify`
+/// traces: camera rays and the shadow and diffuse rays from the oracle's hits).
+fn agrees_with(tracer: &str, params: &Params, oracle_name: &str, oracle_params: &Params) {
     let tol = Tolerance::default();
     let mut total_rays = 0;
     let mut failures = vec![];
     for (name, size) in scenes() {
         let scene = load_scene(name, size).unwrap();
         let frame = scene.frame(0, 1);
-        let reports =
-            verify_frame(&scene, &frame, tracer, params, RESOLUTION, RESOLUTION, SEED).unwrap();
+        let oracle = tracer_for_frame(oracle_name, oracle_params, &frame).unwrap();
+        let tested = tracer_for_frame(tracer, params, &frame).unwrap();
+        let batches = verification_batches(&scene, &frame, &*oracle, RESOLUTION, RESOLUTION, SEED);
+        let reports = compare_batches(&frame, &*tested, &*oracle, &batches);
         println!(
-            "{tracer} {params} on {name} ({} triangles):\n{}",
+            "{tracer} {params} against {oracle_name} on {name} ({} triangles):\n{}",
             scene.triangle_count(),
             format_table(&reports, &tol)
         );
@@ -57,7 +68,7 @@ fn agrees_with_embree_with(tracer: &str, params: &Params) {
     }
     assert!(
         failures.is_empty(),
-        "{tracer} {params} disagrees with Embree: {failures:?}"
+        "{tracer} {params} disagrees with {oracle_name}: {failures:?}"
     );
     if std::env::var_os("RAYLAB_SCENES").is_some() {
         assert!(total_rays >= 1_000_000, "only {total_rays} rays compared");
@@ -67,6 +78,22 @@ fn agrees_with_embree_with(tracer: &str, params: &Params) {
 #[test]
 fn reference_agrees_with_embree() {
     agrees_with_embree("reference");
+}
+
+/// `raylab verify --tracer embree4-1` and `embree4-16`, Embree's default build and the robust
+/// one: Embree 4 agrees with Embree 3 robust (the oracle) and with the reference tracer.
+#[test]
+fn embree4_agrees_with_embree3_and_the_reference() {
+    if !EMBREE4_BUILT {
+        println!("SKIPPED: {EMBREE4_HINT}");
+        return;
+    }
+    for tracer in ["embree4-1", "embree4-16"] {
+        for params in [Params::new(), Params::new().with("robust", true)] {
+            agrees_with_embree_with(tracer, &params);
+            agrees_with(tracer, &params, "reference", &Params::new());
+        }
+    }
 }
 
 #[test]

@@ -13,6 +13,8 @@ use std::sync::Arc;
 use crate::error::{Error, Result};
 use crate::params::Params;
 use crate::scene::Mesh;
+#[cfg(embree4)]
+use embree::Embree4;
 use embree::{BuildQuality, Device, EmbreeConfig, EmbreeScene};
 
 pub use self::obvhs::{ObvhsBvh, ObvhsQuality};
@@ -24,8 +26,11 @@ pub use grid::{Grid, GridConfig};
 pub enum AccelKind {
     /// Our binned-SAH binary BVH.
     Bvh,
-    /// Embree's own BVH over the mesh, built by the library (`quality`, `robust`).
+    /// Embree 3's own BVH over the mesh, built by the library (`quality`, `robust`).
     Embree,
+    /// Embree 4's, with the same parameters (`accel::embree::v4`).
+    #[cfg(embree4)]
+    Embree4,
     /// obvhs's compressed 8-wide BVH, built by obvhs's own builder.
     Obvhs,
     /// Uniform grid with macrocells, rebuilt from scratch every frame (Wald et al. 2006, §3).
@@ -37,6 +42,8 @@ impl AccelKind {
         match self {
             AccelKind::Bvh => "bvh",
             AccelKind::Embree => "embree",
+            #[cfg(embree4)]
+            AccelKind::Embree4 => "embree4",
             AccelKind::Obvhs => "obvhs",
             AccelKind::Grid => "grid",
         }
@@ -47,6 +54,8 @@ impl AccelKind {
         match self {
             AccelKind::Bvh => BvhConfig::PARAMS,
             AccelKind::Embree => EmbreeConfig::PARAMS,
+            #[cfg(embree4)]
+            AccelKind::Embree4 => EmbreeConfig::PARAMS,
             AccelKind::Obvhs => ObvhsQuality::PARAMS,
             AccelKind::Grid => GridConfig::PARAMS,
         }
@@ -60,6 +69,12 @@ impl AccelKind {
             ))),
             AccelKind::Embree => Accel::Embree(Arc::new(EmbreeScene::build(
                 Device::shared()?,
+                mesh,
+                EmbreeConfig::from_params(params)?,
+            )?)),
+            #[cfg(embree4)]
+            AccelKind::Embree4 => Accel::Embree4(Arc::new(EmbreeScene::build(
+                Device::<Embree4>::shared()?,
                 mesh,
                 EmbreeConfig::from_params(params)?,
             )?)),
@@ -99,6 +114,13 @@ impl AccelKind {
                 close,
                 EmbreeConfig::from_params(params)?,
             )?))),
+            #[cfg(embree4)]
+            AccelKind::Embree4 => Ok(Accel::Embree4(Arc::new(EmbreeScene::build_moving(
+                Device::<Embree4>::shared()?,
+                open,
+                close,
+                EmbreeConfig::from_params(params)?,
+            )?))),
             AccelKind::Obvhs | AccelKind::Grid => Err(Error::usage(format!(
                 "the {} structure has no motion blur (moving geometry needs bvh or embree)",
                 self.name()
@@ -111,18 +133,38 @@ impl AccelKind {
     /// is refitted in place (`EmbreeScene::refit`: the tree keeps its topology, its boxes move);
     /// every other structure is built from scratch, as the grid is (Wald et al. 2006, §3).
     pub fn rebuild(self, previous: Option<Accel>, mesh: &Mesh, params: &Params) -> Result<Accel> {
-        if let Some(Accel::Embree(mut scene)) = previous.filter(|_| self.refits(params)) {
-            if let Some(unshared) = Arc::get_mut(&mut scene) {
-                unshared.refit(mesh)?;
-                return Ok(Accel::Embree(scene));
+        match previous.filter(|_| self.refits(params)) {
+            Some(Accel::Embree(mut scene)) => {
+                if let Some(unshared) = Arc::get_mut(&mut scene) {
+                    unshared.refit(mesh)?;
+                    return Ok(Accel::Embree(scene));
+                }
             }
+            #[cfg(embree4)]
+            Some(Accel::Embree4(mut scene)) => {
+                if let Some(unshared) = Arc::get_mut(&mut scene) {
+                    unshared.refit(mesh)?;
+                    return Ok(Accel::Embree4(scene));
+                }
+            }
+            _ => {}
         }
         self.build(mesh, params)
     }
 
+    /// Whether it is a scene built by an Embree library (3 or 4).
+    pub fn is_embree(self) -> bool {
+        match self {
+            AccelKind::Embree => true,
+            #[cfg(embree4)]
+            AccelKind::Embree4 => true,
+            AccelKind::Bvh | AccelKind::Obvhs | AccelKind::Grid => false,
+        }
+    }
+
     /// Whether `rebuild` updates this structure in place rather than building it anew.
     pub fn refits(self, params: &Params) -> bool {
-        self == AccelKind::Embree
+        self.is_embree()
             && EmbreeConfig::from_params(params).is_ok_and(|c| c.quality == BuildQuality::Refit)
     }
 }
@@ -132,6 +174,8 @@ impl AccelKind {
 pub enum Accel {
     Bvh(Arc<Bvh>),
     Embree(Arc<EmbreeScene>),
+    #[cfg(embree4)]
+    Embree4(Arc<EmbreeScene<Embree4>>),
     Obvhs(Arc<ObvhsBvh>),
     Grid(Arc<Grid>),
 }
@@ -142,6 +186,8 @@ impl Accel {
         match self {
             Accel::Bvh(b) => b.motion_end.is_some(),
             Accel::Embree(s) => s.is_moving(),
+            #[cfg(embree4)]
+            Accel::Embree4(s) => s.is_moving(),
             Accel::Obvhs(_) | Accel::Grid(_) => false,
         }
     }
@@ -157,6 +203,14 @@ impl Accel {
         match self {
             Accel::Embree(s) => Ok(s),
             other => Err(other.not(AccelKind::Embree)),
+        }
+    }
+
+    #[cfg(embree4)]
+    pub fn embree4(&self) -> Result<&Arc<EmbreeScene<Embree4>>> {
+        match self {
+            Accel::Embree4(s) => Ok(s),
+            other => Err(other.not(AccelKind::Embree4)),
         }
     }
 
@@ -178,6 +232,8 @@ impl Accel {
         match self {
             Accel::Bvh(_) => AccelKind::Bvh,
             Accel::Embree(_) => AccelKind::Embree,
+            #[cfg(embree4)]
+            Accel::Embree4(_) => AccelKind::Embree4,
             Accel::Obvhs(_) => AccelKind::Obvhs,
             Accel::Grid(_) => AccelKind::Grid,
         }
@@ -196,6 +252,8 @@ impl Accel {
         match self {
             Accel::Bvh(b) => b.build_seconds,
             Accel::Embree(s) => s.build_seconds,
+            #[cfg(embree4)]
+            Accel::Embree4(s) => s.build_seconds,
             Accel::Obvhs(b) => b.build_seconds,
             Accel::Grid(g) => g.build_seconds,
         }

@@ -6,7 +6,9 @@
 //! name = "quick"
 //! description = "built-in scenes, all ray kinds"
 //! scenes = ["room", { name = "balls", size = 3 }]
-//! tracers = ["reference", { name = "embree16", params = { quality = ["low", "high"] } }]
+//! tracers = ["reference", { name = "embree3-16", params = { quality = ["low", "high"] } },
+//!            { name = "embree4-16", if_built = true }]   # skipped (with a note) by a build
+//!                                      # without Embree 4; without `if_built` such a build refuses
 //! params = { leaf_size = [2, 4] }      # shared grid: applies to every tracer that reads the key
 //! rays = ["primary", "shadow", "diffuse", "reflection", "refraction"]   # ray batches (optional
 //!                                      # with `render`): each kind traced on its own; reflection and
@@ -89,6 +91,7 @@ use crate::geometry::RayKind;
 use crate::render::distribution::{DrtSettings, Integrator};
 use crate::render::interleaved::SampleTable;
 use crate::render::whitted::WhittedSettings;
+use crate::tracers::registry::not_built;
 use crate::tracers::visibility::LightSamples;
 use crate::tracers::{Params, TracerInfo, TRACERS};
 use crate::verify::stability::{CaseKind, Sweep};
@@ -474,6 +477,10 @@ struct TracerTable {
     name: String,
     #[serde(default)]
     params: Option<Spanned<BTreeMap<String, toml::Value>>>,
+    /// A tracer this build may lack (Embree 4's, `accel::embree::EMBREE4_BUILT`): skipped with a
+    /// note rather than refused when it is not built.
+    #[serde(default)]
+    if_built: bool,
 }
 
 impl From<String> for SceneSpec {
@@ -484,7 +491,11 @@ impl From<String> for SceneSpec {
 
 impl From<String> for TracerTable {
     fn from(name: String) -> Self {
-        TracerTable { name, params: None }
+        TracerTable {
+            name,
+            params: None,
+            if_built: false,
+        }
     }
 }
 
@@ -887,11 +898,19 @@ fn tracer_entries<'f>(src: &Source, file: &'f ExperimentFile) -> Result<Vec<Trac
     for entry in file.tracers.get_ref() {
         let name = &entry.get_ref().0.name;
         if name == EMBREE_BEST {
-            let embree = TRACERS.iter().filter(|t| t.accel == AccelKind::Embree);
+            let embree = TRACERS.iter().filter(|t| t.accel.is_embree());
             entries.extend(embree.map(|info| (entry, info, EMBREE_BEST_AXES)));
         } else {
-            let info = TracerInfo::find(name).map_err(|e| src.usage_error(&entry.span(), e))?;
-            entries.push((entry, info, &[][..]));
+            match TracerInfo::find(name) {
+                Ok(info) => entries.push((entry, info, &[][..])),
+                Err(e) if entry.get_ref().0.if_built && not_built(name) => {
+                    eprintln!(
+                        "note: {}: skipping {name} (if_built): {e}",
+                        src.path.display()
+                    )
+                }
+                Err(e) => return Err(src.usage_error(&entry.span(), e)),
+            }
         }
     }
     Ok(entries)
@@ -996,6 +1015,7 @@ mod tests {
     use std::collections::BTreeSet;
 
     use super::*;
+    use crate::accel::embree::EMBREE4_BUILT;
     use crate::render::assembly::Assembly;
     use crate::scene::scene_file::Preset;
 
@@ -1041,18 +1061,27 @@ mod tests {
         ))
         .unwrap();
         let embree: Vec<String> = exp.instances[1..].iter().map(|i| i.to_string()).collect();
-        // 5 entry points × 2 contexts × 2 qualities, keys sorted, values as listed.
-        assert_eq!(embree.len(), 20);
-        assert_eq!(embree[0], "embree1[context=coherent;quality=medium]");
-        assert_eq!(embree[19], "embree-stream[context=incoherent;quality=high]");
+        // Embree 3's 5 entry points and Embree 4's 4 (when built) × 2 contexts × 2 qualities,
+        // keys sorted, values as listed.
+        let entry_points = if EMBREE4_BUILT { 9 } else { 5 };
+        assert_eq!(embree.len(), entry_points * 4);
+        assert_eq!(embree[0], "embree3-1[context=coherent;quality=medium]");
+        assert_eq!(
+            embree[19],
+            "embree3-stream[context=incoherent;quality=high]"
+        );
+        if EMBREE4_BUILT {
+            assert_eq!(embree[20], "embree4-1[context=coherent;quality=medium]");
+            assert_eq!(embree[35], "embree4-16[context=incoherent;quality=high]");
+        }
         let names: BTreeSet<&str> = exp.instances[1..].iter().map(|i| i.info.name).collect();
-        assert_eq!(names.len(), 5);
+        assert_eq!(names.len(), entry_points);
         // Its own params replace an axis: per-frame rebuilds sweep low and refit.
         let exp = parse(&format!(
             "{BASE}tracers = [{{ name = \"embree-best\", params = {{ quality = [\"low\", \"refit\"], context = [\"auto\"] }} }}]\n"
         ))
         .unwrap();
-        assert_eq!(exp.instances.len(), 10);
+        assert_eq!(exp.instances.len(), entry_points * 2);
         assert!(exp
             .instances
             .iter()
@@ -1062,6 +1091,34 @@ mod tests {
             "{BASE}tracers = [\"embree-best\", {{ name = \"embree16\", params = {{ context = [\"coherent\"], quality = [\"high\"] }} }}]\n"
         ));
         assert!(twice.unwrap_err().to_string().contains("listed twice"));
+    }
+
+    #[test]
+    fn embree_4_tracers_are_refused_or_skipped_when_not_built() {
+        let named = parse(&format!(
+            "{BASE}tracers = [\"reference\", \"embree4-16\"]\n"
+        ));
+        let optional = parse(&format!(
+            "{BASE}tracers = [\"reference\", {{ name = \"embree4-16\", if_built = true }}]\n"
+        ))
+        .unwrap();
+        if EMBREE4_BUILT {
+            assert_eq!(named.unwrap().instances[1].info.name, "embree4-16");
+            assert_eq!(optional.instances[1].info.name, "embree4-16");
+        } else {
+            let err = named.unwrap_err();
+            assert!(
+                matches!(err, Error::Usage(_) | Error::Input { .. }),
+                "{err}"
+            );
+            assert!(err.to_string().contains("Embree 4 was not built"), "{err}");
+            assert_eq!(optional.instances.len(), 1);
+        }
+        // `if_built` never hides a misspelt name.
+        let misspelt = parse(&format!(
+            "{BASE}tracers = [{{ name = \"embree5-16\", if_built = true }}]\n"
+        ));
+        assert!(misspelt.unwrap_err().to_string().contains("unknown tracer"));
     }
 
     #[test]

@@ -1,13 +1,13 @@
 //! "Embree at its best": for every runs.csv row, the fastest Embree row measured on the same work
 //! in the same run — same scene (and size), frame, ray kind (or render batch and bounce depth, or
-//! whole frame) and thread count — whatever its entry point (1/4/8/16/stream), context and build
-//! quality. Every ratio raylab publishes is against it (`x_embree_best`), never against one
+//! whole frame) and thread count — whatever its Embree version (3 or 4), entry point
+//! (1/4/8/16/stream), context and build quality; its configuration names the tracer, and so the
+//! version (`embree3-16`, `embree4-1`, ...). Every ratio raylab publishes is against it (`x_embree_best`), never against one
 //! Embree configuration that happens to be slow. Groups the run did not measure with Embree get
 //! empty cells.
 
 use std::collections::HashMap;
 
-use crate::accel::AccelKind;
 use crate::geometry::RayKind;
 use crate::render::assembly::BatchKind;
 use crate::tracers::embree::Coherence;
@@ -40,7 +40,7 @@ impl EmbreeBest {
         let mut best = EmbreeBest::default();
         for case in cases {
             let instance = &plan.instances[case.instance];
-            if instance.structure.kind != AccelKind::Embree {
+            if !instance.structure.kind.is_embree() {
                 continue;
             }
             let config = config(instance, case.traced);
@@ -175,14 +175,14 @@ mod tests {
             at(0, 0),
             Some(&Best {
                 seconds: 1.0,
-                config: "embree1 (context coherent)".into()
+                config: "embree3-1 (context coherent)".into()
             })
         );
         assert_eq!(
             at(0, 1),
             Some(&Best {
                 seconds: 0.5,
-                config: "embree16 context=incoherent;quality=high".into()
+                config: "embree3-16 context=incoherent;quality=high".into()
             })
         );
         assert_eq!(at(3, 0), None);
@@ -201,5 +201,49 @@ mod tests {
         // A shadow batch of the same scene is another group.
         let shadow = case(0, 0, RayKind::Shadow, 0.5, vec![timing(1, 1.0)]);
         assert_eq!(best.trace(&shadow, &shadow.timings[0]), None);
+    }
+
+    /// Embree 3 and Embree 4 on the same work: the best is whichever is faster at each thread
+    /// count, its configuration naming the tracer and so the version.
+    #[cfg(embree4)]
+    #[test]
+    fn the_best_is_picked_across_embree_3_and_4_and_names_which() {
+        let exp = experiment(
+            "scenes = [\"lit\"]\nrays = [\"primary\"]\n\
+             tracers = [\"reference\", \"embree3-16\", \"embree4-16\"]\nthreads = [1, 2]\n",
+        );
+        let plan = Plan::derive(&exp, &load_quads).unwrap();
+        use crate::accel::AccelKind;
+        assert_eq!(plan.instances[2].structure.kind, AccelKind::Embree4);
+        let p = RayKind::Primary;
+        let cases = vec![
+            case(0, 0, p, 0.5, vec![timing(1, 2.0), timing(2, 1.0)]),
+            case(1, 0, p, 0.2, vec![timing(1, 1.0), timing(2, 0.5)]),
+            case(2, 0, p, 0.1, vec![timing(1, 0.8), timing(2, 0.6)]),
+        ];
+        let best = EmbreeBest::of(&plan, &cases);
+        let at = |t: usize| best.trace(&cases[0], &cases[0].timings[t]).unwrap();
+        assert_eq!(
+            at(0),
+            &Best {
+                seconds: 0.8,
+                config: "embree4-16 (context coherent)".into()
+            }
+        );
+        assert_eq!(
+            at(1),
+            &Best {
+                seconds: 0.5,
+                config: "embree3-16 (context coherent)".into()
+            }
+        );
+        // Build + trace at 1 thread: Embree 4, 0.1 + 0.8 against Embree 3's 0.2 + 1.0.
+        let bt = best
+            .build_plus_trace(&cases[0], &cases[0].timings[0])
+            .unwrap();
+        assert_eq!(
+            (bt.seconds, bt.config.as_str()),
+            (0.9, "embree4-16 (context coherent)")
+        );
     }
 }

@@ -218,14 +218,36 @@ fn versions() -> BTreeMap<&'static str, String> {
     let mut v = BTreeMap::new();
     // The library actually loaded, asked at run time; a run without Embree tracers still records
     // why it is missing.
-    let embree = crate::accel::embree::version().unwrap_or_else(|e| format!("unavailable: {e}"));
+    use crate::accel::embree::{version, Embree3};
+    let embree = version::<Embree3>().unwrap_or_else(|e| format!("unavailable: {e}"));
     v.insert("embree", embree);
+    v.insert("embree4", embree4_version());
     v.insert("raylab", env!("CARGO_PKG_VERSION").to_string());
     v.insert(
         "obvhs",
         locked_version(CARGO_LOCK, "obvhs").unwrap_or_else(|| "unknown".into()),
     );
     v
+}
+
+/// The Embree 4 library loaded, the headers it was built against and where both came from; or
+/// why this build has none.
+#[cfg(embree4)]
+fn embree4_version() -> String {
+    use crate::accel::embree::{v4, version, Embree4, EmbreeApi};
+    let headers = std::ffi::CStr::from_bytes_with_nul(v4::ffi::RTC_VERSION_STRING)
+        .ok()
+        .and_then(|c| c.to_str().ok())
+        .unwrap_or("?");
+    match version::<Embree4>() {
+        Ok(library) => format!("{library} (headers {headers}; {})", v4::SOURCE),
+        Err(e) => format!("unavailable: {e} ({} headers {headers})", Embree4::NAME),
+    }
+}
+
+#[cfg(not(embree4))]
+fn embree4_version() -> String {
+    format!("not built: {}", crate::accel::embree::EMBREE4_HINT)
 }
 
 #[cfg(test)]

@@ -18,6 +18,7 @@ use std::collections::BTreeMap;
 use serde::Deserialize;
 
 use crate::error::{Error, Result};
+use crate::tracers::registry::canonical_name;
 
 use super::measure::median_of_sorted;
 use super::output::{runs_columns, RUNS_CSV};
@@ -70,7 +71,7 @@ impl<'de> Deserialize<'de> for Filter {
                 toml::Value::Array(list) => list.iter().map(scalar_text).collect(),
                 single => vec![scalar_text(&single)],
             };
-            let values = values
+            let mut values = values
                 .into_iter()
                 .collect::<Option<Vec<String>>>()
                 .ok_or_else(|| {
@@ -78,6 +79,12 @@ impl<'de> Deserialize<'de> for Filter {
                         "where.{field}: expected a string, number or boolean (or a list of them)"
                     ))
                 })?;
+            // Rows carry a tracer's new name: an old one (`embree16`) selects them too.
+            if field == "tracer" {
+                for v in &mut values {
+                    *v = canonical_name(v).to_string();
+                }
+            }
             filter.insert(field, values);
         }
         Ok(Filter(filter))

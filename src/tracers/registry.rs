@@ -2,6 +2,9 @@
 //! reads, how to make one from a built structure, whether it traces moving geometry, and how many
 //! rays it wants per work chunk. Adding a tracer is one entry here.
 
+#[cfg(embree4)]
+use crate::accel::embree::Embree4;
+use crate::accel::embree::{Embree3, EMBREE4_BUILT, EMBREE4_HINT};
 use crate::accel::{Accel, AccelKind};
 use crate::error::{Error, Result};
 use crate::geometry::{Hit, Rays};
@@ -38,12 +41,66 @@ pub struct TracerInfo {
     pub chunk_rays: usize,
 }
 
-fn embree<M: Submission + 'static>(params: &Params, accel: &Accel) -> Result<Box<dyn Tracer>> {
-    Ok(Box::new(EmbreeTracer::<M>::from_params(
+fn embree3<M: Submission<Embree3>>(params: &Params, accel: &Accel) -> Result<Box<dyn Tracer>> {
+    Ok(Box::new(EmbreeTracer::<Embree3, M>::from_params(
         accel.embree()?,
         params,
     )?))
 }
+
+#[cfg(embree4)]
+fn embree4<M: Submission<Embree4>>(params: &Params, accel: &Accel) -> Result<Box<dyn Tracer>> {
+    Ok(Box::new(EmbreeTracer::<Embree4, M>::from_params(
+        accel.embree4()?,
+        params,
+    )?))
+}
+
+/// An Embree tracer's entry: every one reads the coherence hint (`context`) and traces moving
+/// geometry.
+const fn embree_entry(
+    name: &'static str,
+    accel: AccelKind,
+    about: &'static str,
+    make: Make,
+) -> TracerInfo {
+    TracerInfo {
+        name,
+        accel,
+        params: Coherence::PARAMS,
+        about,
+        make,
+        motion_blur: true,
+        chunk_rays: CHUNK_RAYS,
+    }
+}
+
+/// The names the Embree 3 tracers had before Embree 4 came (`embree4` was rtcIntersect4!), kept
+/// as aliases so existing experiment files still run; rows carry the new names.
+pub const ALIASES: &[(&str, &str)] = &[
+    ("embree1", "embree3-1"),
+    ("embree4", "embree3-4"),
+    ("embree8", "embree3-8"),
+    ("embree16", "embree3-16"),
+    ("embree-stream", "embree3-stream"),
+];
+
+/// The name rows carry for a tracer called `name`: the new name of an alias, else `name`.
+pub fn canonical_name(name: &str) -> &str {
+    ALIASES
+        .iter()
+        .find(|(alias, _)| *alias == name)
+        .map_or(name, |(_, canonical)| canonical)
+}
+
+/// Whether `name` is a tracer this build lacks but another build has: Embree 4's, when
+/// `build.rs` did not find Embree 4.
+pub fn not_built(name: &str) -> bool {
+    !EMBREE4_BUILT && EMBREE4_TRACERS.contains(&name)
+}
+
+/// The Embree 4 tracers, which a build without Embree 4 lacks (`accel::embree::EMBREE4_HINT`).
+const EMBREE4_TRACERS: &[&str] = &["embree4-1", "embree4-4", "embree4-8", "embree4-16"];
 
 pub const TRACERS: &[TracerInfo] = &[
     TracerInfo {
@@ -56,51 +113,64 @@ pub const TRACERS: &[TracerInfo] = &[
         motion_blur: true,
         chunk_rays: CHUNK_RAYS,
     },
-    TracerInfo {
-        name: "embree1",
-        accel: AccelKind::Embree,
-        params: Coherence::PARAMS,
-        about: "Embree 3 baseline: rtcIntersect1 / rtcOccluded1 per ray",
-        make: embree::<Single>,
-        motion_blur: true,
-        chunk_rays: CHUNK_RAYS,
-    },
-    TracerInfo {
-        name: "embree4",
-        accel: AccelKind::Embree,
-        params: Coherence::PARAMS,
-        about: "Embree 3 baseline: rtcIntersect4 / rtcOccluded4 on groups of 4 consecutive rays",
-        make: embree::<Packets4>,
-        motion_blur: true,
-        chunk_rays: CHUNK_RAYS,
-    },
-    TracerInfo {
-        name: "embree8",
-        accel: AccelKind::Embree,
-        params: Coherence::PARAMS,
-        about: "Embree 3 baseline: rtcIntersect8 / rtcOccluded8 on groups of 8 consecutive rays",
-        make: embree::<Packets8>,
-        motion_blur: true,
-        chunk_rays: CHUNK_RAYS,
-    },
-    TracerInfo {
-        name: "embree16",
-        accel: AccelKind::Embree,
-        params: Coherence::PARAMS,
-        about: "Embree 3 baseline: rtcIntersect16 / rtcOccluded16 on groups of 16 consecutive rays",
-        make: embree::<Packets16>,
-        motion_blur: true,
-        chunk_rays: CHUNK_RAYS,
-    },
-    TracerInfo {
-        name: "embree-stream",
-        accel: AccelKind::Embree,
-        params: Coherence::PARAMS,
-        about: "Embree 3 baseline: AoS ray streams, rtcIntersect1M / rtcOccluded1M",
-        make: embree::<Stream>,
-        motion_blur: true,
-        chunk_rays: CHUNK_RAYS,
-    },
+    embree_entry(
+        "embree3-1",
+        AccelKind::Embree,
+        "Embree 3 baseline: rtcIntersect1 / rtcOccluded1 per ray (alias embree1)",
+        embree3::<Single>,
+    ),
+    embree_entry(
+        "embree3-4",
+        AccelKind::Embree,
+        "Embree 3 baseline: rtcIntersect4 / rtcOccluded4 on groups of 4 consecutive rays (alias embree4)",
+        embree3::<Packets4>,
+    ),
+    embree_entry(
+        "embree3-8",
+        AccelKind::Embree,
+        "Embree 3 baseline: rtcIntersect8 / rtcOccluded8 on groups of 8 consecutive rays (alias embree8)",
+        embree3::<Packets8>,
+    ),
+    embree_entry(
+        "embree3-16",
+        AccelKind::Embree,
+        "Embree 3 baseline: rtcIntersect16 / rtcOccluded16 on groups of 16 consecutive rays (alias embree16)",
+        embree3::<Packets16>,
+    ),
+    embree_entry(
+        "embree3-stream",
+        AccelKind::Embree,
+        "Embree 3 baseline: AoS ray streams, rtcIntersect1M / rtcOccluded1M (alias embree-stream)",
+        embree3::<Stream>,
+    ),
+    #[cfg(embree4)]
+    embree_entry(
+        "embree4-1",
+        AccelKind::Embree4,
+        "Embree 4 baseline: rtcIntersect1 / rtcOccluded1 per ray",
+        embree4::<Single>,
+    ),
+    #[cfg(embree4)]
+    embree_entry(
+        "embree4-4",
+        AccelKind::Embree4,
+        "Embree 4 baseline: rtcIntersect4 / rtcOccluded4 on groups of 4 consecutive rays",
+        embree4::<Packets4>,
+    ),
+    #[cfg(embree4)]
+    embree_entry(
+        "embree4-8",
+        AccelKind::Embree4,
+        "Embree 4 baseline: rtcIntersect8 / rtcOccluded8 on groups of 8 consecutive rays",
+        embree4::<Packets8>,
+    ),
+    #[cfg(embree4)]
+    embree_entry(
+        "embree4-16",
+        AccelKind::Embree4,
+        "Embree 4 baseline: rtcIntersect16 / rtcOccluded16 on groups of 16 consecutive rays",
+        embree4::<Packets16>,
+    ),
     TracerInfo {
         name: "obvhs",
         accel: AccelKind::Obvhs,
@@ -149,14 +219,20 @@ pub const TRACERS: &[TracerInfo] = &[
 ];
 
 impl TracerInfo {
+    /// The tracer `name` names, directly or through one of its `ALIASES`.
     pub fn find(name: &str) -> Result<&'static TracerInfo> {
-        TRACERS.iter().find(|t| t.name == name).ok_or_else(|| {
-            let known: Vec<&str> = TRACERS.iter().map(|t| t.name).collect();
-            Error::usage(format!(
-                "unknown tracer {name:?} (known: {})",
-                known.join(", ")
-            ))
-        })
+        let canonical = canonical_name(name);
+        if let Some(info) = TRACERS.iter().find(|t| t.name == canonical) {
+            return Ok(info);
+        }
+        if not_built(name) {
+            return Err(Error::usage(format!("tracer {name:?}: {EMBREE4_HINT}")));
+        }
+        let known: Vec<&str> = TRACERS.iter().map(|t| t.name).collect();
+        Err(Error::usage(format!(
+            "unknown tracer {name:?} (known: {})",
+            known.join(", ")
+        )))
     }
 
     /// Every parameter this tracer accepts: its own and its structure's.
@@ -206,7 +282,7 @@ pub fn tracer_for_frame(name: &str, params: &Params, frame: &Frame) -> Result<Bo
 
 /// The oracle verification compares against: Embree's single-ray call on a robust,
 /// high-quality scene.
-pub const ORACLE: &str = "embree1";
+pub const ORACLE: &str = "embree3-1";
 
 pub fn oracle_params() -> Params {
     Params::new().with("robust", "true").with("quality", "high")
@@ -254,6 +330,40 @@ impl Tracer for Registered {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn aliases_resolve_to_the_embree_3_tracers() {
+        for (alias, canonical) in ALIASES {
+            assert_eq!(TracerInfo::find(alias).unwrap().name, *canonical);
+            assert_eq!(
+                TracerInfo::find(canonical).unwrap().accel,
+                AccelKind::Embree
+            );
+            assert!(
+                TRACERS.iter().all(|t| t.name != *alias),
+                "{alias} is only an alias"
+            );
+        }
+        // `embree4` is Embree 3's rtcIntersect4, not Embree 4.
+        assert_eq!(TracerInfo::find("embree4").unwrap().name, "embree3-4");
+    }
+
+    #[test]
+    fn embree_4_tracers_exist_exactly_when_it_was_built() {
+        for name in EMBREE4_TRACERS {
+            let found = TracerInfo::find(name);
+            assert_eq!(found.is_ok(), EMBREE4_BUILT, "{name}");
+            assert_eq!(not_built(name), !EMBREE4_BUILT, "{name}");
+            match found {
+                Ok(info) => assert_eq!((info.name, info.accel.is_embree()), (*name, true)),
+                Err(err) => {
+                    assert!(matches!(err, Error::Usage(_)), "{err}");
+                    assert!(err.to_string().contains(".ci/fetch-embree4"), "{err}");
+                }
+            }
+        }
+        assert!(!not_built("embree3-16") && !not_built("no-such-tracer"));
+    }
 
     #[test]
     fn names_are_unique_and_chunks_hold_whole_blocks() {

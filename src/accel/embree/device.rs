@@ -1,54 +1,71 @@
-//! The Embree device: owns Embree's build threads and reports errors. One device serves the whole
-//! process (`Device::shared`), since creating one starts a thread pool; scenes keep it alive.
+//! The Embree device: owns Embree's build threads and reports errors. One device per Embree
+//! version serves the whole process (`Device::shared`), since creating one starts a thread pool;
+//! scenes keep it alive.
 
 use std::ffi::{c_char, c_void, CStr};
+use std::marker::PhantomData;
 use std::ptr;
 use std::sync::{Arc, Mutex, PoisonError};
 
+use super::api::{Embree3, EmbreeApi};
 use super::ffi;
 use crate::error::{Error, Result};
 
 /// Errors Embree reported through its callback since the last `Device::check`.
 type ErrorLog = Mutex<Vec<String>>;
 
-pub struct Device {
+pub struct Device<A: EmbreeApi = Embree3> {
     raw: ffi::RTCDevice,
     // Boxed so the address handed to Embree as the callback's user pointer never moves.
     errors: Box<ErrorLog>,
+    api: PhantomData<A>,
 }
 
 // SAFETY: Embree's device API is thread-safe; the error log behind the callback is a Mutex.
-unsafe impl Send for Device {}
-unsafe impl Sync for Device {}
+unsafe impl<A: EmbreeApi> Send for Device<A> {}
+unsafe impl<A: EmbreeApi> Sync for Device<A> {}
 
-static SHARED: Mutex<Option<Arc<Device>>> = Mutex::new(None);
-
-impl Device {
-    /// A new device with Embree's default configuration (all hardware threads for builds).
-    pub fn new() -> Result<Device> {
+impl<A: EmbreeApi> Device<A> {
+    /// A new device with Embree's default configuration (all hardware threads for builds), once
+    /// the library is checked to be the major version of our headers and at least as new.
+    pub fn new() -> Result<Self> {
+        A::load()?;
         // SAFETY: a null config string selects the defaults.
-        let raw = unsafe { ffi::rtcNewDevice(ptr::null()) };
+        let raw = unsafe { A::new_device(ptr::null()) };
         if raw.is_null() {
             // SAFETY: with a null device Embree reports the error of device creation.
-            let code = unsafe { ffi::rtcGetDeviceError(ptr::null_mut()) };
+            let code = unsafe { A::device_error(ptr::null_mut()) };
             return Err(Error::runtime(format!(
-                "Embree could not create a device: {}",
+                "{} could not create a device: {}",
+                A::NAME,
                 error_name(code)
             )));
         }
         let device = Device {
             raw,
             errors: Box::default(),
+            api: PhantomData,
         };
         let log: *const ErrorLog = &*device.errors;
         // SAFETY: the log outlives the device: it is dropped after rtcReleaseDevice in Drop.
-        unsafe { ffi::rtcSetDeviceErrorFunction(raw, Some(record_error), log as *mut c_void) };
+        unsafe { A::set_device_error_function(raw, Some(record_error), log as *mut c_void) };
+        let library = device.property(ffi::RTCDeviceProperty::RTC_DEVICE_PROPERTY_VERSION);
+        if !version_fits(library, A::HEADER_VERSION) {
+            return Err(Error::runtime(format!(
+                "{} library {} does not fit the headers raylab was built with ({})",
+                A::NAME,
+                device.version(),
+                dotted(A::HEADER_VERSION)
+            )));
+        }
         Ok(device)
     }
 
-    /// The process-wide device, created on first use.
-    pub fn shared() -> Result<Arc<Device>> {
-        let mut slot = SHARED.lock().unwrap_or_else(PoisonError::into_inner);
+    /// The process-wide device of this version, created on first use.
+    pub fn shared() -> Result<Arc<Self>> {
+        let mut slot = A::shared_device()
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner);
         if let Some(device) = &*slot {
             return Ok(device.clone());
         }
@@ -75,32 +92,43 @@ impl Device {
 
     pub fn property(&self, property: ffi::RTCDeviceProperty::Type) -> isize {
         // SAFETY: a valid device; an unknown property sets an error and returns 0.
-        unsafe { ffi::rtcGetDeviceProperty(self.raw, property) }
+        unsafe { A::device_property(self.raw, property) }
     }
 
     /// The library's version, e.g. "3.13.5", from the device (not from the header we compiled
     /// against): the one recorded in meta.json.
     pub fn version(&self) -> String {
-        use ffi::RTCDeviceProperty::*;
-        format!(
-            "{}.{}.{}",
-            self.property(RTC_DEVICE_PROPERTY_VERSION_MAJOR),
-            self.property(RTC_DEVICE_PROPERTY_VERSION_MINOR),
-            self.property(RTC_DEVICE_PROPERTY_VERSION_PATCH)
-        )
+        dotted(self.property(ffi::RTCDeviceProperty::RTC_DEVICE_PROPERTY_VERSION))
     }
 }
 
-impl Drop for Device {
+impl<A: EmbreeApi> Drop for Device<A> {
     fn drop(&mut self) {
         // SAFETY: the device was created by rtcNewDevice and is released once.
-        unsafe { ffi::rtcReleaseDevice(self.raw) };
+        unsafe { A::release_device(self.raw) };
     }
 }
 
 /// The Embree library version, via the shared device.
-pub fn version() -> Result<String> {
-    Ok(Device::shared()?.version())
+pub fn version<A: EmbreeApi>() -> Result<String> {
+    Ok(Device::<A>::shared()?.version())
+}
+
+/// Whether a library of `RTC_VERSION` `library` serves code built against headers of `header`:
+/// the same major version, and not older (a newer minor version keeps the API; what it appends
+/// to the records is what `api::Padded` makes room for).
+fn version_fits(library: isize, header: isize) -> bool {
+    library / 10000 == header / 10000 && library >= header
+}
+
+/// `RTC_VERSION` 31305 as "3.13.5".
+fn dotted(version: isize) -> String {
+    format!(
+        "{}.{}.{}",
+        version / 10000,
+        version / 100 % 100,
+        version % 100
+    )
 }
 
 /// Embree's error callback: called from any thread inside an Embree call; must not unwind.
@@ -144,11 +172,22 @@ mod tests {
     use ffi::RTCDeviceProperty::*;
 
     #[test]
+    fn versions_fit_same_major_not_older() {
+        assert!(version_fits(31305, 31305));
+        assert!(version_fits(40400, 40200));
+        assert!(!version_fits(40100, 40200), "older than the headers");
+        assert!(!version_fits(31305, 40200), "another major version");
+        assert!(!version_fits(50000, 40200));
+        assert_eq!(dotted(31305), "3.13.5");
+        assert_eq!(dotted(40400), "4.4.0");
+    }
+
+    #[test]
     fn version_is_embree_3() {
-        let v = version().unwrap();
+        let v = version::<Embree3>().unwrap();
         assert!(v.starts_with("3."), "{v}");
         assert_eq!(
-            Device::shared()
+            Device::<Embree3>::shared()
                 .unwrap()
                 .property(RTC_DEVICE_PROPERTY_VERSION),
             ffi::RTC_VERSION as isize,
@@ -158,7 +197,7 @@ mod tests {
 
     #[test]
     fn library_features_the_tracers_rely_on() {
-        let d = Device::shared().unwrap();
+        let d = Device::<Embree3>::shared().unwrap();
         // Masks compiled in: rays carry mask = 0xFFFFFFFF or they would miss every geometry.
         assert_eq!(d.property(RTC_DEVICE_PROPERTY_RAY_MASK_SUPPORTED), 1);
         // Both faces hit, as in our watertight test.
@@ -172,7 +211,7 @@ mod tests {
 
     #[test]
     fn errors_reported_by_embree_become_runtime_errors() {
-        let d = Device::new().unwrap();
+        let d = Device::<Embree3>::new().unwrap();
         // SAFETY: a device and an out-of-range property value: Embree reports invalid argument.
         unsafe { ffi::rtcGetDeviceProperty(d.raw(), 9999) };
         let err = d.check("reading property 9999").unwrap_err();

@@ -1,17 +1,19 @@
 //! An Embree scene over our `Mesh`: one triangle geometry whose primitive `i` is our triangle `i`,
-//! committed once and then traversed concurrently by any number of tracers.
+//! committed once and then traversed concurrently by any number of tracers. Built the same way by
+//! Embree 3 and Embree 4 (`EmbreeApi`).
 
 use std::fmt;
 use std::sync::Arc;
 use std::time::Instant;
 
+use super::api::{Embree3, EmbreeApi};
 use super::ffi::{self, RTCBufferType::*, RTCFormat::*};
 use super::{Device, EmbreeConfig};
 use crate::error::{Error, Result};
 use crate::scene::Mesh;
 
-pub struct EmbreeScene {
-    device: Arc<Device>,
+pub struct EmbreeScene<A: EmbreeApi = Embree3> {
+    device: Arc<Device<A>>,
     raw: ffi::RTCScene,
     /// The triangle geometry (geomID 0), kept to update its vertices; `None` for an empty mesh,
     /// which Embree takes as a committed scene without geometry that every ray misses.
@@ -28,11 +30,11 @@ pub struct EmbreeScene {
 
 // SAFETY: Embree allows rtcIntersect*/rtcOccluded* on a committed scene from many threads at
 // once; everything that changes the scene (`refit`) takes `&mut self`.
-unsafe impl Send for EmbreeScene {}
-unsafe impl Sync for EmbreeScene {}
+unsafe impl<A: EmbreeApi> Send for EmbreeScene<A> {}
+unsafe impl<A: EmbreeApi> Sync for EmbreeScene<A> {}
 
-impl EmbreeScene {
-    pub fn build(device: Arc<Device>, mesh: &Mesh, config: EmbreeConfig) -> Result<EmbreeScene> {
+impl<A: EmbreeApi> EmbreeScene<A> {
+    pub fn build(device: Arc<Device<A>>, mesh: &Mesh, config: EmbreeConfig) -> Result<Self> {
         Self::build_timed(device, mesh, None, config)
     }
 
@@ -41,11 +43,11 @@ impl EmbreeScene {
     /// (`rtcSetGeometryTimeStepCount`, one vertex buffer per step); each ray is traced at its
     /// `time` in [0, 1].
     pub fn build_moving(
-        device: Arc<Device>,
+        device: Arc<Device<A>>,
         open: &Mesh,
         close: &Mesh,
         config: EmbreeConfig,
-    ) -> Result<EmbreeScene> {
+    ) -> Result<Self> {
         if open.len() != close.len() {
             return Err(Error::runtime(format!(
                 "a moving Embree scene needs the same triangles at both ends: {} and {}",
@@ -57,21 +59,22 @@ impl EmbreeScene {
     }
 
     fn build_timed(
-        device: Arc<Device>,
+        device: Arc<Device<A>>,
         mesh: &Mesh,
         close: Option<&Mesh>,
         config: EmbreeConfig,
-    ) -> Result<EmbreeScene> {
+    ) -> Result<Self> {
         let start = Instant::now();
         // Vertex indices are 32-bit: three per triangle.
         if mesh.len() > (u32::MAX / 3) as usize {
             return Err(Error::runtime(format!(
-                "Embree cannot index {} triangles with 32-bit vertex ids",
+                "{} cannot index {} triangles with 32-bit vertex ids",
+                A::NAME,
                 mesh.len()
             )));
         }
         // SAFETY: a live device.
-        let raw = unsafe { ffi::rtcNewScene(device.raw()) };
+        let raw = unsafe { A::new_scene(device.raw()) };
         // Owned from here on, so Drop releases it on every error path (a null one is skipped).
         let mut scene = EmbreeScene {
             device,
@@ -86,8 +89,8 @@ impl EmbreeScene {
         created(&scene.device, raw, "creating a scene")?;
         // SAFETY: a live scene, not yet committed.
         unsafe {
-            ffi::rtcSetSceneFlags(raw, config.scene_flags());
-            ffi::rtcSetSceneBuildQuality(raw, config.quality.scene());
+            A::set_scene_flags(raw, config.scene_flags());
+            A::set_scene_build_quality(raw, config.quality.scene());
         }
         if !mesh.is_empty() {
             scene.attach_triangles(mesh, close)?;
@@ -101,9 +104,8 @@ impl EmbreeScene {
         let n = mesh.len();
         let device = self.device.raw();
         // SAFETY: a live device.
-        let geometry = unsafe {
-            ffi::rtcNewGeometry(device, ffi::RTCGeometryType::RTC_GEOMETRY_TYPE_TRIANGLE)
-        };
+        let geometry =
+            unsafe { A::new_geometry(device, ffi::RTCGeometryType::RTC_GEOMETRY_TYPE_TRIANGLE) };
         // Owned by `self` as soon as it exists, so Drop releases it on every error path below.
         self.geometry = (!geometry.is_null()).then_some(geometry);
         created(&self.device, geometry, "creating the triangle geometry")?;
@@ -113,10 +115,10 @@ impl EmbreeScene {
         // With motion, one vertex buffer per time step (slot 0: open, slot 1: close).
         let steps = if close.is_some() { 2 } else { 1 };
         let indices = unsafe {
-            ffi::rtcSetGeometryBuildQuality(geometry, self.config.quality.geometry());
-            ffi::rtcSetGeometryTimeStepCount(geometry, steps);
+            A::set_geometry_build_quality(geometry, self.config.quality.geometry());
+            A::set_geometry_time_step_count(geometry, steps);
             for slot in 0..steps {
-                ffi::rtcSetNewGeometryBuffer(
+                A::set_new_geometry_buffer(
                     geometry,
                     RTC_BUFFER_TYPE_VERTEX,
                     slot,
@@ -125,14 +127,7 @@ impl EmbreeScene {
                     3 * n,
                 );
             }
-            ffi::rtcSetNewGeometryBuffer(
-                geometry,
-                RTC_BUFFER_TYPE_INDEX,
-                0,
-                RTC_FORMAT_UINT3,
-                12,
-                n,
-            )
+            A::set_new_geometry_buffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 12, n)
         };
         created(
             &self.device,
@@ -151,8 +146,8 @@ impl EmbreeScene {
         }
         // SAFETY: live geometry and scene; the scene takes its own reference to the geometry.
         let id = unsafe {
-            ffi::rtcCommitGeometry(geometry);
-            ffi::rtcAttachGeometry(self.raw, geometry)
+            A::commit_geometry(geometry);
+            A::attach_geometry(self.raw, geometry)
         };
         self.device.check("attaching the triangle geometry")?;
         debug_assert_eq!(id, 0, "the only geometry gets id 0");
@@ -167,8 +162,8 @@ impl EmbreeScene {
         // SAFETY: the vertex buffer `slot` set in `attach_triangles` holds 3 · triangle_count
         // FLOAT3 items, and `mesh` has triangle_count triangles (checked by callers).
         let vertices = unsafe {
-            let data = ffi::rtcGetGeometryBufferData(geometry, RTC_BUFFER_TYPE_VERTEX, slot)
-                as *mut [f32; 3];
+            let data =
+                A::geometry_buffer_data(geometry, RTC_BUFFER_TYPE_VERTEX, slot) as *mut [f32; 3];
             std::slice::from_raw_parts_mut(data, 3 * self.triangle_count)
         };
         for (corners, tri) in vertices.chunks_exact_mut(3).zip(&mesh.triangles) {
@@ -180,7 +175,7 @@ impl EmbreeScene {
 
     fn commit(&mut self, what: &str) -> Result<()> {
         // SAFETY: a live scene; no traversal runs while we hold `&mut self`.
-        unsafe { ffi::rtcCommitScene(self.raw) };
+        unsafe { A::commit_scene(self.raw) };
         self.device.check(what)
     }
 
@@ -205,8 +200,8 @@ impl EmbreeScene {
         if let Some(geometry) = self.geometry {
             // SAFETY: a live geometry whose vertex buffer was just rewritten.
             unsafe {
-                ffi::rtcUpdateGeometryBuffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0);
-                ffi::rtcCommitGeometry(geometry);
+                A::update_geometry_buffer(geometry, RTC_BUFFER_TYPE_VERTEX, 0);
+                A::commit_geometry(geometry);
             }
         }
         self.commit("refitting a scene")?;
@@ -231,7 +226,7 @@ impl EmbreeScene {
 }
 
 /// `Ok` when Embree reported no error while `what` and returned a non-null `ptr`.
-fn created<T>(device: &Device, ptr: *mut T, what: &str) -> Result<()> {
+fn created<A: EmbreeApi, T>(device: &Device<A>, ptr: *mut T, what: &str) -> Result<()> {
     device.check(what)?;
     if ptr.is_null() {
         return Err(Error::runtime(format!(
@@ -241,24 +236,25 @@ fn created<T>(device: &Device, ptr: *mut T, what: &str) -> Result<()> {
     Ok(())
 }
 
-impl Drop for EmbreeScene {
+impl<A: EmbreeApi> Drop for EmbreeScene<A> {
     fn drop(&mut self) {
         // SAFETY: handles created by rtcNewGeometry / rtcNewScene, each released once; a null
         // scene (failed creation) is skipped.
         unsafe {
             if let Some(geometry) = self.geometry {
-                ffi::rtcReleaseGeometry(geometry);
+                A::release_geometry(geometry);
             }
             if !self.raw.is_null() {
-                ffi::rtcReleaseScene(self.raw);
+                A::release_scene(self.raw);
             }
         }
     }
 }
 
-impl fmt::Debug for EmbreeScene {
+impl<A: EmbreeApi> fmt::Debug for EmbreeScene<A> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.debug_struct("EmbreeScene")
+            .field("library", &A::NAME)
             .field("triangles", &self.triangle_count)
             .field("config", &self.config)
             .field("build_seconds", &self.build_seconds)

@@ -1,6 +1,7 @@
-//! Embree 3 as a baseline: one tracer over an Embree scene (`accel::embree`), generic over how
-//! rays are submitted — single rays (`embree1`), packets of 4/8/16 (`embree4/8/16`) and AoS
-//! streams (`embree-stream`).
+//! Embree 3 and Embree 4 as baselines: one tracer over an Embree scene (`accel::embree`), generic
+//! over the version and over how rays are submitted — single rays (`embree3-1`, `embree4-1`),
+//! packets of 4/8/16 (`embree3-4/8/16`, `embree4-4/8/16`) and Embree 3's AoS streams
+//! (`embree3-stream`).
 
 mod convert;
 mod denormals;

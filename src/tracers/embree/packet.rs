@@ -1,15 +1,13 @@
-//! `embree4`, `embree8`, `embree16`: `rtcIntersectN` / `rtcOccludedN` on consecutive groups of N
-//! rays of the chunk (never across an explicit packet boundary, `Rays::packets`); a partial
-//! group masks its missing lanes off. One implementation
-//! over the packet type; the three bindgen structs only supply their lanes and their calls.
+//! `embree3-4/8/16`, `embree4-4/8/16`: `rtcIntersectN` / `rtcOccludedN` on consecutive groups of
+//! N rays of the chunk (never across an explicit packet boundary, `Rays::packets`); a partial
+//! group masks its missing lanes off. One implementation over the packet type and the Embree
+//! version; the three bindgen structs only supply their lanes and their calls.
 
 use std::marker::PhantomData;
 
 use super::{convert, Submission};
-use crate::accel::embree::ffi::{
-    self, RTCIntersectContext, RTCRay, RTCScene, RTC_INVALID_GEOMETRY_ID,
-};
-use crate::accel::embree::EmbreeScene;
+use crate::accel::embree::ffi::{self, RTCRay, RTCScene, RTC_INVALID_GEOMETRY_ID};
+use crate::accel::embree::{EmbreeApi, EmbreeScene, Padded};
 use crate::geometry::{Hit, Rays};
 
 /// An Embree ray packet (`RTCRayN`): N lanes of rays, traced by `rtcOccludedN`.
@@ -21,11 +19,11 @@ pub trait RayPacket: Sized {
     fn tfar(&self, lane: usize) -> f32;
     /// # Safety
     /// `valid` points to `WIDTH` ints, `scene` is committed, `self` is aligned as Embree requires.
-    unsafe fn occluded(
+    unsafe fn occluded<A: EmbreeApi>(
         &mut self,
         valid: *const i32,
         scene: RTCScene,
-        context: &mut RTCIntersectContext,
+        args: &mut A::Arguments,
     );
 }
 
@@ -38,12 +36,12 @@ pub trait RayHitPacket: Sized {
     fn clear_hit(&mut self, lane: usize);
     fn hit(&self, lane: usize) -> Hit;
     /// # Safety
-    /// As `RayPacket::occluded`.
-    unsafe fn intersect(
-        &mut self,
+    /// As `RayPacket::occluded`, with `packet` pointing to a `Padded` packet.
+    unsafe fn intersect<A: EmbreeApi>(
+        packet: *mut Self,
         valid: *const i32,
         scene: RTCScene,
-        context: &mut RTCIntersectContext,
+        args: &mut A::Arguments,
     );
 }
 
@@ -75,14 +73,14 @@ macro_rules! embree_packet {
                 self.tfar[lane]
             }
             #[inline(always)]
-            unsafe fn occluded(
+            unsafe fn occluded<A: EmbreeApi>(
                 &mut self,
                 valid: *const i32,
                 scene: RTCScene,
-                context: &mut RTCIntersectContext,
+                args: &mut A::Arguments,
             ) {
                 // SAFETY: the caller's contract.
-                unsafe { ffi::$occluded(valid, scene, context, self) }
+                unsafe { A::$occluded(valid, scene, args, self) }
             }
         }
 
@@ -113,22 +111,22 @@ macro_rules! embree_packet {
                 )
             }
             #[inline(always)]
-            unsafe fn intersect(
-                &mut self,
+            unsafe fn intersect<A: EmbreeApi>(
+                packet: *mut Self,
                 valid: *const i32,
                 scene: RTCScene,
-                context: &mut RTCIntersectContext,
+                args: &mut A::Arguments,
             ) {
                 // SAFETY: the caller's contract.
-                unsafe { ffi::$intersect(valid, scene, context, self) }
+                unsafe { A::$intersect(valid, scene, args, packet) }
             }
         }
     };
 }
 
-embree_packet!(4, RTCRay4, RTCRayHit4, rtcOccluded4, rtcIntersect4);
-embree_packet!(8, RTCRay8, RTCRayHit8, rtcOccluded8, rtcIntersect8);
-embree_packet!(16, RTCRay16, RTCRayHit16, rtcOccluded16, rtcIntersect16);
+embree_packet!(4, RTCRay4, RTCRayHit4, occluded4, intersect4);
+embree_packet!(8, RTCRay8, RTCRayHit8, occluded8, intersect8);
+embree_packet!(16, RTCRay16, RTCRayHit16, occluded16, intersect16);
 
 /// Embree's valid mask: −1 for an active lane, 0 for an inactive one; room and alignment for the
 /// widest packet.
@@ -148,18 +146,19 @@ impl ValidMask {
 /// Rays in packets of `P`'s width.
 pub struct Packets<P>(PhantomData<fn() -> P>);
 
-impl<P: RayHitPacket + 'static> Submission for Packets<P> {
+impl<A: EmbreeApi, P: RayHitPacket + 'static> Submission<A> for Packets<P> {
     fn intersect(
-        scene: &EmbreeScene,
-        context: &mut RTCIntersectContext,
+        scene: &EmbreeScene<A>,
+        args: &mut A::Arguments,
         rays: Rays<'_>,
         hits: &mut [Hit],
     ) {
         let width = P::Rays::WIDTH;
-        let mut packet = P::zeroed();
+        let mut padded = Padded::new(P::zeroed());
         for group in rays.packets(width) {
             let start = group.start;
             let hits = &mut hits[group];
+            let packet = &mut padded.record;
             for lane in 0..hits.len() {
                 packet
                     .rays()
@@ -167,17 +166,17 @@ impl<P: RayHitPacket + 'static> Submission for Packets<P> {
                 packet.clear_hit(lane);
             }
             let valid = ValidMask::first(hits.len());
-            // SAFETY: WIDTH valid ints, a committed scene, a packet aligned by its type.
-            unsafe { packet.intersect(valid.0.as_ptr(), scene.raw(), context) };
+            // SAFETY: WIDTH valid ints, a committed scene, a padded packet aligned by its type.
+            unsafe { P::intersect::<A>(padded.as_mut_ptr(), valid.0.as_ptr(), scene.raw(), args) };
             for (lane, hit) in hits.iter_mut().enumerate() {
-                *hit = packet.hit(lane);
+                *hit = padded.record.hit(lane);
             }
         }
     }
 
     fn occluded(
-        scene: &EmbreeScene,
-        context: &mut RTCIntersectContext,
+        scene: &EmbreeScene<A>,
+        args: &mut A::Arguments,
         rays: Rays<'_>,
         occluded: &mut [bool],
     ) {
@@ -191,7 +190,7 @@ impl<P: RayHitPacket + 'static> Submission for Packets<P> {
             }
             let valid = ValidMask::first(occluded.len());
             // SAFETY: as above.
-            unsafe { packet.occluded(valid.0.as_ptr(), scene.raw(), context) };
+            unsafe { packet.occluded::<A>(valid.0.as_ptr(), scene.raw(), args) };
             for (lane, o) in occluded.iter_mut().enumerate() {
                 *o = convert::is_occluded(packet.tfar(lane));
             }

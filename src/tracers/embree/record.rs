@@ -1,10 +1,12 @@
 //! The two single-ray records Embree traces — `RTCRayHit` for intersect, `RTCRay` for occluded —
-//! behind one trait, so `embree1` and `embree-stream` each have one loop for both queries.
+//! behind one trait, so the single-ray tracers and Embree 3's streams each have one loop for both
+//! queries.
 
 use std::mem::size_of;
 
 use super::convert;
 use crate::accel::embree::ffi::{self, RTCIntersectContext, RTCRay, RTCRayHit, RTCScene};
+use crate::accel::embree::EmbreeApi;
 use crate::geometry::{Hit, Rays};
 
 /// A single-ray Embree record, the calls that trace it and what it answers.
@@ -13,12 +15,14 @@ pub trait RayRecord: Sized {
     type Answer;
     fn from_rays(rays: &Rays<'_>, i: usize) -> Self;
     fn answer(&self) -> Self::Answer;
-    /// `rtcIntersect1` / `rtcOccluded1`.
+    /// `rtcIntersect1` / `rtcOccluded1` of Embree `A`.
     ///
     /// # Safety
-    /// `scene` is committed and `context` valid (the record types carry Embree's alignment).
-    unsafe fn trace1(&mut self, scene: RTCScene, context: &mut RTCIntersectContext);
-    /// `rtcIntersect1M` / `rtcOccluded1M` over `records`, `size_of::<Self>()` bytes apart.
+    /// `scene` is committed, `args` valid, and `record` points to a `Padded` record (the record
+    /// types carry Embree's alignment).
+    unsafe fn trace1<A: EmbreeApi>(record: *mut Self, scene: RTCScene, args: &mut A::Arguments);
+    /// Embree 3's `rtcIntersect1M` / `rtcOccluded1M` over `records`, `size_of::<Self>()` bytes
+    /// apart.
     ///
     /// # Safety
     /// As `trace1`, and `records.len()` fits in a u32.
@@ -40,8 +44,8 @@ impl RayRecord for RTCRayHit {
     }
 
     #[inline(always)]
-    unsafe fn trace1(&mut self, scene: RTCScene, context: &mut RTCIntersectContext) {
-        ffi::rtcIntersect1(scene, context, self)
+    unsafe fn trace1<A: EmbreeApi>(record: *mut Self, scene: RTCScene, args: &mut A::Arguments) {
+        A::intersect1(scene, args, record)
     }
 
     #[inline(always)]
@@ -71,8 +75,8 @@ impl RayRecord for RTCRay {
     }
 
     #[inline(always)]
-    unsafe fn trace1(&mut self, scene: RTCScene, context: &mut RTCIntersectContext) {
-        ffi::rtcOccluded1(scene, context, self)
+    unsafe fn trace1<A: EmbreeApi>(record: *mut Self, scene: RTCScene, args: &mut A::Arguments) {
+        A::occluded1(scene, args, record)
     }
 
     #[inline(always)]

@@ -1,43 +1,43 @@
-//! `embree1`: one `rtcIntersect1` / `rtcOccluded1` call per ray.
+//! `embree3-1`, `embree4-1`: one `rtcIntersect1` / `rtcOccluded1` call per ray.
 
 use super::record::RayRecord;
 use super::Submission;
-use crate::accel::embree::ffi::{RTCIntersectContext, RTCRay, RTCRayHit};
-use crate::accel::embree::EmbreeScene;
+use crate::accel::embree::ffi::{RTCRay, RTCRayHit};
+use crate::accel::embree::{EmbreeApi, EmbreeScene, Padded};
 use crate::geometry::{Hit, Rays};
 
 pub struct Single;
 
-impl Submission for Single {
+impl<A: EmbreeApi> Submission<A> for Single {
     fn intersect(
-        scene: &EmbreeScene,
-        context: &mut RTCIntersectContext,
+        scene: &EmbreeScene<A>,
+        args: &mut A::Arguments,
         rays: Rays<'_>,
         hits: &mut [Hit],
     ) {
-        trace_one_by_one::<RTCRayHit>(scene, context, rays, hits);
+        trace_one_by_one::<A, RTCRayHit>(scene, args, rays, hits);
     }
 
     fn occluded(
-        scene: &EmbreeScene,
-        context: &mut RTCIntersectContext,
+        scene: &EmbreeScene<A>,
+        args: &mut A::Arguments,
         rays: Rays<'_>,
         occluded: &mut [bool],
     ) {
-        trace_one_by_one::<RTCRay>(scene, context, rays, occluded);
+        trace_one_by_one::<A, RTCRay>(scene, args, rays, occluded);
     }
 }
 
-fn trace_one_by_one<R: RayRecord>(
-    scene: &EmbreeScene,
-    context: &mut RTCIntersectContext,
+fn trace_one_by_one<A: EmbreeApi, R: RayRecord>(
+    scene: &EmbreeScene<A>,
+    args: &mut A::Arguments,
     rays: Rays<'_>,
     answers: &mut [R::Answer],
 ) {
     for (i, answer) in answers.iter_mut().enumerate() {
-        let mut record = R::from_rays(&rays, i);
-        // SAFETY: a committed scene and a valid context.
-        unsafe { record.trace1(scene.raw(), context) };
-        *answer = record.answer();
+        let mut record = Padded::new(R::from_rays(&rays, i));
+        // SAFETY: a committed scene, valid arguments, a padded record.
+        unsafe { R::trace1::<A>(record.as_mut_ptr(), scene.raw(), args) };
+        *answer = record.record.answer();
     }
 }

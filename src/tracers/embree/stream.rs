@@ -1,4 +1,5 @@
-//! `embree-stream`: the AoS stream calls `rtcIntersect1M` / `rtcOccluded1M`.
+//! `embree3-stream`: Embree 3's AoS stream calls `rtcIntersect1M` / `rtcOccluded1M` (Embree 4
+//! has no stream API).
 //!
 //! The chunk goes to Embree in streams of at most `STREAM_LENGTH` rays, converted into a
 //! per-thread buffer. Embree 3 itself works through a stream in blocks of at most 64 rays
@@ -12,7 +13,7 @@ use std::thread::LocalKey;
 use super::record::RayRecord;
 use super::Submission;
 use crate::accel::embree::ffi::{RTCIntersectContext, RTCRay, RTCRayHit};
-use crate::accel::embree::EmbreeScene;
+use crate::accel::embree::{Embree3, EmbreeScene};
 use crate::geometry::{Hit, Rays};
 
 /// Rays per stream call: 4096 × 80 bytes of RTCRayHit = 320 KiB, within L2.
@@ -42,7 +43,7 @@ impl Buffered for RTCRay {
 
 pub struct Stream;
 
-impl Submission for Stream {
+impl Submission<Embree3> for Stream {
     fn intersect(
         scene: &EmbreeScene,
         context: &mut RTCIntersectContext,

@@ -1,5 +1,6 @@
-//! The Embree baseline as a `Kernel`: one tracer type over a committed `EmbreeScene`, generic
-//! over how rays are handed to Embree (`Submission`: one at a time, packets of 4/8/16, streams).
+//! The Embree baselines as a `Kernel`: one tracer type over a committed `EmbreeScene`, generic
+//! over the Embree version (`EmbreeApi`: 3 or 4) and over how rays are handed to it
+//! (`Submission`: one at a time, packets of 4/8/16, Embree 3's streams).
 
 use std::fmt;
 use std::marker::PhantomData;
@@ -7,32 +8,27 @@ use std::str::FromStr;
 use std::sync::Arc;
 
 use super::denormals::FlushDenormals;
-use crate::accel::embree::ffi::{self, RTCIntersectContext, RTCIntersectContextFlags};
-use crate::accel::embree::EmbreeScene;
+use crate::accel::embree::{EmbreeApi, EmbreeScene};
 use crate::error::Result;
 use crate::geometry::{Hit, RayKind, Rays};
 use crate::params::Params;
 use crate::stats::Stats;
 use crate::tracers::Kernel;
 
-/// One way of calling Embree's intersect/occluded functions on a chunk of rays.
-pub trait Submission: 'static {
-    fn intersect(
-        scene: &EmbreeScene,
-        context: &mut RTCIntersectContext,
-        rays: Rays<'_>,
-        hits: &mut [Hit],
-    );
+/// One way of calling Embree `A`'s intersect/occluded functions on a chunk of rays.
+pub trait Submission<A: EmbreeApi>: 'static {
+    fn intersect(scene: &EmbreeScene<A>, args: &mut A::Arguments, rays: Rays<'_>, hits: &mut [Hit]);
     fn occluded(
-        scene: &EmbreeScene,
-        context: &mut RTCIntersectContext,
+        scene: &EmbreeScene<A>,
+        args: &mut A::Arguments,
         rays: Rays<'_>,
         occluded: &mut [bool],
     );
 }
 
 /// The intersect context's hint (tracer parameter `context`): whether the rays of a call are
-/// coherent. Embree's own default (`rtcInitIntersectContext`) is incoherent, and its
+/// coherent (Embree 3's intersect context flag, Embree 4's ray query flag in the intersect and
+/// occluded arguments). Embree's own default (`rtcInitIntersectContext`) is incoherent, and its
 /// documentation prescribes the coherent traversal for coherent rays such as primary camera rays;
 /// so `auto` (our default) gives each batch the hint its kind calls for (`for_kind`), and
 /// `coherent` / `incoherent` force one.
@@ -62,13 +58,10 @@ impl Coherence {
         }
     }
 
-    fn flags(self) -> RTCIntersectContextFlags {
-        match self {
-            Coherence::Coherent => RTCIntersectContextFlags::RTC_INTERSECT_CONTEXT_FLAG_COHERENT,
-            Coherence::Incoherent | Coherence::Auto => {
-                RTCIntersectContextFlags::RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT
-            }
-        }
+    /// Whether a resolved hint is coherent (`Auto` before resolution is Embree's default,
+    /// incoherent).
+    fn is_coherent(self) -> bool {
+        self == Coherence::Coherent
     }
 }
 
@@ -94,14 +87,14 @@ impl fmt::Display for Coherence {
     }
 }
 
-pub struct EmbreeTracer<M: Submission> {
-    scene: Arc<EmbreeScene>,
+pub struct EmbreeTracer<A: EmbreeApi, M: Submission<A>> {
+    scene: Arc<EmbreeScene<A>>,
     coherence: Coherence,
     submission: PhantomData<fn() -> M>,
 }
 
-impl<M: Submission> EmbreeTracer<M> {
-    pub fn new(scene: Arc<EmbreeScene>, coherence: Coherence) -> Self {
+impl<A: EmbreeApi, M: Submission<A>> EmbreeTracer<A, M> {
+    pub fn new(scene: Arc<EmbreeScene<A>>, coherence: Coherence) -> Self {
         EmbreeTracer {
             scene,
             coherence,
@@ -110,22 +103,17 @@ impl<M: Submission> EmbreeTracer<M> {
     }
 
     /// A tracer over `scene` reading the tracer parameter `context`.
-    pub fn from_params(scene: &Arc<EmbreeScene>, params: &Params) -> Result<Self> {
+    pub fn from_params(scene: &Arc<EmbreeScene<A>>, params: &Params) -> Result<Self> {
         Ok(Self::new(scene.clone(), Coherence::from_params(params)?))
     }
 
     /// Runs one Embree call sequence on rays of `kind` the way Embree asks: FTZ/DAZ on for its
-    /// duration only, and a fresh intersect context with the kind's coherence hint.
+    /// duration only, and fresh arguments (intersect context) with the kind's coherence hint.
     #[inline]
-    fn call<R>(
-        &self,
-        kind: RayKind,
-        f: impl FnOnce(&EmbreeScene, &mut RTCIntersectContext) -> R,
-    ) -> R {
+    fn call<R>(&self, kind: RayKind, f: impl FnOnce(&EmbreeScene<A>, &mut A::Arguments) -> R) -> R {
         let _denormals = FlushDenormals::new();
-        let flags = self.coherence.for_kind(kind).flags();
-        let mut context = ffi::intersect_context(flags);
-        f(&self.scene, &mut context)
+        let mut args = A::arguments(self.coherence.for_kind(kind).is_coherent());
+        f(&self.scene, &mut args)
     }
 }
 
@@ -139,22 +127,22 @@ fn count_rays<S: Stats>(n: usize, stats: &mut S) {
     }
 }
 
-impl<M: Submission> Kernel for EmbreeTracer<M> {
+impl<A: EmbreeApi, M: Submission<A>> Kernel for EmbreeTracer<A, M> {
     const COUNTS_INTERNALS: bool = false;
 
     fn intersect_with<S: Stats>(&self, rays: Rays<'_>, hits: &mut [Hit], stats: &mut S) {
         let rays = rays.slice(0..hits.len());
         count_rays(hits.len(), stats);
-        self.call(rays.kind, |scene, context| {
-            M::intersect(scene, context, rays, hits)
+        self.call(rays.kind, |scene, args| {
+            M::intersect(scene, args, rays, hits)
         });
     }
 
     fn occluded_with<S: Stats>(&self, rays: Rays<'_>, occluded: &mut [bool], stats: &mut S) {
         let rays = rays.slice(0..occluded.len());
         count_rays(occluded.len(), stats);
-        self.call(rays.kind, |scene, context| {
-            M::occluded(scene, context, rays, occluded)
+        self.call(rays.kind, |scene, args| {
+            M::occluded(scene, args, rays, occluded)
         });
     }
 }
