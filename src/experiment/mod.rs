@@ -638,7 +638,7 @@ mod tests {
     #[test]
     fn a_path_workload_gives_rows_per_bounce_and_an_rmse_that_falls_with_spp() {
         let out = scratch("path");
-        let text = "name = \"t\"\nscenes = [\"room-area-light\"]\ntracers = [\"reference\", \"stream\", \"embree1\", \"embree16\"]\n\
+        let text = "name = \"t\"\nscenes = [\"room-area-light\"]\ntracers = [\"reference\", \"stream\", \"embree3-1\", \"embree3-16\"]\n\
                     render = { renderer = \"path\", spp = [1, 16], max_depth = 2 }\n\
                     resolution = { width = 12, height = 12 }\nthreads = [1]\nwarmup = 0\nrepeats = 1\n";
         let load = |spec: &SceneSpec| crate::scene::library::load_scene(&spec.name, spec.size);
@@ -696,7 +696,7 @@ mod tests {
                 .filter(|p| p["tracer"] == "Embree best" && p["spp"] == spp.to_string())
                 .collect();
             assert_eq!(embree.len(), 1, "{points:?}");
-            let fastest = frame_seconds("embree1", spp).min(frame_seconds("embree16", spp));
+            let fastest = frame_seconds("embree3-1", spp).min(frame_seconds("embree3-16", spp));
             let plotted: f64 = embree[0]["seconds"].parse().unwrap();
             assert!((plotted - fastest).abs() < 2e-6, "{plotted} vs {fastest}");
         }
@@ -722,8 +722,12 @@ mod tests {
         // packet.toml compares with Embree at its best: every Embree configuration it sweeps.
         let packet = Experiment::load(&dir.join("packet.toml")).unwrap();
         let embree = packet.instances.iter().filter(|i| i.info.accel.is_embree());
-        assert_eq!(embree.count(), if EMBREE4_BUILT { 36 } else { 20 });
+        assert_eq!(embree.count(), EMBREE_BEST_CONFIGURATIONS);
     }
+
+    /// `embree-best`'s sweep: entry points (Embree 3: 1/4/8/16/stream; Embree 4, when built:
+    /// 1/4/8/16) × 2 contexts × 2 build qualities.
+    const EMBREE_BEST_CONFIGURATIONS: usize = if EMBREE4_BUILT { 36 } else { 20 };
 
     #[test]
     fn the_quick_experiment_plans_as_documented() {
@@ -917,8 +921,8 @@ series = "scene"
         assert_eq!(exp.tables.len(), 4);
         let bench = load("wald06-benchmark.toml");
         assert_eq!(exp.scenes, bench.scenes);
-        // cgt 4×4, 8×8, 16×16; Embree low, refit.
-        assert_eq!(bench.instances.len(), 5);
+        // cgt 4×4, 8×8, 16×16; every Embree entry point and context at low and refit.
+        assert_eq!(bench.instances.len(), 3 + EMBREE_BEST_CONFIGURATIONS);
         assert_eq!(
             (bench.width, bench.frames, bench.threads.as_slice()),
             (1024, 2, &[1, 2][..])
@@ -931,9 +935,9 @@ series = "scene"
     #[test]
     fn the_boulos07_experiments_parse_and_select_their_own_workloads() {
         for (file, instances, renders, tables, figures) in [
-            // embree-best: 5 entry points × 2 contexts × 2 build qualities.
-            ("boulos07.toml", 26, 12, 3, 1),
-            ("boulos07-drt.toml", 23, 8, 2, 1),
+            // Plus embree-best's Embree configurations (below).
+            ("boulos07.toml", 6, 12, 3, 1),
+            ("boulos07-drt.toml", 3, 8, 2, 1),
             ("boulos07-fig8.toml", 1, 2, 1, 2),
         ] {
             let exp = Experiment::load(
@@ -942,7 +946,11 @@ series = "scene"
                     .join(file),
             )
             .unwrap();
-            assert_eq!(exp.instances.len(), instances, "{file}");
+            let embree = match file {
+                "boulos07-fig8.toml" => 0,
+                _ => EMBREE_BEST_CONFIGURATIONS,
+            };
+            assert_eq!(exp.instances.len(), instances + embree, "{file}");
             assert_eq!(exp.renders.len(), renders, "{file}");
             assert_eq!((exp.tables.len(), exp.figures.len()), (tables, figures));
             let labels: Vec<String> = exp.renders.iter().map(|r| r.to_string()).collect();
