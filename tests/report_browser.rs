@@ -39,9 +39,12 @@ fn chromium() -> Option<PathBuf> {
         .find(|p| p.is_file())
 }
 
-/// Runs headless Chromium on `page` with `args`; returns its standard output.
+/// Runs headless Chromium on `page` with `args`, killed after two minutes (coreutils `timeout`) so a
+/// stuck browser fails the test instead of hanging CI; returns its standard output.
 fn browse(browser: &Path, profile: &Path, page: &Path, args: &[String]) -> String {
-    let out = Command::new(browser)
+    let out = Command::new("timeout")
+        .arg("120")
+        .arg(browser)
         .args([
             "--headless",
             "--no-sandbox",
