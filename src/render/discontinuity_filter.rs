@@ -10,9 +10,11 @@
 //! (distance and angle to the light) stay sharp, only the sampled visibility is averaged.
 //!
 //! Each pixel's filtered value is the mean over the pixels of the 4×4 window
-//! `[x − 1, x + 2] × [y − 1, y + 2]` (clipped to the image) whose depth is within
-//! `depth_tolerance` (relative) of the pixel's and whose normal is within `normal_cos` (cosine) of
-//! its normal. Pixels without a surface (background) keep their value and take no part.
+//! `[x − 1, x + 2] × [y − 1, y + 2]` (clipped to the image) that lie on the pixel's surface: within
+//! `depth_tolerance` × the pixel's depth of its tangent plane (a depth discontinuity measured
+//! along the normal, so that a plane seen at a grazing angle stays whole while a table top and the
+//! floor below it do not mix), and with a normal within `normal_cos` (cosine) of its normal.
+//! Pixels without a surface (background) keep their value and take no part.
 
 use glam::Vec3;
 
@@ -22,6 +24,8 @@ pub const WINDOW: u32 = crate::render::interleaved::K;
 /// What the filter knows about the surface a pixel sees.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PixelSurface {
+    /// The hit point.
+    pub position: Vec3,
     /// Distance along the camera ray.
     pub depth: f32,
     /// Unit shading normal.
@@ -31,18 +35,18 @@ pub struct PixelSurface {
 /// When two pixels see the same surface.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct DiscontinuityFilter {
-    /// Largest depth difference, relative to the centre pixel's depth.
+    /// Largest distance from the centre pixel's tangent plane, relative to its depth.
     pub depth_tolerance: f32,
     /// Smallest cosine between the two normals.
     pub normal_cos: f32,
 }
 
 impl Default for DiscontinuityFilter {
-    /// 10% of the depth and 25° (cos 0.9): a plane seen at up to ~85° from face-on keeps its
-    /// 4×4 windows whole, while a step to another object or a crease is a discontinuity.
+    /// 1% of the depth off the tangent plane (15 units at the conference room's 1,500) and 25°
+    /// (cos 0.9) between normals: a step to another object or a crease is a discontinuity.
     fn default() -> Self {
         DiscontinuityFilter {
-            depth_tolerance: 0.1,
+            depth_tolerance: 0.01,
             normal_cos: 0.9,
         }
     }
@@ -50,7 +54,8 @@ impl Default for DiscontinuityFilter {
 
 impl DiscontinuityFilter {
     fn same_surface(&self, centre: &PixelSurface, other: &PixelSurface) -> bool {
-        (other.depth - centre.depth).abs() <= self.depth_tolerance * centre.depth
+        let off_plane = centre.normal.dot(other.position - centre.position).abs();
+        off_plane <= self.depth_tolerance * centre.depth
             && centre.normal.dot(other.normal) >= self.normal_cos
     }
 
@@ -93,8 +98,10 @@ mod tests {
     const W: u32 = 12;
     const H: u32 = 8;
 
-    fn flat(depth: f32) -> Option<PixelSurface> {
+    /// Pixel `i` on the plane z = `depth` facing the camera at the origin (pixels 0.01 apart).
+    fn flat(i: u32, depth: f32) -> Option<PixelSurface> {
         Some(PixelSurface {
+            position: Vec3::new((i % W) as f32 * 0.01, (i / W) as f32 * 0.01, depth),
             depth,
             normal: Vec3::Z,
         })
@@ -103,8 +110,20 @@ mod tests {
     #[test]
     fn a_constant_image_is_left_as_it_is() {
         let irradiance = vec![0.3f32; (W * H) as usize];
-        // Depths vary within the tolerance, and one pixel is background.
-        let mut surfaces: Vec<_> = (0..W * H).map(|i| flat(10.0 + 0.01 * i as f32)).collect();
+        // A tilted plane whose depth doubles across the image (far beyond the tolerance, but
+        // every pixel on the others' tangent plane), and one pixel of background.
+        let normal = Vec3::new(-0.1, 0.0, 1.0).normalize();
+        let mut surfaces: Vec<_> = (0..W * H)
+            .map(|i| {
+                let depth = 1.0 + (i % W) as f32 / W as f32;
+                let position = Vec3::new(10.0 * depth, (i / W) as f32 * 0.01, depth);
+                Some(PixelSurface {
+                    position,
+                    depth,
+                    normal,
+                })
+            })
+            .collect();
         surfaces[17] = None;
         let out = DiscontinuityFilter::default().apply(W, &irradiance, &surfaces);
         assert_eq!(out, irradiance);
@@ -115,7 +134,7 @@ mod tests {
         // A 4×4-periodic pattern on one plane: every full window holds each value once.
         let value = |x: u32, y: u32| ((x % 4) + 4 * (y % 4)) as f32;
         let irradiance: Vec<f32> = (0..W * H).map(|i| value(i % W, i / W)).collect();
-        let surfaces = vec![flat(3.0); (W * H) as usize];
+        let surfaces: Vec<_> = (0..W * H).map(|i| flat(i, 3.0)).collect();
         let out = DiscontinuityFilter::default().apply(W, &irradiance, &surfaces);
         for y in 1..H - 2 {
             for x in 1..W - 2 {
@@ -128,11 +147,11 @@ mod tests {
 
     #[test]
     fn nothing_is_blurred_across_a_depth_step_or_a_crease() {
-        // Left half at depth 1 in shadow, right half at depth 2 lit: the step stays sharp.
+        // Left half at depth 1 in shadow, right half at depth 1.1 lit: the step stays sharp.
         let lit = |x: u32| if x < W / 2 { 0.0 } else { 1.0 };
         let irradiance: Vec<f32> = (0..W * H).map(|i| lit(i % W)).collect();
         let step: Vec<_> = (0..W * H)
-            .map(|i| flat(if i % W < W / 2 { 1.0 } else { 2.0 }))
+            .map(|i| flat(i, if i % W < W / 2 { 1.0 } else { 1.1 }))
             .collect();
         let filter = DiscontinuityFilter::default();
         assert_eq!(filter.apply(W, &irradiance, &step), irradiance);
@@ -140,12 +159,15 @@ mod tests {
         let crease: Vec<_> = (0..W * H)
             .map(|i| {
                 let normal = if i % W < W / 2 { Vec3::Z } else { Vec3::X };
-                Some(PixelSurface { depth: 1.0, normal })
+                Some(PixelSurface {
+                    normal,
+                    ..flat(i, 1.0).unwrap()
+                })
             })
             .collect();
         assert_eq!(filter.apply(W, &irradiance, &crease), irradiance);
         // One plane: the edge is blurred (the control: the filter does filter here).
-        let plane = vec![flat(1.0); (W * H) as usize];
+        let plane: Vec<_> = (0..W * H).map(|i| flat(i, 1.0)).collect();
         let blurred = filter.apply(W, &irradiance, &plane);
         assert_eq!(blurred[(W / 2 - 1) as usize], 0.5);
     }

@@ -164,6 +164,7 @@ pub fn render_interleaved_shadows(
             centre,
         });
         surfaces[pixel as usize] = Some(PixelSurface {
+            position: surface.p,
             depth: hit.t,
             normal: surface.n,
         });
