@@ -12,9 +12,11 @@ use raylab::experiment::shard::Shard;
 use raylab::experiment::{run_experiment, RunOverrides};
 use raylab::geometry::ray_file::{hits_csv, occlusion_csv, read_rays};
 use raylab::geometry::RayKind;
+use raylab::render::area_light::LightSampleSets;
 use raylab::render::assembly::Assembly;
 use raylab::render::distribution::{render_sampled, DrtSettings, FrameGeometry, Integrator};
 use raylab::render::image::Image;
+use raylab::render::interleaved_shadows::InterleavedShadows;
 use raylab::render::motion::MovingMesh;
 use raylab::render::path::ShadeStreams;
 use raylab::render::raycast::render_raycast;
@@ -249,6 +251,24 @@ struct DrtArgs {
     /// (motion blur).
     #[arg(long)]
     shutter: Option<f32>,
+    /// Distribution: soft shadows as Benthin & Wald 2009 §4.5 render them — one camera ray per
+    /// pixel, --spp light samples per pixel from 4×4 interleaved sets, shading at the light's
+    /// centre, the 4×4 discontinuity filter; direct light only (needs a quad light).
+    #[arg(long)]
+    interleaved_shadows: bool,
+    /// Interleaved shadows: the sets, jittered, hammersley or lp (powers of 4).
+    #[arg(long, default_value = "jittered", value_parser = parse_sets)]
+    sets: LightSampleSets,
+    /// Interleaved shadows: leave the discontinuity filter out.
+    #[arg(long)]
+    no_filter: bool,
+    /// Interleaved shadows: light samples per partly occluded pixel, asked again (0: none).
+    #[arg(long, default_value_t = 0)]
+    retrace: u32,
+}
+
+fn parse_sets(s: &str) -> std::result::Result<LightSampleSets, String> {
+    LightSampleSets::parse(s).map_err(|e| e.to_string())
 }
 
 fn parse_assembly(s: &str) -> std::result::Result<Assembly, String> {
@@ -371,8 +391,14 @@ fn execute(command: Command) -> Result<bool> {
                         Renderer::Path => Integrator::Path,
                         _ => Integrator::Distribution,
                     };
+                    let soft_shadows = drt.interleaved_shadows.then_some(InterleavedShadows {
+                        sets: drt.sets,
+                        filter: !drt.no_filter,
+                        retrace: drt.retrace,
+                    });
                     let default_depth = match integrator {
                         Integrator::Path => raylab::render::path::PATH_DEFAULT_DEPTH,
+                        _ if soft_shadows.is_some() => 0,
                         Integrator::Distribution => DrtSettings::default().max_depth,
                     };
                     let settings = DrtSettings {
@@ -383,8 +409,12 @@ fn execute(command: Command) -> Result<bool> {
                         aperture: drt.aperture,
                         focus_distance: drt.focus,
                         max_depth: max_depth.unwrap_or(default_depth),
+                        soft_shadows,
                         ..DrtSettings::default()
                     };
+                    if let Some(mode) = soft_shadows {
+                        mode.check(settings.spp, settings.seed)?;
+                    }
                     render_drt(&scene, &frame, (&tracer, &params), &settings, drt.shutter)?
                 }
             };
@@ -584,7 +614,11 @@ fn render_drt(
         settings,
         Tracing::Timed,
     )?;
-    for kind in settings.integrator.kinds() {
+    let kinds = match settings.soft_shadows {
+        Some(_) => vec![RayKind::Primary, RayKind::SoftShadow],
+        None => settings.integrator.kinds().to_vec(),
+    };
+    for kind in kinds {
         let t = drt.totals(kind);
         println!(
             "{:<10} {:>11} rays {:>9} packets {:>9.3} s",
@@ -593,6 +627,9 @@ fn render_drt(
             t.packets,
             t.seconds
         );
+    }
+    if let Some(n) = drt.retraced_pixels {
+        println!("retraced {n} pixels");
     }
     println!("frame: {:.3} s", drt.seconds);
     Ok(drt.image)

@@ -4,7 +4,7 @@
 //! the soft-shadow workload of the runner (16 interleaved light samples per primary hit).
 
 use glam::Vec3;
-use raylab::render::area_light::soft_shadow_points;
+use raylab::render::area_light::{soft_shadow_points, LightSampleSets};
 use raylab::render::rays::primary_rays;
 use raylab::render::wavefront::{answer, Answers, Work};
 use raylab::scene::library::load_scene;
@@ -53,8 +53,16 @@ fn visibility(scene: &Scene, tracer: &str, params: &Params) -> (Visibility, usiz
     let oracle = tracer_for_frame("embree16", &oracle_params(), &frame).unwrap();
     let primary = primary_rays(&frame.camera, RESOLUTION, RESOLUTION);
     let hits = trace_hits(oracle.as_ref(), &primary);
-    let (points, samples) =
-        soft_shadow_points(&frame.mesh, &primary, &hits, RESOLUTION, SAMPLES, 7).unwrap();
+    let (points, samples) = soft_shadow_points(
+        &frame.mesh,
+        &primary,
+        &hits,
+        RESOLUTION,
+        SAMPLES,
+        LightSampleSets::Jittered,
+        7,
+    )
+    .unwrap();
     let light = QuadLight::of(scene.quad_light().expect("a quad light"));
     let query = VisibilityQuery::new(&points, light, &samples).unwrap();
     let work = Work::LightVisibility(query);

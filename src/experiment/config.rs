@@ -25,6 +25,15 @@
 //! #              aperture = [0, 15], focus = 1650,   # lens radius, focal distance (default: camera's)
 //! #              shutter = 0.25,                     # motion blur over this many seconds (optional)
 //! #              max_depth = 1 }                     # glossy/mirror bounces (default 2)
+//! # Soft shadows as Benthin & Wald 2009 §4.5 render them (`render::interleaved_shadows`): one
+//! # camera ray per pixel, `spp` light samples per pixel from 4×4 interleaved sets, shading at the
+//! # light's centre, direct light only (max_depth 0, no aperture, no shutter):
+//! #   render = { renderer = "distribution", shadows = "interleaved",   # default "sampled"
+//! #              sets = "hammersley",   # jittered (default) | hammersley | lp (powers of 4)
+//! #              filter = [true, false],   # 4×4 discontinuity filter (default true)
+//! #              retrace = 256,         # light samples per partly occluded pixel (default 0: off)
+//! #              spp = [4, 16, 64] }
+//! # The frame row's `retraced_share` is the share of pixels retraced.
 //! # Its frame rows also carry `rmse` against the 1024-spp reference image (cached under
 //! # <output>/cache/drt-reference), and workloads differing only in spp give error_vs_time.png.
 //! render = { renderer = "whitted",
@@ -46,9 +55,10 @@
 //! warmup = 1
 //! repeats = 3
 //! seed = 1
-//! soft_shadow = { samples = 16 }       # light samples per shading point of rays = ["soft_shadow"]
-//!                                      # (a perfect square; default 16): each primary hit asks
-//!                                      # which of its samples on the scene's first quad light it sees
+//! soft_shadow = { samples = 16,        # light samples per shading point of rays = ["soft_shadow"]
+//!                sets = "lp" }         # (a perfect square; default 16): each primary hit asks
+//!                                      # which of its samples on the scene's first quad light it sees;
+//!                                      # sets: jittered (default) | hammersley | lp (powers of 4)
 //! output = "results"                   # relative to the working directory
 //!
 //! [[tables]]                           # optional: paper-vs-ours tables → tables.md
@@ -88,6 +98,7 @@ use toml::Spanned;
 use crate::accel::AccelKind;
 use crate::error::{Error, Result};
 use crate::geometry::RayKind;
+use crate::render::area_light::LightSampleSets;
 use crate::render::distribution::{DrtSettings, Integrator};
 use crate::render::interleaved::SampleTable;
 use crate::render::whitted::WhittedSettings;
@@ -123,6 +134,8 @@ pub struct Experiment {
     pub seed: u64,
     /// Light samples per shading point of the `soft_shadow` workload (a perfect square).
     pub soft_shadow_samples: u32,
+    /// How the `soft_shadow` workload's interleaved light sample sets are made.
+    pub soft_shadow_sets: LightSampleSets,
     /// Results go to `<output>/<name>/<run-id>/`.
     pub output: PathBuf,
     /// Paper-vs-ours tables written to tables.md.
@@ -173,10 +186,12 @@ pub struct DistributionWorkload {
 }
 
 impl DistributionWorkload {
-    /// The same workload at another sample count: the points of one error-vs-time line.
+    /// The same workload at another sample count, or with other refinements (filter, retrace)
+    /// of interleaved soft shadows: the points of one error-vs-time plot.
     pub fn same_but_spp(&self, other: &DistributionWorkload) -> bool {
         let with_spp = |w: &DistributionWorkload| DrtSettings {
             spp: 0,
+            soft_shadows: w.settings.soft_shadows.map(|m| m.unrefined()),
             ..w.settings
         };
         with_spp(self) == with_spp(other)
@@ -207,14 +222,20 @@ impl fmt::Display for RenderWorkload {
             ),
             RenderWorkload::Distribution(w) => write!(
                 f,
-                "renderer={};aperture={};focus={};max_depth={}{};shutter={};spp={}",
+                "renderer={};aperture={};focus={};max_depth={}{};shutter={};spp={}{}",
                 w.settings.integrator.name(),
                 camera(w.settings.aperture),
                 camera(w.settings.focus_distance),
                 w.settings.max_depth,
                 if w.rmse { "" } else { ";rmse=false" },
                 w.shutter.map_or("none".to_string(), |s| s.to_string()),
-                w.settings.spp
+                w.settings.spp,
+                w.settings.soft_shadows.map_or(String::new(), |m| format!(
+                    ";shadows=interleaved;sets={};filter={};retrace={}",
+                    m.sets.name(),
+                    m.filter,
+                    m.retrace
+                ))
             ),
         }
     }
@@ -374,6 +395,7 @@ impl<'de> Deserialize<'de> for RayEntry {
 #[serde(deny_unknown_fields)]
 struct SoftShadowSpec {
     samples: u32,
+    sets: Option<String>,
 }
 
 /// `[stability]`: what the numerical stability suite sweeps; every key has a default.
@@ -754,19 +776,25 @@ impl Experiment {
             return Err(src.input_error(&span, "no ray kinds and no render workload"));
         }
 
-        let soft_shadow_samples = match &file.soft_shadow {
-            None => DEFAULT_SOFT_SHADOW_SAMPLES,
+        let (soft_shadow_samples, soft_shadow_sets) = match &file.soft_shadow {
+            None => (DEFAULT_SOFT_SHADOW_SAMPLES, LightSampleSets::default()),
             Some(spec) => {
-                let samples = spec.get_ref().samples;
+                let SoftShadowSpec { samples, sets } = spec.get_ref();
                 let bad = |e: String| src.usage_error(&spec.span(), format!("soft_shadow: {e}"));
-                if samples as usize > LightSamples::MAX_PER_POINT {
+                if *samples as usize > LightSamples::MAX_PER_POINT {
                     return Err(bad(format!(
                         "samples = {samples} is more than {} per point",
                         LightSamples::MAX_PER_POINT
                     )));
                 }
-                SampleTable::new(samples, 0).map_err(|e| bad(e.to_string()))?;
-                samples
+                let sets = match sets {
+                    None => LightSampleSets::default(),
+                    Some(name) => LightSampleSets::parse(name).map_err(|e| bad(e.to_string()))?,
+                };
+                SampleTable::new(*samples, 0).map_err(|e| bad(e.to_string()))?;
+                sets.tile_sets(*samples, 0)
+                    .map_err(|e| bad(e.to_string()))?;
+                (*samples, sets)
             }
         };
         let instances = expand_tracers(&src, &file)?;
@@ -800,6 +828,7 @@ impl Experiment {
             repeats,
             seed: file.seed,
             soft_shadow_samples,
+            soft_shadow_sets,
             output: file.output,
             tables: file.tables.into_iter().map(Spanned::into_inner).collect(),
             figures: file.figures.into_iter().map(Spanned::into_inner).collect(),
@@ -1514,5 +1543,63 @@ mod tests {
                 "{msg}"
             );
         }
+    }
+
+    #[test]
+    fn interleaved_soft_shadows_are_a_distribution_mode_with_checked_keys() {
+        let text = format!(
+            "{BASE}tracers = [\"reference\"]\nrender = {{ renderer = \"distribution\", shadows = \"interleaved\", \
+             sets = \"lp\", filter = [true, false], retrace = 64, spp = 16 }}\nsoft_shadow = {{ samples = 4, sets = \"hammersley\" }}\n"
+        );
+        let exp = parse(&text).unwrap();
+        assert_eq!(exp.soft_shadow_sets, LightSampleSets::Hammersley);
+        let labels: Vec<String> = exp.renders.iter().map(|r| r.to_string()).collect();
+        let label = |filter| {
+            format!("renderer=distribution;aperture=camera;focus=camera;max_depth=0;shutter=none;spp=16;shadows=interleaved;sets=lp;filter={filter};retrace=64")
+        };
+        assert_eq!(labels, [label(true), label(false)]);
+        let (RenderWorkload::Distribution(a), RenderWorkload::Distribution(b)) =
+            (&exp.renders[0], &exp.renders[1])
+        else {
+            panic!("distribution workloads")
+        };
+        // Filtered and unfiltered are one error-vs-time plot.
+        assert!(a.same_but_spp(b));
+        assert_eq!(
+            a.settings.soft_shadows.unwrap().refinement(),
+            " filtered retrace 64"
+        );
+        assert_eq!(b.settings.soft_shadows.unwrap().refinement(), " retrace 64");
+        for (bad, word) in [
+            ("sets = \"lp\"", "needs shadows = \"interleaved\""),
+            ("shadows = \"soft\"", "sampled or interleaved"),
+            ("shadows = \"interleaved\", sets = \"sobol\"", "sobol"),
+            (
+                "shadows = \"interleaved\", sets = \"lp\", spp = 9",
+                "powers of 4",
+            ),
+            (
+                "shadows = \"interleaved\", retrace = 8, sets = \"lp\"",
+                "powers of 4",
+            ),
+            ("shadows = \"interleaved\", filter = 1", "filter"),
+            ("shadows = \"interleaved\", max_depth = 1", "max_depth = 0"),
+            ("shadows = \"interleaved\", aperture = 2", "aperture 0"),
+        ] {
+            let text = format!(
+                "{BASE}tracers = [\"reference\"]\nrender = {{ renderer = \"distribution\", {bad} }}\n"
+            );
+            let msg = usage_message(parse(&text).unwrap_err());
+            assert!(
+                msg.starts_with("exp.toml:6:") && msg.contains(word),
+                "{bad}: {msg}"
+            );
+        }
+        let text = format!("{BASE}tracers = [\"reference\"]\nsoft_shadow = {{ samples = 16, sets = \"halton\" }}\n");
+        let msg = usage_message(parse(&text).unwrap_err());
+        assert!(
+            msg.contains("soft_shadow") && msg.contains("halton"),
+            "{msg}"
+        );
     }
 }

@@ -3,7 +3,8 @@
 //! spp). Lower left is better: less error for the time spent.
 //!
 //! In an experiment run (`write_error_plots`), each group of distribution (or path) workloads that
-//! differ only in `spp` (at least two sample counts) gives one plot and its `.csv` per scene, from frame
+//! differ only in `spp` (at least two sample counts; for interleaved soft shadows also in filter
+//! and retrace, each refinement its own line) gives one plot and its `.csv` per scene, from frame
 //! 0's `frame` rows at the widest thread count: time = the fastest frame, trace time = the sum of
 //! the fastest passes of its batches, error = the runs.csv `rmse`.
 
@@ -71,8 +72,8 @@ pub fn write_error_plots(
     Ok(written)
 }
 
-/// Indices of the distribution workloads, grouped by everything but `spp`; only groups with at
-/// least two sample counts.
+/// Indices of the distribution workloads, grouped by everything but `spp` (and the refinements of
+/// interleaved soft shadows); only groups with at least two sample counts.
 fn spp_groups(exp: &Experiment) -> Vec<Vec<usize>> {
     let mut groups: Vec<Vec<usize>> = Vec::new();
     for (r, workload) in exp.renders.iter().enumerate() {
@@ -91,7 +92,11 @@ fn spp_groups(exp: &Experiment) -> Vec<Vec<usize>> {
             None => groups.push(vec![r]),
         }
     }
-    groups.retain(|g| g.len() > 1);
+    let spp = |i: &usize| match &exp.renders[*i] {
+        RenderWorkload::Distribution(w) => w.settings.spp,
+        RenderWorkload::Whitted(_) => 0,
+    };
+    groups.retain(|g| g.iter().any(|i| spp(i) != spp(&g[0])));
     groups
 }
 
@@ -134,12 +139,17 @@ fn error_points(
             })
             .filter_map(at)
             .sum();
+        // Interleaved soft shadows' refinements are lines of their own ("packet filtered").
+        let refinement = w
+            .settings
+            .soft_shadows
+            .map_or(String::new(), |m| m.refinement());
         let instance = &plan.instances[frame.instance];
         let embree = instance.structure.kind == AccelKind::Embree;
         let point = ErrorPoint {
             tracer: match embree {
-                true => EMBREE_BEST_LINE.to_string(),
-                false => instance.label.clone(),
+                true => format!("{EMBREE_BEST_LINE}{refinement}"),
+                false => format!("{}{refinement}", instance.label),
             },
             spp: w.settings.spp,
             seconds,
@@ -148,7 +158,7 @@ fn error_points(
             rmse,
         };
         let slower_embree = points.iter().position(|p: &ErrorPoint| {
-            embree && p.tracer == EMBREE_BEST_LINE && p.spp == point.spp
+            embree && p.tracer == point.tracer && p.spp == point.spp
         });
         match slower_embree {
             Some(i) if points[i].seconds <= point.seconds => {}

@@ -635,6 +635,55 @@ mod tests {
     /// A path workload (Gribble & Ramani 2008 §4) is measured like a distribution one: a row per
     /// (bounce, kind) batch with its `bounce_depth`, a frame row with the RMSE against the cached
     /// reference image, and the error-vs-time plot.
+    /// Interleaved soft shadows (Benthin & Wald 2009) with retrace: camera rays, the first
+    /// visibility query, the retrace query, and a frame row with the RMSE and the share of pixels
+    /// retraced — the same for every tracer (the same bits); a scene without a quad light is
+    /// refused before anything runs.
+    #[test]
+    fn interleaved_soft_shadows_give_a_retraced_share_and_need_a_quad_light() {
+        let out = scratch("interleaved");
+        let text = "name = \"t\"\nscenes = [\"room-area-light\"]\ntracers = [\"reference\", \"packet\"]\n\
+                    render = { renderer = \"distribution\", shadows = \"interleaved\", sets = \"lp\", spp = 16, retrace = 64 }\n\
+                    resolution = { width = 32, height = 32 }\nthreads = [1]\nwarmup = 0\nrepeats = 1\n";
+        let load = |spec: &SceneSpec| crate::scene::library::load_scene(&spec.name, spec.size);
+        let dir = run_text(text, &out, &load);
+        let (_, runs) = read_csv(&dir.join(output::RUNS_CSV));
+        let mut shares = Vec::new();
+        for tracer in ["reference", "packet"] {
+            let rows: Vec<_> = runs.iter().filter(|r| r["tracer"] == tracer).collect();
+            let kinds: Vec<(&str, &str)> = rows
+                .iter()
+                .map(|r| (r["ray_kind"].as_str(), r["bounce_depth"].as_str()))
+                .collect();
+            assert_eq!(
+                kinds,
+                [
+                    ("primary", "0"),
+                    ("soft_shadow", "1"),
+                    ("soft_shadow", "2"),
+                    ("frame", "")
+                ]
+            );
+            assert_eq!(rows[0]["rays"], "1024");
+            let share: f64 = rows[3]["retraced_share"].parse().unwrap();
+            assert!(share > 0.0 && share < 0.5, "{share}");
+            assert!(rows[3]["rmse"].parse::<f64>().unwrap() > 0.0);
+            assert!(rows[..3].iter().all(|r| r["retraced_share"].is_empty()));
+            shares.push((share, rows[3]["rmse"].clone()));
+        }
+        assert_eq!(shares[0], shares[1]);
+        fs::remove_dir_all(&out).unwrap();
+
+        let dark = text.replace("room-area-light", "room");
+        let mut exp = Experiment::parse(Path::new("t.toml"), &dark).unwrap();
+        exp.output = out.clone();
+        let err = run(&exp, &dark, &RunOverrides::default(), &load).unwrap_err();
+        assert!(err.to_string().contains("no quad light"), "{err}");
+        let left = fs::read_dir(out.join("t")).is_ok_and(|mut d| d.next().is_some());
+        assert!(!left, "no results for a refused experiment");
+        let _ = fs::remove_dir_all(&out);
+    }
+
     #[test]
     fn a_path_workload_gives_rows_per_bounce_and_an_rmse_that_falls_with_spp() {
         let out = scratch("path");

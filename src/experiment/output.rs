@@ -6,7 +6,8 @@
 //! `build_plus_trace_seconds` is the frame's build (or refit) time of the row's structure plus
 //! the row's fastest pass: "rebuild + render" for that ray kind (0 build when reused).
 //! `rmse`: a distribution or path frame row's RMSE against its high-spp reference image (empty
-//! elsewhere, and with `rmse = false`).
+//! elsewhere, and with `rmse = false`). `retraced_share`: an interleaved-soft-shadow frame row's
+//! share of pixels retraced (`retrace` > 0; Benthin & Wald 2009 Fig. 7), empty elsewhere.
 //! `embree_best_*`: the fastest Embree row on the same work in the same run (`embree_best`), its
 //! configuration, and `x_embree_best` = its seconds / this row's (> 1: faster than Embree at its
 //! best); the same for build + trace. Empty when the run measured no Embree row for that work.
@@ -54,6 +55,7 @@ pub const RUNS_COLUMNS: &[&str] = &[
     "counting_seconds",
     "counting_overhead",
     "rmse",
+    "retraced_share",
     "embree_best_seconds",
     "embree_best_config",
     "x_embree_best",
@@ -159,6 +161,7 @@ pub fn write_runs(path: &Path, plan: &Plan, cases: &[Case]) -> Result<()> {
                 cell(same_threads.then_some(case.counted.seconds)),
                 cell(same_threads.then(|| case.counted.seconds / timing.seconds_median)),
                 cell(case.rmse),
+                cell(case.retraced_share),
                 cell(best.map(|b| b.seconds)),
                 cell(best.map(|b| &b.config)),
                 cell(ratio(best, timing.seconds_min)),

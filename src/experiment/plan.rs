@@ -19,7 +19,7 @@ use crate::geometry::{RayKind, Triangle};
 use crate::scene::{Material, Mesh, Scene};
 use crate::tracers::{build_tracer, Params};
 
-use super::config::{Experiment, SceneSpec, StructureKey};
+use super::config::{Experiment, RenderWorkload, SceneSpec, StructureKey};
 
 /// Finds a scene by its experiment entry. The run uses `scene::library::load_scene`; tests hand in
 /// scenes of their own.
@@ -160,6 +160,16 @@ impl Plan {
                 Error::Usage(m) => Error::usage(format!("{}: {m}", exp.path.display())),
                 other => other,
             })?;
+            let interleaved = exp.renders.iter().any(|r| {
+                matches!(r, RenderWorkload::Distribution(w) if w.settings.soft_shadows.is_some())
+            });
+            if interleaved && scene.quad_light().is_none() {
+                return Err(Error::usage(format!(
+                    "{}: scene {} has no quad light for the interleaved soft shadows of render shadows = \"interleaved\" (use a *-area-light scene)",
+                    exp.path.display(),
+                    spec.name
+                )));
+            }
             scenes.push(plan_scene(exp, spec, &scene));
         }
         let mut notes = Vec::new();

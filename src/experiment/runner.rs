@@ -113,6 +113,8 @@ pub struct Case {
     pub timings: Vec<Timing>,
     /// A distribution frame's RMSE against its reference image (frame rows only).
     pub rmse: Option<f64>,
+    /// An interleaved-soft-shadow frame's share of pixels retraced (frame rows, with retrace).
+    pub retraced_share: Option<f64>,
 }
 
 /// A built structure with its build time.
@@ -329,6 +331,7 @@ impl Measure<'_> {
             built: self.built,
             timings,
             rmse: None,
+            retraced_share: None,
         }
     }
 
@@ -417,8 +420,10 @@ impl Measure<'_> {
         }
         let rays = counted.batches.iter().map(|b| b.rays).sum();
         let timings = timed.iter().map(|t| t.frame).collect();
+        let pixels = (self.exp.width * self.exp.height) as f64;
         cases.push(Case {
             rmse,
+            retraced_share: counted.retraced_pixels.map(|n| n as f64 / pixels),
             ..self.case(Traced::Frame { render: r }, rays, total, timings)
         });
         Ok(cases)
@@ -431,10 +436,12 @@ struct RenderTimings {
     frame: Timing,
 }
 
-/// What a render returns to the runner: the image and one record per traced batch.
+/// What a render returns to the runner: the image, one record per traced batch, and the pixels
+/// retraced (interleaved soft shadows with retrace).
 struct Rendered {
     image: Image,
     batches: Vec<BatchRecord>,
+    retraced_pixels: Option<u64>,
 }
 
 /// One tracer rendering one frame with one workload's settings.
@@ -478,6 +485,7 @@ impl RenderJob<'_> {
                 Ok(Rendered {
                     image: out.image,
                     batches: out.batches,
+                    retraced_pixels: None,
                 })
             }
             RenderWorkload::Distribution(w) => {
@@ -492,6 +500,7 @@ impl RenderJob<'_> {
                 Ok(Rendered {
                     image: out.image,
                     batches: out.batches,
+                    retraced_pixels: out.retraced_pixels,
                 })
             }
         }
@@ -695,6 +704,7 @@ fn generate_workloads(
                     hits(),
                     exp.width,
                     exp.soft_shadow_samples,
+                    exp.soft_shadow_sets,
                     seed(kind),
                 )?;
                 workloads.push(Workload::SoftShadow {

@@ -2,13 +2,15 @@
 //! shadows: Boulos et al. 2007 §4, "shadow rays to different positions on area light sources")
 //! through one uniformly chosen point of its area per sample. A stratified 2D sample
 //! (`interleaved::SampleTable`) maps to a stratified set of points on the quad, since the map
-//! `(s, t) ↦ corner + s·edge_u + t·edge_v` is affine.
+//! `(s, t) ↦ corner + s·edge_u + t·edge_v` is affine. The soft-shadow workload's sets of light
+//! samples per 4×4 tile of pixels are jittered or QMC (`LightSampleSets`).
 
 use glam::Vec3;
 
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::geometry::{Hit, RayBatch};
 use crate::render::interleaved::{SampleTable, K};
+use crate::render::qmc::Net;
 use crate::render::rays::SurfacePoint;
 use crate::render::shading::point_irradiance;
 use crate::scene::{Light, Mesh};
@@ -53,38 +55,109 @@ pub fn sample_light(light: &Light, p: Vec3, n: Vec3, s: f32, t: f32) -> Option<L
     Some(LightSample { point, incident })
 }
 
+/// How the light samples of a `K×K` tile of pixels are made (Benthin & Wald 2009 §4.5: "each
+/// pixel is assigned to a different interleaved sampling set, using a 4×4 pixel grid pattern ...
+/// all 2D sets yield 256 2D random numbers").
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum LightSampleSets {
+    /// Interleaved jittered sets of the static sample table (Keller & Heidrich 2001): each set
+    /// a jittered grid, the tile together a finer one. Any perfect square per set. The default
+    /// (the soft-shadow workload's sets before the QMC ones existed).
+    #[default]
+    Jittered,
+    /// The tile's sets are the disjoint parts of one Hammersley net (`qmc`). Powers of 4.
+    Hammersley,
+    /// As `Hammersley` with the Larcher–Pillichshammer net (`qmc`). Powers of 4.
+    LarcherPillichshammer,
+}
+
+impl LightSampleSets {
+    pub const NAMES: [&str; 3] = ["jittered", "hammersley", "lp"];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            LightSampleSets::Jittered => "jittered",
+            LightSampleSets::Hammersley => "hammersley",
+            LightSampleSets::LarcherPillichshammer => "lp",
+        }
+    }
+
+    pub fn parse(name: &str) -> Result<Self> {
+        match name {
+            "jittered" => Ok(LightSampleSets::Jittered),
+            "hammersley" => Ok(LightSampleSets::Hammersley),
+            "lp" => Ok(LightSampleSets::LarcherPillichshammer),
+            _ => Err(Error::usage(format!(
+                "unknown light sample sets {name:?} (known: {})",
+                Self::NAMES.join(", ")
+            ))),
+        }
+    }
+
+    /// The `K²` sets of `per_set` samples of one tile, set `p` for the pixels of pattern `p`
+    /// (`SampleTable::pattern_of`); `seed` seeds the jittered table (the QMC nets are fixed).
+    pub fn tile_sets(self, per_set: u32, seed: u64) -> Result<LightSamples> {
+        self.sets(per_set, K * K, seed)
+    }
+
+    /// One set of `per_set` samples for every point (the adaptive retrace's samples).
+    pub fn single_set(self, per_set: u32, seed: u64) -> Result<LightSamples> {
+        self.sets(per_set, 1, seed)
+    }
+
+    fn sets(self, per_set: u32, sets: u32, seed: u64) -> Result<LightSamples> {
+        let uv = match self {
+            LightSampleSets::Jittered => {
+                let table = SampleTable::new(per_set, seed)?;
+                (0..sets)
+                    .flat_map(|pattern| {
+                        let (x, y) = (pattern % K, pattern / K);
+                        let table = &table;
+                        (0..per_set).map(move |s| <[f32; 2]>::from(table.get(x, y, s, 0)))
+                    })
+                    .collect()
+            }
+            LightSampleSets::Hammersley => Net::Hammersley.interleaved_sets(per_set, sets)?,
+            LightSampleSets::LarcherPillichshammer => {
+                Net::LarcherPillichshammer.interleaved_sets(per_set, sets)?
+            }
+        };
+        LightSamples::new(per_set as usize, uv)
+    }
+}
+
 /// The soft-shadow workload of Benthin & Wald 2009 (§4) over a frame's primary hits: one shading
 /// point per hit, each its own packet (its samples share an origin), with interleaved light
-/// sample sets (§4.5; Keller & Heidrich 2001): pixel `(x, y)` of a `width`-wide image uses the
-/// `samples` points of pattern `(x mod K, y mod K)` of the static sample table.
+/// sample sets (§4.5; Keller & Heidrich 2001): pixel `(x, y)` of a `width`-wide image uses set
+/// `(x mod K, y mod K)` of the tile's `sets`.
 pub fn soft_shadow_points(
     mesh: &Mesh,
     primary: &RayBatch,
     hits: &[Hit],
     width: u32,
     samples: u32,
+    sets: LightSampleSets,
     seed: u64,
 ) -> Result<(ShadingPoints, LightSamples)> {
-    let table = SampleTable::new(samples, seed)?;
-    let mut uv = Vec::with_capacity((K * K * samples) as usize);
-    for pattern in 0..K * K {
-        let (x, y) = (pattern % K, pattern / K);
-        uv.extend((0..samples).map(|s| <[f32; 2]>::from(table.get(x, y, s, 0))));
-    }
+    let samples = sets.tile_sets(samples, seed)?;
     let mut points = ShadingPoints::default();
     for (i, hit) in hits.iter().enumerate().filter(|(_, h)| h.is_hit()) {
         let surface = SurfacePoint::of_hit(mesh, &primary.ray(i), hit);
         let pixel = primary.pixel[i];
-        let point = ShadingPoint {
-            position: surface.p,
-            normal: surface.n,
-            origin: surface.ray_origin(),
-            time: 0.0,
-            set: SampleTable::pattern_of(pixel % width, pixel / width) as u32,
-        };
-        points.push(point, true);
+        points.push(shading_point(&surface, pixel % width, pixel / width), true);
     }
-    Ok((points, LightSamples::new(samples as usize, uv)?))
+    Ok((points, samples))
+}
+
+/// The shading point of pixel `(x, y)` at `surface`, with the pixel's interleaved set.
+pub fn shading_point(surface: &SurfacePoint, x: u32, y: u32) -> ShadingPoint {
+    ShadingPoint {
+        position: surface.p,
+        normal: surface.n,
+        origin: surface.ray_origin(),
+        time: 0.0,
+        set: SampleTable::pattern_of(x, y) as u32,
+    }
 }
 
 #[cfg(test)]

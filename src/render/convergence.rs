@@ -8,6 +8,9 @@
 //! lights, camera, resolution, renderer settings and `RENDERER_VERSION` — so an edited scene file
 //! or a changed setting never reads a stale image. The file name also carries the scene name,
 //! frame and resolution for people browsing the directory. Delete the directory to drop the cache.
+//! Interleaved soft shadows (Benthin & Wald 2009) are compared with their own unfiltered,
+//! unretraced estimate at `REFERENCE_SPP` light samples per pixel: filter and retrace are what is
+//! measured against it.
 
 use std::fs;
 use std::io::Write;
@@ -66,9 +69,8 @@ pub fn reference_key(
         scene.lights,
         frame.camera,
         DrtSettings {
-            spp: REFERENCE_SPP,
             shade: ShadeStreams::default(),
-            ..*settings
+            ..reference_settings(settings)
         }
     );
     for chunk in described.as_bytes().chunks(8) {
@@ -130,10 +132,7 @@ pub fn reference_image(
     }
     let geometry = FrameGeometry::of(frame, motion);
     let tracer = geometry.tracer("reference", &Params::new())?;
-    let reference = DrtSettings {
-        spp: REFERENCE_SPP,
-        ..*settings
-    };
+    let reference = reference_settings(settings);
     let image = render_sampled(
         scene,
         frame,
@@ -145,6 +144,16 @@ pub fn reference_image(
     .image;
     write_cached(&path, key, &image)?;
     Ok((image, false))
+}
+
+/// The reference's settings: `settings` at `REFERENCE_SPP`, and interleaved soft shadows
+/// without filter and retrace (the reference is the plain estimate the refinements approximate).
+pub fn reference_settings(settings: &DrtSettings) -> DrtSettings {
+    DrtSettings {
+        spp: REFERENCE_SPP,
+        soft_shadows: settings.soft_shadows.map(|mode| mode.unrefined()),
+        ..*settings
+    }
 }
 
 fn header(key: u64, width: u32, height: u32) -> String {

@@ -24,11 +24,12 @@ use glam::Vec3;
 
 use crate::error::{Error, Result};
 use crate::geometry::{Ray, RayBatch, RayKind, Triangle};
-use crate::render::area_light::sample_light;
+use crate::render::area_light::{sample_light, LightSampleSets};
 use crate::render::assembly::BatchKind;
 use crate::render::glossy::sample_phong_lobe;
 use crate::render::image::Image;
 use crate::render::interleaved::{SampleTable, DIMENSION_PAIRS};
+use crate::render::interleaved_shadows::{render_interleaved_shadows, InterleavedShadows};
 use crate::render::light_query::LightQueries;
 use crate::render::motion::{tracer_for_motion, MovingMesh};
 use crate::render::path::{
@@ -110,6 +111,10 @@ pub struct DrtSettings {
     pub max_depth: u32,
     /// Seed of the static sample table.
     pub seed: u64,
+    /// Soft shadows as Benthin & Wald 2009 §4.5 render them (`interleaved_shadows`): interleaved
+    /// light sample sets, visibility apart from shading, filter and retrace; `spp` is then the
+    /// light samples per pixel. `None`: one light sample per path sample.
+    pub soft_shadows: Option<InterleavedShadows>,
 }
 
 impl Default for DrtSettings {
@@ -124,6 +129,7 @@ impl Default for DrtSettings {
             focus_distance: None,
             max_depth: 2,
             seed: 0x0D57_7ACE,
+            soft_shadows: None,
         }
     }
 }
@@ -157,7 +163,16 @@ impl DrtSettings {
     }
 
     /// The keys of an experiment's distribution `render` table besides `renderer`.
-    pub const KEYS: [&str; 4] = ["spp", "aperture", "focus", "max_depth"];
+    pub const KEYS: [&str; 8] = [
+        "spp",
+        "aperture",
+        "focus",
+        "max_depth",
+        "shadows",
+        "sets",
+        "filter",
+        "retrace",
+    ];
 
     /// Settings of `integrator` from one combination of an experiment's `render` grid (defaults
     /// for the keys it does not give), checked; `also` names the workload's own keys, for the
@@ -171,6 +186,12 @@ impl DrtSettings {
             },
             ..DrtSettings::default()
         };
+        let mut interleaved = InterleavedShadows {
+            filter: true,
+            ..InterleavedShadows::default()
+        };
+        // The keys of the interleaved mode given (they need `shadows = "interleaved"`).
+        let mut mode_keys = Vec::new();
         for (key, value) in &params.0 {
             let bad = || Error::usage(format!("render {key} = {value:?} is not valid"));
             let number = || value.parse::<f32>().map_err(|_| bad());
@@ -179,6 +200,34 @@ impl DrtSettings {
                 "aperture" => s.aperture = Some(number()?),
                 "focus" => s.focus_distance = Some(number()?),
                 "max_depth" => s.max_depth = value.parse().map_err(|_| bad())?,
+                "shadows" => {
+                    s.soft_shadows = match value.as_str() {
+                        "sampled" => None,
+                        "interleaved" => Some(interleaved),
+                        _ => {
+                            return Err(Error::usage(format!(
+                                "render shadows = {value:?} is not valid (sampled or interleaved)"
+                            )))
+                        }
+                    }
+                }
+                "sets" => {
+                    interleaved.sets = LightSampleSets::parse(value)
+                        .map_err(|e| Error::usage(format!("render sets: {e}")))?;
+                    mode_keys.push(key.as_str());
+                }
+                "filter" => {
+                    interleaved.filter = match value.as_str() {
+                        "true" => true,
+                        "false" => false,
+                        _ => return Err(bad()),
+                    };
+                    mode_keys.push(key.as_str());
+                }
+                "retrace" => {
+                    interleaved.retrace = value.parse().map_err(|_| bad())?;
+                    mode_keys.push(key.as_str());
+                }
                 _ => {
                     let known: Vec<&str> = Self::KEYS.iter().chain(also).copied().collect();
                     return Err(Error::usage(format!(
@@ -189,10 +238,29 @@ impl DrtSettings {
                 }
             }
         }
+        if s.soft_shadows.is_some() {
+            // Keys sort before `shadows`: the mode's own settings are applied here.
+            s.soft_shadows = Some(interleaved);
+            if !params.0.contains_key("max_depth") {
+                s.max_depth = 0;
+            }
+        } else if let Some(key) = mode_keys.first() {
+            return Err(Error::usage(format!(
+                "render {key} needs shadows = \"interleaved\""
+            )));
+        }
         s.check()?;
         if integrator == Integrator::Distribution {
             SampleTable::new(s.spp, s.seed)
                 .map_err(|e| Error::usage(format!("render spp = {}: {e}", s.spp)))?;
+        }
+        if let Some(mode) = s.soft_shadows {
+            mode.check(s.spp, s.seed).map_err(|e| {
+                Error::usage(format!(
+                    "render spp = {}, retrace = {}: {e}",
+                    s.spp, mode.retrace
+                ))
+            })?;
         }
         Ok(s)
     }
@@ -201,6 +269,17 @@ impl DrtSettings {
         let lens_ok = self.aperture.is_none_or(|a| a.is_finite() && a >= 0.0)
             && self.focus_distance.is_none_or(|f| f.is_finite() && f > 0.0);
         let max_depth = self.integrator.max_depth();
+        if let Some(mode) = self.soft_shadows {
+            let pinhole = self.aperture.is_none_or(|a| a == 0.0);
+            if self.integrator != Integrator::Distribution || self.max_depth != 0 || !pinhole {
+                return Err(Error::usage(format!(
+                    "interleaved soft shadows (Benthin & Wald 2009) render direct light through a pinhole: renderer distribution, max_depth = 0, aperture 0 (got {} renderer, max_depth {}, aperture {:?}; {mode:?})",
+                    self.integrator.name(),
+                    self.max_depth,
+                    self.aperture
+                )));
+            }
+        }
         if self.width == 0
             || self.height == 0
             || self.spp == 0
@@ -250,6 +329,8 @@ pub struct DrtFrame {
     pub packets: [u64; RayKind::ALL.len()],
     /// Wall time of the whole frame: sampling, shading and tracing.
     pub seconds: f64,
+    /// Interleaved soft shadows with retrace: how many pixels were retraced.
+    pub retraced_pixels: Option<u64>,
 }
 
 impl DrtFrame {
@@ -345,6 +426,7 @@ impl Records {
             batches: self.batches.into_values().collect(),
             packets: self.packets,
             seconds: start.elapsed().as_secs_f64(),
+            retraced_pixels: None,
         }
     }
 }
@@ -448,6 +530,9 @@ pub fn render_sampled(
     settings: &DrtSettings,
     tracing: Tracing,
 ) -> Result<DrtFrame> {
+    if let Some(mode) = settings.soft_shadows {
+        return render_interleaved_shadows(scene, frame, geometry, tracer, settings, mode, tracing);
+    }
     match settings.integrator {
         Integrator::Distribution => {
             render_distribution(scene, frame, geometry, tracer, settings, tracing)
