@@ -572,5 +572,28 @@ mod tests {
         assert_eq!(p.ray.tfar, [1.0; 16]);
         assert_eq!(p.hit.geomID, [0; 16]);
         assert_eq!(packet.guard, [GUARD; 64]);
+
+        // Occlusion writes only tfar (−∞ when blocked): a bare ray packet needs no room.
+        #[repr(C)]
+        struct GuardedRays {
+            rays: v3::RTCRay16,
+            guard: [u32; 64],
+        }
+        let mut occluded = GuardedRays {
+            rays: packet.padded.record.ray,
+            guard: [GUARD; 64],
+        };
+        occluded.rays.tfar = [f32::INFINITY; 16];
+        // SAFETY: as above.
+        unsafe {
+            Embree4::occluded16(
+                valid.as_ptr(),
+                scene.raw(),
+                &mut args,
+                (&mut occluded as *mut GuardedRays).cast(),
+            )
+        };
+        assert_eq!(occluded.rays.tfar, [f32::NEG_INFINITY; 16]);
+        assert_eq!(occluded.guard, [GUARD; 64]);
     }
 }
