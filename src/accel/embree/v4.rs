@@ -558,11 +558,14 @@ mod tests {
             p.hit.geomID[lane] = u32::MAX;
             p.hit.instID[0][lane] = u32::MAX;
         }
-        let valid = [-1i32; 16];
+        // Embree loads the valid mask with the packet's alignment.
+        #[repr(C, align(64))]
+        struct Valid([i32; 16]);
+        let valid = Valid([-1; 16]);
         // SAFETY: as above, 16 valid lanes, the packet 64-byte aligned by its type.
         unsafe {
             Embree4::intersect16(
-                valid.as_ptr(),
+                valid.0.as_ptr(),
                 scene.raw(),
                 &mut args,
                 (&mut packet as *mut Guarded<_>).cast(),
@@ -587,7 +590,7 @@ mod tests {
         // SAFETY: as above.
         unsafe {
             Embree4::occluded16(
-                valid.as_ptr(),
+                valid.0.as_ptr(),
                 scene.raw(),
                 &mut args,
                 (&mut occluded as *mut GuardedRays).cast(),
