@@ -130,8 +130,6 @@ pub struct Padded<T> {
 }
 
 impl<T> Padded<T> {
-    pub const TAIL_BYTES: usize = 16 * 4;
-
     #[inline(always)]
     pub fn new(record: T) -> Self {
         Padded {

@@ -558,11 +558,14 @@ mod tests {
             p.hit.geomID[lane] = u32::MAX;
             p.hit.instID[0][lane] = u32::MAX;
         }
-        let valid = [-1i32; 16];
+        // Embree loads the valid mask with the packet's alignment.
+        #[repr(C, align(64))]
+        struct Valid([i32; 16]);
+        let valid = Valid([-1; 16]);
         // SAFETY: as above, 16 valid lanes, the packet 64-byte aligned by its type.
         unsafe {
             Embree4::intersect16(
-                valid.as_ptr(),
+                valid.0.as_ptr(),
                 scene.raw(),
                 &mut args,
                 (&mut packet as *mut Guarded<_>).cast(),
@@ -572,5 +575,28 @@ mod tests {
         assert_eq!(p.ray.tfar, [1.0; 16]);
         assert_eq!(p.hit.geomID, [0; 16]);
         assert_eq!(packet.guard, [GUARD; 64]);
+
+        // Occlusion writes only tfar (−∞ when blocked): a bare ray packet needs no room.
+        #[repr(C)]
+        struct GuardedRays {
+            rays: v3::RTCRay16,
+            guard: [u32; 64],
+        }
+        let mut occluded = GuardedRays {
+            rays: packet.padded.record.ray,
+            guard: [GUARD; 64],
+        };
+        occluded.rays.tfar = [f32::INFINITY; 16];
+        // SAFETY: as above.
+        unsafe {
+            Embree4::occluded16(
+                valid.0.as_ptr(),
+                scene.raw(),
+                &mut args,
+                (&mut occluded as *mut GuardedRays).cast(),
+            )
+        };
+        assert_eq!(occluded.rays.tfar, [f32::NEG_INFINITY; 16]);
+        assert_eq!(occluded.guard, [GUARD; 64]);
     }
 }
