@@ -1,4 +1,4 @@
-//! The `raylab` command line: run, render, verify, trace, scenes. Parsing and printing only; the work is
+//! The `raylab` command line: run, summary, render, verify, trace, scenes. Parsing and printing only; the work is
 //! in the library. Any `Error` is printed once and exits with its code (2 for bad input).
 
 use std::path::PathBuf;
@@ -8,7 +8,8 @@ use clap::{Parser, Subcommand};
 
 use raylab::error::{Error, Result};
 use raylab::experiment::results_dir::PendingResults;
-use raylab::experiment::{run_experiment, RunOverrides};
+use raylab::experiment::summary::{Summary, SUMMARY_MD};
+use raylab::experiment::{run_experiment, Chatter, RunOverrides};
 use raylab::geometry::ray_file::{hits_csv, occlusion_csv, read_rays};
 use raylab::geometry::RayKind;
 use raylab::render::assembly::Assembly;
@@ -65,6 +66,21 @@ enum Command {
         /// the results directory (binary ray files, for `trace`, `verify --rays`, `rays = [{ file }]`).
         #[arg(long)]
         dump_rays: bool,
+        /// Print nothing but the results directory (no plan, progress bar or summary).
+        #[arg(long, conflicts_with = "json")]
+        quiet: bool,
+        /// Print only the summary, as JSON, on standard output (plan and progress on standard error).
+        #[arg(long)]
+        json: bool,
+    },
+    /// Print the summary of a results directory again (computed from its runs.csv, verify.csv and
+    /// meta.json; the same table as its summary.md).
+    Summary {
+        /// A results directory, `results/<experiment>/<run-id>`.
+        dir: PathBuf,
+        /// As JSON.
+        #[arg(long)]
+        json: bool,
     },
     /// Render a frame to a PNG: ray casting with point-light shadows and Lambert shading, or
     /// Whitted ray tracing (mirror reflection, Fresnel refraction, packet-assembled batches).
@@ -261,7 +277,14 @@ fn execute(command: Command) -> Result<bool> {
             warmup,
             repeats,
             dump_rays,
+            quiet,
+            json,
         } => {
+            let chatter = match (quiet, json) {
+                (true, _) => Chatter::Quiet,
+                (false, true) => Chatter::Stderr,
+                (false, false) => Chatter::Normal,
+            };
             let overrides = RunOverrides {
                 output: out,
                 threads,
@@ -270,9 +293,29 @@ fn execute(command: Command) -> Result<bool> {
                 warmup,
                 repeats,
                 dump_rays,
+                chatter,
             };
             let dir = run_experiment(&experiment, &overrides)?;
-            println!("results: {}", dir.display());
+            // A stability run has no summary.
+            let has_summary = dir.join(SUMMARY_MD).is_file();
+            match chatter {
+                Chatter::Quiet => println!("{}", dir.display()),
+                Chatter::Stderr if has_summary => print!("{}", Summary::read(&dir)?.json(&dir)),
+                Chatter::Stderr => eprintln!("results: {}", dir.display()),
+                Chatter::Normal => {
+                    if has_summary {
+                        println!("{}", Summary::read(&dir)?.markdown());
+                    }
+                    println!("results: {}", dir.display());
+                }
+            }
+        }
+        Command::Summary { dir, json } => {
+            let summary = Summary::read(&dir)?;
+            match json {
+                true => print!("{}", summary.json(&dir)),
+                false => print!("{}", summary.markdown()),
+            }
         }
         Command::Render {
             scene,

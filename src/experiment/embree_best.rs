@@ -149,6 +149,7 @@ mod tests {
             built: true,
             timings,
             rmse: None,
+            checked: None,
         }
     }
 

@@ -12,10 +12,13 @@ pub mod meta;
 pub mod output;
 pub mod plan;
 pub mod plots;
+pub mod render_pruning;
 pub mod results_dir;
 pub mod runner;
+pub mod sampled_check;
 pub mod selection;
 pub mod stability;
+pub mod summary;
 pub mod tables;
 pub mod utc;
 
@@ -46,6 +49,21 @@ pub struct RunOverrides {
     /// Not a setting: also write every generated ray batch to `rays/` in the results directory
     /// (`runner::dump_name`), for replay with `trace`, `verify --rays` or `rays = [{ file }]`.
     pub dump_rays: bool,
+    /// Not a setting: where the plan and the progress bar go.
+    #[serde(skip)]
+    pub chatter: Chatter,
+}
+
+/// What a run shows while it runs.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Chatter {
+    /// The plan on standard output, the progress bar on standard error (on a terminal).
+    #[default]
+    Normal,
+    /// Both on standard error, keeping standard output for machine-readable output (`--json`).
+    Stderr,
+    /// Neither (`--quiet`).
+    Quiet,
 }
 
 impl RunOverrides {
@@ -117,10 +135,14 @@ pub fn run(
     plots::register_font()?;
     let started = utc::UtcTime::now();
     let plan = Plan::derive(exp, load)?;
-    println!("{plan}");
+    match overrides.chatter {
+        Chatter::Normal => println!("{plan}"),
+        Chatter::Stderr => eprintln!("{plan}"),
+        Chatter::Quiet => {}
+    }
     let results = results_dir::PendingResults::create(&exp.output, &exp.name, &started.compact())?;
 
-    let progress = runner::progress_bar(plan.measurements());
+    let progress = runner::progress_bar(plan.measurements(), overrides.chatter != Chatter::Quiet);
     let dump = overrides.dump_rays.then(|| results.dir().join(RAYS_DIR));
     let cases = runner::run_plan(exp, &plan, load, &progress, dump.as_deref());
     progress.finish_and_clear();
@@ -129,6 +151,7 @@ pub fn run(
     let dir = results.dir();
     output::write_runs(&dir.join(output::RUNS_CSV), &plan, &cases)?;
     output::write_histograms(&dir.join(output::HISTOGRAMS_CSV), &plan, &cases)?;
+    sampled_check::write_verify(&dir.join(sampled_check::VERIFY_CSV), &plan, &cases)?;
     plots::write_plots(dir, &plan, &cases)?;
     error_plot::write_error_plots(dir, exp, &plan, &cases)?;
     if !exp.tables.is_empty() || !exp.figures.is_empty() {
@@ -161,6 +184,10 @@ pub fn run(
         overrides,
     );
     meta::write(dir, &meta)?;
+    // From the files just written, as `raylab summary` recomputes it.
+    let summary = summary::Summary::read(dir)?;
+    let path = dir.join(summary::SUMMARY_MD);
+    std::fs::write(&path, summary.markdown()).map_err(|e| Error::io(&path, e))?;
     results.commit()
 }
 
@@ -399,6 +426,29 @@ mod tests {
             .collect();
         pngs.sort();
         assert_eq!(pngs.len(), 3 * 3, "{pngs:?}");
+
+        // Every ray batch was checked whole (≤ 4096 rays) against Embree: no disagreement on a
+        // quad seen head-on but for ties on its diagonal.
+        let (header, checks) = read_csv(&dir.join(sampled_check::VERIFY_CSV));
+        assert_eq!(header, sampled_check::VERIFY_COLUMNS);
+        assert_eq!(checks.len(), 3 * 2 * (3 + 2 + 3));
+        for c in &checks {
+            let rays = runs
+                .iter()
+                .find(|r| {
+                    ["scene", "frame", "parameters", "ray_kind"]
+                        .iter()
+                        .all(|k| r[*k] == c[*k])
+                })
+                .unwrap()["rays"]
+                .clone();
+            assert_eq!(c["checked_rays"], rays, "{c:?}");
+            assert_eq!(c["unexplained"], "0", "{c:?}");
+        }
+        // The saved summary is the one recomputed from the files.
+        let saved = fs::read_to_string(dir.join(summary::SUMMARY_MD)).unwrap();
+        assert_eq!(saved, summary::Summary::read(&dir).unwrap().markdown());
+        assert!(saved.contains("| lit (2 tris) | primary | — |"), "{saved}");
         fs::remove_dir_all(&out).unwrap();
     }
 
@@ -939,6 +989,7 @@ series = "scene"
             warmup: Some(2),
             repeats: Some(5),
             dump_rays: false,
+            chatter: Chatter::Quiet,
         };
         overrides.apply(&mut exp).unwrap();
         assert_eq!(
