@@ -66,6 +66,17 @@ pub enum Chatter {
     Quiet,
 }
 
+impl Chatter {
+    /// Shows `text` (the plan, a suite's outline) where this level sends it.
+    pub fn say(self, text: &str) {
+        match self {
+            Chatter::Normal => println!("{text}"),
+            Chatter::Stderr => eprintln!("{text}"),
+            Chatter::Quiet => {}
+        }
+    }
+}
+
 impl RunOverrides {
     pub fn apply(&self, exp: &mut Experiment) -> Result<()> {
         let at_least_one = |what: &str, n: usize| match n {
@@ -135,11 +146,7 @@ pub fn run(
     plots::register_font()?;
     let started = utc::UtcTime::now();
     let plan = Plan::derive(exp, load)?;
-    match overrides.chatter {
-        Chatter::Normal => println!("{plan}"),
-        Chatter::Stderr => eprintln!("{plan}"),
-        Chatter::Quiet => {}
-    }
+    overrides.chatter.say(&plan.to_string());
     let results = results_dir::PendingResults::create(&exp.output, &exp.name, &started.compact())?;
 
     let progress = runner::progress_bar(plan.measurements(), overrides.chatter != Chatter::Quiet);

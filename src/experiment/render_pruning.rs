@@ -53,7 +53,7 @@ fn effective(
     let mut pruned = Vec::new();
     match workload {
         RenderWorkload::Whitted(settings) => {
-            let mut s = settings.clone();
+            let mut s = *settings;
             let surfaces = Surfaces::of(scene, s.materials);
             if s.shadows && scene.lights.is_empty() {
                 s.shadows = false;

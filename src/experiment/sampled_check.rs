@@ -12,7 +12,6 @@ use std::path::Path;
 use crate::error::{Error, Result};
 use crate::geometry::RayBatch;
 use crate::scene::Mesh;
-use crate::tracers::batch::CHUNK_RAYS;
 use crate::tracers::Tracer;
 use crate::verify::{classify, BatchAnswers, KindReport};
 
@@ -34,7 +33,10 @@ pub const VERIFY_COLUMNS: &[&str] = &[
 ];
 
 /// Rays checked per batch at most.
-pub const SAMPLE_RAYS: usize = 4 * CHUNK_RAYS;
+pub const SAMPLE_RAYS: usize = 4 * BLOCK_RAYS;
+/// Consecutive rays checked together: one 32×32 tile of camera rays (they come in Morton-ordered
+/// tiles), a whole number of every packet size (n×n, n ≤ 32).
+pub const BLOCK_RAYS: usize = 1024;
 
 /// What the check of one batch found.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -44,19 +46,19 @@ pub struct Checked {
     pub unexplained: u64,
 }
 
-/// The rays checked of `batch`: all of it when small, else `SAMPLE_RAYS / CHUNK_RAYS` blocks of
-/// `CHUNK_RAYS` consecutive rays, evenly spaced and aligned to whole chunks, so a packet tracer
+/// The rays checked of `batch`: all of it when small, else `SAMPLE_RAYS / BLOCK_RAYS` blocks of
+/// `BLOCK_RAYS` consecutive rays, evenly spaced and aligned to whole blocks, so a packet tracer
 /// forms the very packets (screen blocks of camera rays) it forms in the timed passes.
 pub fn sample(batch: &RayBatch) -> RayBatch {
     let n = batch.len();
     if n <= SAMPLE_RAYS {
         return batch.clone();
     }
-    let blocks = SAMPLE_RAYS / CHUNK_RAYS;
-    let stride = n / CHUNK_RAYS / blocks * CHUNK_RAYS;
+    let blocks = SAMPLE_RAYS / BLOCK_RAYS;
+    let stride = n / BLOCK_RAYS / blocks * BLOCK_RAYS;
     let mut out = RayBatch::with_capacity(batch.kind(), SAMPLE_RAYS);
     for b in 0..blocks {
-        let range = b * stride..(b * stride + CHUNK_RAYS).min(n);
+        let range = b * stride..(b * stride + BLOCK_RAYS).min(n);
         let starts = |i: usize| i == range.start || batch.packet_start.get(i) == Some(&true);
         for i in range.clone() {
             let ray = batch.ray(i);
@@ -143,8 +145,8 @@ mod tests {
         assert_eq!(s.len(), SAMPLE_RAYS);
         // 32,768 rays: blocks start every 8,192 rays.
         for b in 0..4 {
-            for j in [0, 1, CHUNK_RAYS - 1] {
-                assert_eq!(s.pixel[b * CHUNK_RAYS + j], batch.pixel[b * 8192 + j]);
+            for j in [0, 1, BLOCK_RAYS - 1] {
+                assert_eq!(s.pixel[b * BLOCK_RAYS + j], batch.pixel[b * 8192 + j]);
             }
         }
         let small = primary_rays(&frame.camera, 16, 16);
