@@ -714,18 +714,24 @@ mod tests {
             .collect();
         assert_eq!(
             scenes,
-            [
-                ("room", 864),
-                ("balls", 118_082),
-                ("rings", 174_722),
-                ("marbles", 8_810)
-            ]
-            .map(|(name, triangles)| (name, triangles, name == "marbles"))
+            [("room", 864), ("marbles", 8_810), ("room-area-light", 864)]
+                .map(|(name, triangles)| (name, triangles, name == "marbles"))
         );
         let labels: Vec<&str> = plan.instances.iter().map(|i| i.label.as_str()).collect();
-        assert_eq!(labels, ["reference", "obvhs", "embree1", "embree16"]);
-        // Every scene has lights: 4 scenes × 2 frames × 4 tracers × 3 kinds × 2 thread counts.
-        assert_eq!(plan.measurements(), 192);
+        assert_eq!(
+            labels,
+            [
+                "packet[frustum=false;lanes=16;packet=8;traversal=ranged]",
+                "cgt[packet=16]",
+                "stream[stream=65536;width=16]",
+                "obvhs",
+                "embree16",
+                "embree-stream"
+            ]
+        );
+        // Soft shadows only under the quad light: (3 + 3 + 4) kinds × 2 frames × 6 tracers × 1
+        // thread count.
+        assert_eq!(plan.measurements(), 120);
     }
 
     const TABLES_TEXT: &str = r#"name = "t"

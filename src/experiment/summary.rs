@@ -245,16 +245,32 @@ impl Summary {
             self.frames,
             plural(self.frames)
         );
-        s.push_str(
-            "| scene | rays | ours: fastest | Mrays/s | box / tri tests per ray | Embree best | Mrays/s | × Embree best | obvhs Mrays/s | reference Mrays/s | checked against Embree |\n\
-             |---|---|---|---:|---:|---|---:|---:|---:|---:|---|\n",
+        // The obvhs and reference columns only when the run measured them.
+        let with_obvhs = self.rows.iter().any(|r| r.obvhs.is_some());
+        let with_reference = self.rows.iter().any(|r| r.reference.is_some());
+        let optional = |cells: [&str; 2]| {
+            [(with_obvhs, cells[0]), (with_reference, cells[1])]
+                .into_iter()
+                .filter(|(shown, _)| *shown)
+                .map(|(_, cell)| format!(" {cell} |"))
+                .collect::<String>()
+        };
+        let _ = writeln!(
+            s,
+            "| scene | rays | ours: fastest | Mrays/s | box / tri tests per ray | Embree best | Mrays/s | × Embree best |{} checked against Embree |",
+            optional(["obvhs Mrays/s", "reference Mrays/s"])
+        );
+        let _ = writeln!(
+            s,
+            "|---|---|---|---:|---:|---|---:|---:|{}---|",
+            optional(["---:", "---:"]).replace(' ', "")
         );
         for r in &self.rows {
             let ours = r.ours.as_ref();
             let tests = ours.and_then(|o| Some((o.aabb_tests_per_ray?, o.triangle_tests_per_ray?)));
             let _ = writeln!(
                 s,
-                "| {} ({} tris) | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+                "| {} ({} tris) | {} | {} | {} | {} | {} | {} | {} |{} {} |",
                 r.scene,
                 r.triangles,
                 r.ray_kind,
@@ -264,8 +280,10 @@ impl Summary {
                 r.embree_best.as_ref().map_or("—", |e| e.config.as_str()),
                 mrays(r.embree_best.as_ref().map(|e| e.mrays_per_s)),
                 r.x_embree_best.map_or("—".into(), |x| format!("{x:.2}×")),
-                mrays(r.obvhs.as_ref().map(|o| o.mrays_per_s)),
-                mrays(r.reference.as_ref().map(|o| o.mrays_per_s)),
+                optional([
+                    &mrays(r.obvhs.as_ref().map(|o| o.mrays_per_s)),
+                    &mrays(r.reference.as_ref().map(|o| o.mrays_per_s)),
+                ]),
                 ours.map_or("—".into(), |o| checked(o.checked)),
             );
         }
@@ -661,6 +679,20 @@ mod tests {
         );
         assert_eq!(json["rows"][1]["ours"], serde_json::Value::Null);
         assert_eq!(json["results"], dir.display().to_string());
+    }
+
+    #[test]
+    fn columns_of_baselines_the_run_did_not_measure_are_left_out() {
+        let runs: Vec<&str> = RUNS
+            .iter()
+            .copied()
+            .filter(|r| !r.contains(",reference,"))
+            .collect();
+        let md = Summary::read(&results("no-reference", &runs))
+            .unwrap()
+            .markdown();
+        assert!(md.contains("| × Embree best | obvhs Mrays/s | checked against Embree |\n|---|---|---|---:|---:|---|---:|---:|---:|---|\n"), "{md}");
+        assert!(md.contains("| 0.50× | 25.0 | **1 unexplained**"), "{md}");
     }
 
     #[test]
