@@ -1,4 +1,4 @@
-//! The `raylab` command line: run, render, verify, trace, scenes. Parsing and printing only; the work is
+//! The `raylab` command line: run, summary, render, verify, trace, scenes. Parsing and printing only; the work is
 //! in the library. Any `Error` is printed once and exits with its code (2 for bad input).
 
 use std::path::PathBuf;
@@ -9,7 +9,8 @@ use clap::{Parser, Subcommand};
 use raylab::error::{Error, Result};
 use raylab::experiment::results_dir::PendingResults;
 use raylab::experiment::shard::Shard;
-use raylab::experiment::{run_experiment, RunOverrides};
+use raylab::experiment::summary::{Summary, SUMMARY_MD};
+use raylab::experiment::{run_experiment, Chatter, RunOverrides};
 use raylab::geometry::ray_file::{hits_csv, occlusion_csv, read_rays};
 use raylab::geometry::RayKind;
 use raylab::render::area_light::LightSampleSets;
@@ -72,6 +73,12 @@ enum Command {
         /// and balanced by estimated cost; `raylab merge` joins the n results directories.
         #[arg(long, value_parser = parse_shard)]
         shard: Option<Shard>,
+        /// Print nothing but the results directory (no plan, progress bar or summary).
+        #[arg(long, conflicts_with = "json")]
+        quiet: bool,
+        /// Print only the summary, as JSON, on standard output (plan and progress on standard error).
+        #[arg(long)]
+        json: bool,
     },
     /// Join the results directories of a sharded sweep (`run --shard i/n`, every i once) into one
     /// results directory with the rows, plots and tables of an unsharded run.
@@ -94,6 +101,15 @@ enum Command {
         /// Where to write (default: DIR/report.html, report.html for several, DIR/REPORT.md).
         #[arg(long, short)]
         output: Option<PathBuf>,
+    },
+    /// Print the summary of a results directory again (computed from its runs.csv, verify.csv and
+    /// meta.json; the same table as its summary.md).
+    Summary {
+        /// A results directory, `results/<experiment>/<run-id>`.
+        dir: PathBuf,
+        /// As JSON.
+        #[arg(long)]
+        json: bool,
     },
     /// Render a frame to a PNG: ray casting with point-light shadows and Lambert shading, or
     /// Whitted ray tracing (mirror reflection, Fresnel refraction, packet-assembled batches).
@@ -313,7 +329,14 @@ fn execute(command: Command) -> Result<bool> {
             repeats,
             dump_rays,
             shard,
+            quiet,
+            json,
         } => {
+            let chatter = match (quiet, json) {
+                (true, _) => Chatter::Quiet,
+                (false, true) => Chatter::Stderr,
+                (false, false) => Chatter::Normal,
+            };
             let overrides = RunOverrides {
                 output: out,
                 threads,
@@ -323,9 +346,29 @@ fn execute(command: Command) -> Result<bool> {
                 repeats,
                 dump_rays,
                 shard,
+                chatter,
             };
             let dir = run_experiment(&experiment, &overrides)?;
-            println!("results: {}", dir.display());
+            // A stability run has no summary.
+            let has_summary = dir.join(SUMMARY_MD).is_file();
+            match chatter {
+                Chatter::Quiet => println!("{}", dir.display()),
+                Chatter::Stderr if has_summary => print!("{}", Summary::read(&dir)?.json(&dir)),
+                Chatter::Stderr => eprintln!("results: {}", dir.display()),
+                Chatter::Normal => {
+                    if has_summary {
+                        println!("{}", Summary::read(&dir)?.markdown());
+                    }
+                    println!("results: {}", dir.display());
+                }
+            }
+        }
+        Command::Summary { dir, json } => {
+            let summary = Summary::read(&dir)?;
+            match json {
+                true => print!("{}", summary.json(&dir)),
+                false => print!("{}", summary.markdown()),
+            }
         }
         Command::Merge { dirs, out } => {
             let load = |spec: &raylab::experiment::SceneSpec| load_scene(&spec.name, spec.size);

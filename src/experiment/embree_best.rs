@@ -150,6 +150,7 @@ mod tests {
             timings,
             rmse: None,
             retraced_share: None,
+            checked: None,
         }
     }
 

@@ -157,9 +157,9 @@ fn error_points(
             rays: frame.rays as u64,
             rmse,
         };
-        let slower_embree = points.iter().position(|p: &ErrorPoint| {
-            embree && p.tracer == point.tracer && p.spp == point.spp
-        });
+        let slower_embree = points
+            .iter()
+            .position(|p: &ErrorPoint| embree && p.tracer == point.tracer && p.spp == point.spp);
         match slower_embree {
             Some(i) if points[i].seconds <= point.seconds => {}
             Some(i) => points[i] = point,

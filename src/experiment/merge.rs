@@ -18,7 +18,7 @@ use super::meta::{self, MergedShard, META_JSON};
 use super::plan::{Plan, SceneLoader};
 use super::runner::{Case, Traced};
 use super::shard::{Part, Shard, ShardMeta, CASES_JSON};
-use super::{plots, results_dir, utc, write_outputs, RunOverrides};
+use super::{plots, results_dir, utc, write_outputs, write_summary, RunOverrides};
 
 /// Writes a shard's cases as JSON (floats written so they read back bit for bit).
 pub fn write_cases(path: &Path, cases: &[Case]) -> Result<()> {
@@ -223,6 +223,7 @@ pub fn merge(dirs: &[PathBuf], output: Option<&Path>, load: SceneLoader) -> Resu
         })
         .collect();
     meta::write(results.dir(), &meta)?;
+    write_summary(results.dir())?;
     results.commit()
 }
 

@@ -14,12 +14,15 @@ pub mod meta;
 pub mod output;
 pub mod plan;
 pub mod plots;
+pub mod render_pruning;
 pub mod report;
 pub mod results_dir;
 pub mod runner;
+pub mod sampled_check;
 pub mod selection;
 pub mod shard;
 pub mod stability;
+pub mod summary;
 pub mod tables;
 pub mod utc;
 
@@ -53,6 +56,32 @@ pub struct RunOverrides {
     /// Measure only this part of the plan (see `shard`); `raylab merge` joins the parts.
     #[serde(default)]
     pub shard: Option<shard::Shard>,
+    /// Not a setting: where the plan and the progress bar go.
+    #[serde(skip)]
+    pub chatter: Chatter,
+}
+
+/// What a run shows while it runs.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Chatter {
+    /// The plan on standard output, the progress bar on standard error (on a terminal).
+    #[default]
+    Normal,
+    /// Both on standard error, keeping standard output for machine-readable output (`--json`).
+    Stderr,
+    /// Neither (`--quiet`).
+    Quiet,
+}
+
+impl Chatter {
+    /// Shows `text` (the plan, a suite's outline) where this level sends it.
+    pub fn say(self, text: &str) {
+        match self {
+            Chatter::Normal => println!("{text}"),
+            Chatter::Stderr => eprintln!("{text}"),
+            Chatter::Quiet => {}
+        }
+    }
 }
 
 impl RunOverrides {
@@ -130,7 +159,7 @@ pub fn run(
     plots::register_font()?;
     let started = utc::UtcTime::now();
     let plan = Plan::derive(exp, load)?;
-    println!("{plan}");
+    overrides.chatter.say(&plan.to_string());
     let part = match overrides.shard {
         Some(shard) => {
             let part = shard::Part::of(&plan, shard);
@@ -139,7 +168,7 @@ pub fn run(
                 .iter()
                 .map(|&(s, i)| format!("{} × {}", plan.scenes[s].name, plan.instances[i].label))
                 .collect();
-            println!(
+            overrides.chatter.say(&format!(
                 "shard {shard}: {} of {} (scene × tracer) units: {}",
                 units.len(),
                 plan.scenes.len() * plan.instances.len(),
@@ -148,7 +177,7 @@ pub fn run(
                 } else {
                     units.join(", ")
                 }
-            );
+            ));
             part
         }
         None => shard::Part::whole(&plan),
@@ -159,7 +188,10 @@ pub fn run(
     };
     let results = results_dir::PendingResults::create(&exp.output, &exp.name, &run_id)?;
 
-    let progress = runner::progress_bar(part.measurements(&plan));
+    let progress = runner::progress_bar(
+        part.measurements(&plan),
+        overrides.chatter != Chatter::Quiet,
+    );
     let dump = overrides.dump_rays.then(|| results.dir().join(RAYS_DIR));
     let cases = runner::run_plan(exp, &plan, &part, load, &progress, dump.as_deref());
     progress.finish_and_clear();
@@ -191,7 +223,18 @@ pub fn run(
         None => write_outputs(dir, exp, &plan, &cases)?,
     }
     meta::write(dir, &meta)?;
+    if overrides.shard.is_none() {
+        write_summary(dir)?;
+    }
     results.commit()
+}
+
+/// summary.md, from the files just written (runs.csv, verify.csv, meta.json), as `raylab summary`
+/// recomputes it. A run and a merged sweep write it last.
+fn write_summary(dir: &Path) -> Result<()> {
+    let summary = summary::Summary::read(dir)?;
+    let path = dir.join(summary::SUMMARY_MD);
+    std::fs::write(&path, summary.markdown()).map_err(|e| Error::io(&path, e))
 }
 
 /// Everything a run writes from its cases except meta.json: runs.csv, histograms.csv, the plots,
@@ -199,6 +242,7 @@ pub fn run(
 fn write_outputs(dir: &Path, exp: &Experiment, plan: &Plan, cases: &[runner::Case]) -> Result<()> {
     output::write_runs(&dir.join(output::RUNS_CSV), plan, cases)?;
     output::write_histograms(&dir.join(output::HISTOGRAMS_CSV), plan, cases)?;
+    sampled_check::write_verify(&dir.join(sampled_check::VERIFY_CSV), plan, cases)?;
     plots::write_plots(dir, plan, cases)?;
     error_plot::write_error_plots(dir, exp, plan, cases)?;
     if exp.tables.is_empty() && exp.figures.is_empty() {
@@ -460,6 +504,29 @@ mod tests {
             .collect();
         pngs.sort();
         assert_eq!(pngs.len(), 3 * 3, "{pngs:?}");
+
+        // Every ray batch was checked whole (≤ 4096 rays) against Embree: no disagreement on a
+        // quad seen head-on but for ties on its diagonal.
+        let (header, checks) = read_csv(&dir.join(sampled_check::VERIFY_CSV));
+        assert_eq!(header, sampled_check::VERIFY_COLUMNS);
+        assert_eq!(checks.len(), 3 * 2 * (3 + 2 + 3));
+        for c in &checks {
+            let rays = runs
+                .iter()
+                .find(|r| {
+                    ["scene", "frame", "parameters", "ray_kind"]
+                        .iter()
+                        .all(|k| r[*k] == c[*k])
+                })
+                .unwrap()["rays"]
+                .clone();
+            assert_eq!(c["checked_rays"], rays, "{c:?}");
+            assert_eq!(c["unexplained"], "0", "{c:?}");
+        }
+        // The saved summary is the one recomputed from the files.
+        let saved = fs::read_to_string(dir.join(summary::SUMMARY_MD)).unwrap();
+        assert_eq!(saved, summary::Summary::read(&dir).unwrap().markdown());
+        assert!(saved.contains("| lit (2 tris) | primary | — |"), "{saved}");
         fs::remove_dir_all(&out).unwrap();
     }
 
@@ -790,22 +857,25 @@ mod tests {
             .collect();
         assert_eq!(
             scenes,
-            [
-                ("room", 864),
-                ("balls", 118_082),
-                ("rings", 174_722),
-                ("marbles", 8_810)
-            ]
-            .map(|(name, triangles)| (name, triangles, name == "marbles"))
+            [("room", 864), ("marbles", 8_810), ("room-area-light", 864)]
+                .map(|(name, triangles)| (name, triangles, name == "marbles"))
         );
         let labels: Vec<&str> = plan.instances.iter().map(|i| i.label.as_str()).collect();
-        let mut expected = vec!["reference", "obvhs", "embree3-1", "embree3-16"];
+        let mut expected = vec![
+            "packet[frustum=false;lanes=16;packet=8;traversal=ranged]",
+            "cgt[packet=16]",
+            "stream[stream=65536;width=16]",
+            "obvhs",
+            "embree3-16",
+            "embree3-stream",
+        ];
         if EMBREE4_BUILT {
             expected.push("embree4-16");
         }
         assert_eq!(labels, expected);
-        // Every scene has lights: 4 scenes × 2 frames × 4 (5) tracers × 3 kinds × 2 thread counts.
-        assert_eq!(plan.measurements(), 4 * 2 * expected.len() * 3 * 2);
+        // Soft shadows only under the quad light: (3 + 3 + 4) kinds × 2 frames × 6 (7) tracers ×
+        // 1 thread count.
+        assert_eq!(plan.measurements(), 10 * 2 * expected.len());
     }
 
     const TABLES_TEXT: &str = r#"name = "t"
@@ -1083,6 +1153,7 @@ series = "scene"
             repeats: Some(5),
             dump_rays: false,
             shard: None,
+            chatter: Chatter::Quiet,
         };
         overrides.apply(&mut exp).unwrap();
         assert_eq!(

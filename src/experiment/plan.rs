@@ -1,8 +1,9 @@
 //! What a run needs, and only that, derived before anything is timed: per scene, which ray kinds
 //! make sense (no shadow rays without lights, no reflection or refraction rays without materials
-//! that reflect or refract), which acceleration structures to build (one per
-//! distinct kind and structure parameters among the requested tracers, plus our BVH when secondary
-//! rays must be generated), and whether geometry changes per frame (rebuild) or not (build once,
+//! that reflect or refract), which render workloads render something different on it
+//! (`render_pruning`), which acceleration structures to build (one per distinct kind and
+//! structure parameters among the requested tracers, plus our BVH when secondary rays must be
+//! generated), and whether geometry changes per frame (rebuild) or not (build once,
 //! reuse). Printed before the run and stored in meta.json.
 
 use std::collections::BTreeMap;
@@ -20,6 +21,7 @@ use crate::scene::{Material, Mesh, Scene};
 use crate::tracers::{build_tracer, Params};
 
 use super::config::{Experiment, RenderWorkload, SceneSpec, StructureKey};
+use super::render_pruning::prune_renders;
 
 /// Finds a scene by its experiment entry. The run uses `scene::library::load_scene`; tests hand in
 /// scenes of their own.
@@ -76,6 +78,9 @@ pub struct ScenePlan {
     #[serde(serialize_with = "kind_names")]
     pub ray_kinds: Vec<RayKind>,
     pub structures: Vec<StructurePlan>,
+    /// The render workloads measured on this scene (indices into `Plan::renders`): those that
+    /// render something different here (`render_pruning`).
+    pub renders: Vec<usize>,
     /// Animated geometry: every structure is rebuilt each frame. Otherwise built at frame 0 only.
     pub rebuild_per_frame: bool,
     /// Decisions worth reading: what was left out and why.
@@ -202,7 +207,7 @@ impl Plan {
         let per_kind = self.frames * self.instances.len() * self.threads.len();
         self.scenes
             .iter()
-            .map(|s| (s.ray_kinds.len() + self.ray_files.len() + self.renders.len()) * per_kind)
+            .map(|s| (s.ray_kinds.len() + self.ray_files.len() + s.renders.len()) * per_kind)
             .sum()
     }
 }
@@ -303,6 +308,9 @@ fn plan_scene(exp: &Experiment, spec: &SceneSpec, scene: &Scene) -> ScenePlan {
         }
     }
 
+    let renders = prune_renders(&exp.renders, scene);
+    notes.extend(renders.notes);
+
     let rebuild_per_frame = scene.is_animated();
     if exp.frames > 1 {
         notes.push(if rebuild_per_frame {
@@ -333,6 +341,7 @@ fn plan_scene(exp: &Experiment, spec: &SceneSpec, scene: &Scene) -> ScenePlan {
         camera_path: scene.camera_path.is_some(),
         ray_kinds,
         structures,
+        renders: renders.kept,
         rebuild_per_frame,
         notes,
     }

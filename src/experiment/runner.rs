@@ -35,11 +35,15 @@ use crate::render::whitted::render_whitted;
 use crate::scene::{Frame, Scene};
 use crate::tracers::batch::trace_hits;
 use crate::tracers::visibility::{LightSamples, QuadLight, ShadingPoints};
-use crate::tracers::{build_tracer, Params, Tracer, TracerInfo, VisibilityQuery};
+use crate::tracers::{
+    build_tracer, oracle_params, tracer_for_frame, Params, Tracer, TracerInfo, VisibilityQuery,
+    ORACLE,
+};
 
 use super::config::{DistributionWorkload, Experiment, RenderWorkload, SceneSpec, StructureKey};
 use super::measure::{count_pass, time_passes, timing_of, Counted, Timing};
 use super::plan::{secondary_ray_structure, Plan, SceneLoader, ScenePlan, SECONDARY_RAY_TRACER};
+use super::sampled_check::{self, Checked};
 use super::shard::Part;
 
 /// What a case measured.
@@ -115,6 +119,8 @@ pub struct Case {
     pub rmse: Option<f64>,
     /// An interleaved-soft-shadow frame's share of pixels retraced (frame rows, with retrace).
     pub retraced_share: Option<f64>,
+    /// The sampled check against the oracle (ray batches and ray files only).
+    pub checked: Option<Checked>,
 }
 
 /// A built structure with its build time.
@@ -130,12 +136,15 @@ struct FrameTracers {
     tracers: Vec<Option<Box<dyn Tracer>>>,
     /// The reference tracer that finds where secondary rays start, when any are needed.
     secondary: Option<Box<dyn Tracer>>,
+    /// The verification oracle over the frame's geometry, for the sampled check.
+    oracle: Box<dyn Tracer>,
 }
 
-/// The progress bar over the plan's measurements, drawn only on a terminal so logs and CI output
-/// stay clean.
-pub fn progress_bar(measurements: usize) -> ProgressBar {
-    if !std::io::stderr().is_terminal() {
+/// The progress bar over the plan's measurements: the current scene, frame, tracer and workload,
+/// and an ETA. Drawn only when `shown` and standard error is a terminal, so logs, CI output and
+/// `--quiet` runs stay clean.
+pub fn progress_bar(measurements: usize, shown: bool) -> ProgressBar {
+    if !shown || !std::io::stderr().is_terminal() {
         return ProgressBar::with_draw_target(
             Some(measurements as u64),
             ProgressDrawTarget::hidden(),
@@ -248,6 +257,7 @@ pub fn run_plan(
                     frame: &frame,
                     instance: i,
                     tracer: tracer.as_ref(),
+                    oracle: frame_tracers.oracle.as_ref(),
                     build_seconds: match built_now {
                         true => frame_tracers.structures[&exp.instances[i].structure()].seconds,
                         false => 0.0,
@@ -260,8 +270,8 @@ pub fn run_plan(
                 for (file, batch) in file_batches.iter().enumerate() {
                     cases.push(measure.file(file, batch));
                 }
-                for (r, workload) in exp.renders.iter().enumerate() {
-                    cases.extend(measure.render(r, &plan.renders[r], workload)?);
+                for &r in &scene_plan.renders {
+                    cases.extend(measure.render(r, &plan.renders[r], &exp.renders[r])?);
                 }
             }
         }
@@ -283,6 +293,8 @@ struct Measure<'a> {
     frame: &'a Frame<'a>,
     instance: usize,
     tracer: &'a dyn Tracer,
+    /// What the sampled check compares the tracer with.
+    oracle: &'a dyn Tracer,
     build_seconds: f64,
     built: bool,
 }
@@ -332,19 +344,36 @@ impl Measure<'_> {
             timings,
             rmse: None,
             retraced_share: None,
+            checked: None,
         }
     }
 
     /// One workload traced on its own.
     fn batch(&self, workload: &Workload) -> Case {
         let kind = workload.kind();
-        self.traced(Traced::Batch(kind), kind.name(), workload.work())
+        let case = self.traced(Traced::Batch(kind), kind.name(), workload.work());
+        match workload {
+            Workload::Rays(batch) => self.checked(case, batch),
+            Workload::SoftShadow { .. } => case,
+        }
     }
 
     /// The rays of `Experiment::ray_files[file]`.
     fn file(&self, file: usize, batch: &RayBatch) -> Case {
         let what = format!("file:{}", self.exp.ray_files[file].name);
-        self.traced(Traced::File(file), &what, Work::of_batch(batch))
+        let case = self.traced(Traced::File(file), &what, Work::of_batch(batch));
+        self.checked(case, batch)
+    }
+
+    /// `case` with the sampled check of its `batch` against the oracle (untimed, widest pool).
+    fn checked(&self, case: Case, batch: &RayBatch) -> Case {
+        let checked = self
+            .widest
+            .install(|| sampled_check::check(&self.frame.mesh, self.tracer, self.oracle, batch));
+        Case {
+            checked: Some(checked),
+            ..case
+        }
     }
 
     /// `work` traced on its own (`what` in the progress line): timed at every thread count, then
@@ -613,10 +642,13 @@ fn build_frame(
         }
         false => None,
     };
+    // Its own structure (robust, high quality), built untimed like the secondary-ray tracer's.
+    let oracle = tracer_for_frame(ORACLE, &oracle_params(), frame)?;
     Ok(FrameTracers {
         structures,
         tracers,
         secondary,
+        oracle,
     })
 }
 

@@ -44,14 +44,17 @@ pub fn run(
         })
         .collect();
     let cases = stability::generate(&settings.sweep);
-    println!(
+    overrides.chatter.say(&format!(
         "stability suite: {} cases × {} tracers (closest hit and occlusion), oracle {} robust",
         cases.len(),
         contenders.len(),
         crate::tracers::ORACLE
-    );
+    ));
     let results = results_dir::PendingResults::create(&exp.output, &exp.name, &started.compact())?;
-    let progress = runner::progress_bar(cases.len() * contenders.len());
+    let progress = runner::progress_bar(
+        cases.len() * contenders.len(),
+        overrides.chatter != super::Chatter::Quiet,
+    );
     let outcomes = stability::run(cases, &contenders, settings.timeout, &|case, c| {
         progress.set_message(format!("{} {} {}", case.kind, case.variant, c.label));
         progress.inc(1);

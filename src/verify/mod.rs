@@ -13,10 +13,10 @@ pub mod truth;
 use rayon::prelude::*;
 
 use crate::error::Result;
-use crate::geometry::{RayBatch, RayKind};
+use crate::geometry::{Hit, RayBatch, RayKind};
 use crate::render::rays::{diffuse_rays, primary_rays, shadow_rays};
 use crate::render::specular::specular_rays;
-use crate::scene::{Frame, Scene};
+use crate::scene::{Frame, Mesh, Scene};
 use crate::tracers::batch::{trace_hits, trace_occlusion};
 use crate::tracers::{oracle_params, tracer_for_frame, Params, Tracer, ORACLE};
 
@@ -52,6 +52,52 @@ pub fn verification_batches(
     batches
 }
 
+/// One tracer's answers on a batch: the closest hits, and for shadow rays the occlusion flags too
+/// (judged on their own, with the closest hits saying why they differ).
+#[derive(Clone, Debug)]
+pub struct BatchAnswers {
+    pub hits: Vec<Hit>,
+    pub occluded: Option<Vec<bool>>,
+}
+
+impl BatchAnswers {
+    pub fn of(tracer: &dyn Tracer, batch: &RayBatch) -> BatchAnswers {
+        BatchAnswers {
+            hits: trace_hits(tracer, batch),
+            occluded: (batch.kind() == RayKind::Shadow).then(|| trace_occlusion(tracer, batch)),
+        }
+    }
+}
+
+/// Classifies every ray of `batch`: `tested`'s answer against `reference`'s, by occlusion for
+/// shadow rays and by closest hit otherwise.
+pub fn classify(
+    mesh: &Mesh,
+    batch: &RayBatch,
+    tested: &BatchAnswers,
+    reference: &BatchAnswers,
+) -> Vec<Agreement> {
+    match (&tested.occluded, &reference.occluded) {
+        (Some(tested_flags), Some(reference_flags)) => (0..batch.len())
+            .into_par_iter()
+            .map(|i| {
+                compare::occlusion(
+                    mesh,
+                    &batch.ray(i),
+                    tested_flags[i],
+                    reference_flags[i],
+                    &tested.hits[i],
+                    &reference.hits[i],
+                )
+            })
+            .collect(),
+        _ => (0..batch.len())
+            .into_par_iter()
+            .map(|i| compare::closest(mesh, &batch.ray(i), &tested.hits[i], &reference.hits[i]))
+            .collect(),
+    }
+}
+
 /// Compares `tracer` with `oracle` on every batch, one report per ray kind.
 pub fn compare_batches(
     frame: &Frame,
@@ -62,34 +108,16 @@ pub fn compare_batches(
     batches
         .iter()
         .map(|batch| {
-            let kind = batch.kind();
-            let tested = trace_hits(tracer, batch);
-            let reference = trace_hits(oracle, batch);
-            let agreements: Vec<Agreement> = if kind == RayKind::Shadow {
-                let tested_flags = trace_occlusion(tracer, batch);
-                let reference_flags = trace_occlusion(oracle, batch);
-                (0..batch.len())
-                    .into_par_iter()
-                    .map(|i| {
-                        compare::occlusion(
-                            &frame.mesh,
-                            &batch.ray(i),
-                            tested_flags[i],
-                            reference_flags[i],
-                            &tested[i],
-                            &reference[i],
-                        )
-                    })
-                    .collect()
-            } else {
-                (0..batch.len())
-                    .into_par_iter()
-                    .map(|i| {
-                        compare::closest(&frame.mesh, &batch.ray(i), &tested[i], &reference[i])
-                    })
-                    .collect()
-            };
-            KindReport::from_agreements(kind, batch, &agreements, &tested, &reference)
+            let tested = BatchAnswers::of(tracer, batch);
+            let reference = BatchAnswers::of(oracle, batch);
+            let agreements = classify(&frame.mesh, batch, &tested, &reference);
+            KindReport::from_agreements(
+                batch.kind(),
+                batch,
+                &agreements,
+                &tested.hits,
+                &reference.hits,
+            )
         })
         .collect()
 }
