@@ -83,7 +83,7 @@ fn a_run_prints_and_saves_its_summary_and_summary_prints_it_again() {
         line.contains("| packet packet=8;traversal=ranged |"),
         "{line}"
     );
-    assert!(line.contains("| embree16 (context coherent) |"), "{line}");
+    assert!(line.contains("| embree3-16 (context coherent) |"), "{line}");
     assert!(line.contains("| yes: 4096 rays, "), "{line}");
 
     // JSON: the same numbers, rounded as the table rounds them.
