@@ -104,6 +104,14 @@ fn effective(
     }
 }
 
+/// The generations a workload asks for.
+fn max_depth(workload: &RenderWorkload) -> u32 {
+    match workload {
+        RenderWorkload::Whitted(s) => s.max_depth,
+        RenderWorkload::Distribution(w) => w.settings.max_depth,
+    }
+}
+
 /// Prunes `renders` for `scene`.
 pub fn prune_renders(renders: &[RenderWorkload], scene: &Scene) -> PrunedRenders {
     let mut out = PrunedRenders::default();
@@ -118,10 +126,22 @@ pub fn prune_renders(renders: &[RenderWorkload], scene: &Scene) -> PrunedRenders
                         out.notes.push(note);
                     }
                 }
-                match kept_effective.iter().find(|(_, e)| *e == effective) {
-                    Some(&(same, _)) => out.notes.push(format!(
+                match kept_effective.iter().position(|(_, e)| *e == effective) {
+                    // Of two workloads rendering the same, keep the one asking for the fewest
+                    // generations: its settings say what is rendered (tables select by them).
+                    Some(k) if max_depth(workload) < max_depth(&renders[kept_effective[k].0]) => {
+                        let replaced = kept_effective[k].0;
+                        out.notes.push(format!(
+                            "left out render {}: renders the same as {workload} on this scene",
+                            renders[replaced]
+                        ));
+                        kept_effective[k].0 = r;
+                        let at = out.kept.iter().position(|&i| i == replaced);
+                        out.kept[at.expect("a kept workload is in the kept list")] = r;
+                    }
+                    Some(k) => out.notes.push(format!(
                         "left out render {workload}: renders the same as {} on this scene",
-                        renders[same]
+                        renders[kept_effective[k].0]
                     )),
                     None => {
                         kept_effective.push((r, effective));
@@ -164,7 +184,8 @@ mod tests {
         // Unlit and diffuse: all three are camera rays and Lambert shading.
         let dark = quad_scene("dark", false, false);
         let pruned = prune_renders(&renders, &dark);
-        assert_eq!(pruned.kept, vec![0]);
+        // The one asking for depth 0 stays: its settings say what all three render.
+        assert_eq!(pruned.kept, vec![1]);
         assert_eq!(
             pruned.notes,
             vec![
@@ -173,11 +194,11 @@ mod tests {
                 "render workloads: no refraction generations (no material refracts)".into(),
                 format!(
                     "left out render {}: renders the same as {} on this scene",
-                    renders[1], renders[0]
+                    renders[0], renders[1]
                 ),
                 format!(
                     "left out render {}: renders the same as {} on this scene",
-                    renders[2], renders[0]
+                    renders[2], renders[1]
                 ),
             ]
         );
