@@ -447,6 +447,8 @@ fn summarise(runs: &Table, checks: &BTreeMap<(GroupKey, ConfigKey), Checks>) -> 
             runs.text(i, "parameters").to_string(),
         );
         let totals = group.configs.entry(config).or_default();
+        // What the row traversed says it is Embree (`embree`, `embree[quality=high]`), as in
+        // `embree_best`; the file needs no tracer registry of this build.
         totals.is_embree = runs.text(i, "structure").starts_with("embree");
         totals.rays += runs.required::<u64>(i, "rays")?;
         let s: f64 = runs.required(i, "seconds_min")?;
