@@ -10,8 +10,7 @@
 //! over frames, per tracer configuration (tracer + parameters). Embree's side is the
 //! `embree_best_seconds` column summed over frames — the fastest Embree configuration of each
 //! frame, whatever it was — so the ratio never flatters us. Only ray batches, the soft-shadow
-//! query and ray files are
-//! summarised; render workloads are in runs.csv.
+//! query and ray files are summarised; render workloads are in runs.csv.
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
