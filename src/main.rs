@@ -44,7 +44,8 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Run an experiment TOML: scenes × tracers × parameters × frames → results/<experiment>/<run-id>/.
+    /// Run an experiment TOML: scenes × tracers × parameters × frames → results/<experiment>/<run-id>/,
+    /// ending with the run's summary (also saved there as summary.md).
     Run {
         experiment: PathBuf,
         /// Results root (default: the experiment's, else `results/`).

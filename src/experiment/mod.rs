@@ -356,6 +356,21 @@ mod tests {
         );
         assert_eq!(r["counted_rays"], r["rays"]);
         assert_eq!(r["bounce_depth"], "1");
+        // The sampled check covers the query: 4 blocks of 256 points (1024 rays at 4 samples)
+        // reach all 900 points, every sample ray agreeing with Embree.
+        let (_, checks) = read_csv(&dir.join(sampled_check::VERIFY_CSV));
+        let soft: Vec<_> = checks
+            .iter()
+            .filter(|c| c["ray_kind"] == "soft_shadow")
+            .collect();
+        assert_eq!(soft.len(), 1, "{checks:?}");
+        assert_eq!(
+            (
+                soft[0]["checked_rays"].as_str(),
+                soft[0]["unexplained"].as_str()
+            ),
+            (&*(4 * hits).to_string(), "0")
+        );
     }
 
     #[test]

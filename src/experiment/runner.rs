@@ -352,9 +352,23 @@ impl Measure<'_> {
     fn batch(&self, workload: &Workload) -> Case {
         let kind = workload.kind();
         let case = self.traced(Traced::Batch(kind), kind.name(), workload.work());
-        match workload {
-            Workload::Rays(batch) => self.checked(case, batch),
-            Workload::SoftShadow { .. } => case,
+        let (mesh, tracer, oracle) = (&self.frame.mesh, self.tracer, self.oracle);
+        let checked = self.widest.install(|| match workload {
+            Workload::Rays(batch) => sampled_check::check(mesh, tracer, oracle, batch),
+            Workload::SoftShadow {
+                points,
+                light,
+                samples,
+            } => sampled_check::check_visibility(
+                mesh,
+                tracer,
+                oracle,
+                &light_query(points, *light, samples),
+            ),
+        });
+        Case {
+            checked: Some(checked),
+            ..case
         }
     }
 
@@ -678,13 +692,22 @@ impl Workload {
                 points,
                 light,
                 samples,
-            } => Work::LightVisibility(VisibilityQuery {
-                points: &points.points,
-                packet_start: &points.packet_start,
-                light: *light,
-                samples,
-            }),
+            } => Work::LightVisibility(light_query(points, *light, samples)),
         }
+    }
+}
+
+/// The light-visibility query of every shading point.
+fn light_query<'a>(
+    points: &'a ShadingPoints,
+    light: QuadLight,
+    samples: &'a LightSamples,
+) -> VisibilityQuery<'a> {
+    VisibilityQuery {
+        points: &points.points,
+        packet_start: &points.packet_start,
+        light,
+        samples,
     }
 }
 

@@ -4,15 +4,17 @@
 //! (shared edges, grazed edges, range ends) are counted apart from unexplained ones. Cheap enough
 //! for every run (at most `SAMPLE_RAYS` rays per scene × frame × instance × ray kind), it says in
 //! the summary whether the numbers came from right answers. Written to verify.csv, so the summary
-//! can be recomputed from the results directory alone. The soft-shadow query and render
-//! workloads are not ray batches and are not checked here (`raylab verify` checks tracers fully).
+//! can be recomputed from the results directory alone. The soft-shadow query is checked sample ray
+//! by sample ray (`check_visibility`); render workloads are not checked here (`raylab verify`
+//! checks tracers fully).
 
 use std::path::Path;
 
 use crate::error::{Error, Result};
 use crate::geometry::RayBatch;
 use crate::scene::Mesh;
-use crate::tracers::Tracer;
+use crate::tracers::batch::trace_hits;
+use crate::tracers::{Tracer, VisibilityQuery};
 use crate::verify::{classify, BatchAnswers, KindReport};
 
 use super::plan::Plan;
@@ -100,6 +102,51 @@ pub fn check(mesh: &Mesh, tracer: &dyn Tracer, oracle: &dyn Tracer, batch: &RayB
     let tested = BatchAnswers::of(tracer, &sampled);
     let reference = BatchAnswers::of(oracle, &sampled);
     tally(mesh, &sampled, &tested, &reference)
+}
+
+/// Checks `tracer`'s light-visibility answers against `oracle`'s on a sample of `query`'s points:
+/// `SAMPLE_RAYS / BLOCK_RAYS` evenly spaced blocks of points casting about `BLOCK_RAYS` shadow rays
+/// each. Every sample ray is one ray of the comparison: its occlusion bit from each side's
+/// `light_visibility`, judged like a shadow ray (`verify::classify`, with each side's closest hit
+/// on that ray saying why the bits differ).
+pub fn check_visibility(
+    mesh: &Mesh,
+    tracer: &dyn Tracer,
+    oracle: &dyn Tracer,
+    query: &VisibilityQuery,
+) -> Checked {
+    let per_point = query.samples.per_point().max(1);
+    let block = (BLOCK_RAYS / per_point).max(1);
+    let blocks = SAMPLE_RAYS / BLOCK_RAYS;
+    let n = query.len();
+    let stride = (n / blocks).max(block);
+    let mut checked = Checked::default();
+    let (mut batch, mut traced) = (RayBatch::default(), Vec::new());
+    for start in (0..n).step_by(stride).take(blocks) {
+        let slice = query.slice(start..(start + block).min(n));
+        slice.rays(&mut batch, &mut traced);
+        let answers = |t: &dyn Tracer| {
+            let mut bits = vec![0; slice.len() * slice.samples.words_per_point()];
+            t.light_visibility(slice, &mut bits);
+            let words = slice.samples.words_per_point();
+            let flags = traced
+                .iter()
+                .map(|&(i, s)| {
+                    let (i, s) = (i as usize, s as usize);
+                    bits[i * words + s / 64] >> (s % 64) & 1 == 1
+                })
+                .collect();
+            BatchAnswers {
+                hits: trace_hits(t, &batch),
+                occluded: Some(flags),
+            }
+        };
+        let c = tally(mesh, &batch, &answers(tracer), &answers(oracle));
+        checked.rays += c.rays;
+        checked.ties += c.ties;
+        checked.unexplained += c.unexplained;
+    }
+    checked
 }
 
 /// verify.csv: one row per checked case.

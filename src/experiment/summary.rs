@@ -9,8 +9,8 @@
 //! Every speed is over all of the run's frames: rays summed over frames / the fastest pass summed
 //! over frames, per tracer configuration (tracer + parameters). Embree's side is the
 //! `embree_best_seconds` column summed over frames — the fastest Embree configuration of each
-//! frame, whatever it was — so the ratio never flatters us. Only ray batches and ray files are
-//! summarised; render workloads are in runs.csv.
+//! frame, whatever it was — so the ratio never flatters us. Only ray batches, the soft-shadow
+//! query and ray files are summarised; render workloads are in runs.csv.
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -447,6 +447,8 @@ fn summarise(runs: &Table, checks: &BTreeMap<(GroupKey, ConfigKey), Checks>) -> 
             runs.text(i, "parameters").to_string(),
         );
         let totals = group.configs.entry(config).or_default();
+        // What the row traversed says it is Embree (`embree`, `embree[quality=high]`), as in
+        // `embree_best`; the file needs no tracer registry of this build.
         totals.is_embree = runs.text(i, "structure").starts_with("embree");
         totals.rays += runs.required::<u64>(i, "rays")?;
         let s: f64 = runs.required(i, "seconds_min")?;
