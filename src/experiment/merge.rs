@@ -292,18 +292,7 @@ mod tests {
     }
 
     fn rows(path: &Path) -> Vec<BTreeMap<String, String>> {
-        let mut reader = csv::Reader::from_path(path).unwrap();
-        let header: Vec<String> = reader.headers().unwrap().iter().map(String::from).collect();
-        reader
-            .records()
-            .map(|r| {
-                header
-                    .iter()
-                    .cloned()
-                    .zip(r.unwrap().iter().map(String::from))
-                    .collect()
-            })
-            .collect()
+        crate::experiment::selection::read_rows(path).unwrap()
     }
 
     fn files(dir: &Path) -> BTreeSet<String> {
