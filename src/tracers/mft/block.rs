@@ -2,7 +2,8 @@
 //! §4, App. A): a stack of (node, mask of frusta) entries; at an inner node one test per child box
 //! for all frusta of the mask (`Frusta::box_mask`); at a leaf, per triangle, culling for all frusta
 //! (`cull::keep_mask`), then the rays of each remaining frustum, generated on demand when the
-//! frustum first needs them at this leaf, against the triangle. Occlusion is kept as bits; a
+//! frustum first needs them (then kept while the block is traced), against the triangle, 16 rays
+//! at a time. Occlusion is kept as bits; a
 //! frustum retires when all its rays are occluded.
 //!
 //! The rays are `visibility::shadow_ray` of the per-query light points of each sample set (the
@@ -12,7 +13,8 @@
 use glam::Vec3;
 
 use crate::accel::Bvh;
-use crate::geometry::{Ray, WatertightRay};
+use crate::geometry::Ray;
+use crate::lanes::SimdRay;
 use crate::stats::{Event, Stats};
 use crate::tracers::mft::cull::keep_mask;
 use crate::tracers::mft::frusta::{bits, Frusta, Margins};
@@ -27,10 +29,13 @@ pub struct Scratch {
     pub targets: Vec<Vec3>,
     /// Live (not yet occluded, casting a ray) samples: `words` per frustum.
     alive: Vec<u64>,
-    /// The rays generated at the current leaf, `per_point` slots per frustum.
-    rays: Vec<(WatertightRay, f32, f32)>,
+    /// The generated rays, 16 samples to a SIMD ray, `per_point.div_ceil(16)` per frustum.
+    rays: Vec<SimdRay<LANES>>,
     stack: Vec<(u32, u64)>,
 }
+
+/// Rays per SIMD ray: the paper's 16-wide ray–triangle test, one frustum's 16 samples at once.
+const LANES: usize = 16;
 
 /// The light points of `query`'s sample sets, computed once per query (per frame).
 pub fn light_points(query: &VisibilityQuery<'_>, targets: &mut Vec<Vec3>) {
@@ -80,11 +85,9 @@ pub fn trace_block<S: Stats>(
     } = scratch;
     alive.clear();
     alive.resize(len * words, 0);
-    if rays.len() < len * per_point {
-        rays.resize(
-            len * per_point,
-            (WatertightRay::new(Vec3::ZERO, Vec3::X), 0.0, 0.0),
-        );
+    let groups = per_point.div_ceil(LANES);
+    if rays.len() < len * groups {
+        rays.resize(len * groups, SimdRay::default());
     }
     frusta.len = len;
     let uv = |set: u32| query.samples.set(set);
@@ -141,6 +144,8 @@ pub fn trace_block<S: Stats>(
         stats.event(Event::FrustumBoxTests, 1);
         (0..live.count_ones()).for_each(|_| stats.aabb_test(0));
     }
+    // Frusta whose rays exist: made at the first leaf that needs them, kept for the block.
+    let mut generated = 0u64;
     stack.clear();
     stack.push((
         Bvh::ROOT as u32,
@@ -195,7 +200,6 @@ pub fn trace_block<S: Stats>(
                 .sum();
             stats.event(Event::LeafActiveRays, live_rays as u64);
         }
-        let mut generated = 0u64;
         let mut newly_occluded = 0u64;
         for t in node.first as usize..(node.first + node.count) as usize {
             let candidates = mask & live;
@@ -215,30 +219,25 @@ pub fn trace_block<S: Stats>(
             }
             for f in bits(keep) {
                 let point_alive = &mut alive[f * words..(f + 1) * words];
-                let slots = &mut rays[f * per_point..(f + 1) * per_point];
+                let simd = &mut rays[f * groups..(f + 1) * groups];
                 if generated & 1 << f == 0 {
                     generated |= 1 << f;
                     let point_occluded = &mut occluded[f * words..(f + 1) * words];
-                    generate(
-                        query,
-                        targets,
-                        first + f,
-                        point_alive,
-                        point_occluded,
-                        slots,
-                        stats,
-                    );
+                    generate(query, targets, first + f, point_alive, point_occluded, simd, stats);
                 }
-                for (w, word) in point_alive.iter_mut().enumerate() {
-                    for b in bits(*word) {
-                        let (ray, tmin, tmax) = &slots[w * 64 + b];
-                        if S::ENABLED {
-                            stats.triangle_test(depth(index));
-                        }
-                        if ray.intersect(tri, *tmin, *tmax).is_some() {
-                            *word &= !(1 << b);
-                            newly_occluded |= 1 << f;
-                        }
+                for (g, ray) in simd.iter_mut().enumerate() {
+                    let word = &mut point_alive[g / 4];
+                    let shift = 16 * (g % 4);
+                    let lanes = *word >> shift & 0xffff;
+                    if lanes == 0 {
+                        continue;
+                    }
+                    if S::ENABLED {
+                        (0..lanes.count_ones()).for_each(|_| stats.triangle_test(depth(index)));
+                    }
+                    if ray.intersect::<true>(tri, 0) > 0 {
+                        *word &= !((lanes & !ray.live_mask()) << shift);
+                        newly_occluded |= 1 << f;
                     }
                 }
                 if point_alive.iter().all(|&w| w == 0) {
@@ -261,8 +260,9 @@ pub fn trace_block<S: Stats>(
     finish(occluded, alive, words, len)
 }
 
-/// Generates the rays of point `i`'s live samples into `slots`. A sample whose ray is ill-formed
-/// is answered at once, as the reference tracer answers such a ray: not occluded.
+/// Generates the rays of point `i`'s live samples into its SIMD rays, sample `s` in lane `s % 16`
+/// of ray `s / 16` (dead samples are padding). A sample whose ray is ill-formed is answered at
+/// once, as the reference tracer answers such a ray: not occluded.
 #[inline(always)]
 fn generate<S: Stats>(
     query: &VisibilityQuery<'_>,
@@ -270,25 +270,29 @@ fn generate<S: Stats>(
     i: usize,
     alive: &mut [u64],
     occluded: &mut [u64],
-    slots: &mut [(WatertightRay, f32, f32)],
+    simd: &mut [SimdRay<LANES>],
     stats: &mut S,
 ) {
-    for (w, word) in alive.iter_mut().enumerate() {
-        for b in bits(*word) {
-            let s = w * 64 + b;
-            if S::ENABLED {
-                stats.event(Event::RaysOnDemand, 1);
-            }
-            match sample_ray(query, targets, i, s) {
-                Some(ray) if ray.is_well_formed() => {
-                    slots[s] = (WatertightRay::new(ray.origin, ray.dir), ray.tmin, ray.tmax);
+    for (g, lanes) in simd.iter_mut().enumerate() {
+        for l in 0..LANES {
+            let s = g * LANES + l;
+            let (w, b) = (s / 64, s % 64);
+            let ray = if s < query.samples.per_point() && alive[w] >> b & 1 == 1 {
+                if S::ENABLED {
+                    stats.event(Event::RaysOnDemand, 1);
                 }
-                _ => {
-                    *word &= !(1 << b);
+                let ray = sample_ray(query, targets, i, s).filter(Ray::is_well_formed);
+                if ray.is_none() {
+                    alive[w] &= !(1 << b);
                     occluded[w] &= !(1 << b);
                 }
-            }
+                ray
+            } else {
+                None
+            };
+            lanes.set_lane(l, ray.as_ref());
         }
+        lanes.set_common_axes();
     }
 }
 

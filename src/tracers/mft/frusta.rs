@@ -21,6 +21,9 @@ pub const MAX_FRUSTA: usize = 64;
 /// Lanes per frustum field: `MAX_FRUSTA` floats.
 type Lanes = [f32; MAX_FRUSTA];
 
+/// Frusta per pass of a lane loop (one AVX-512 register of f32).
+pub const W: usize = 16;
+
 /// The rounding allowances of the conservative tests, from the scale of the scene.
 #[derive(Clone, Copy, Debug)]
 pub struct Margins {
@@ -91,23 +94,6 @@ pub fn bits(mut mask: u64) -> impl Iterator<Item = usize> {
     })
 }
 
-/// Builds a mask from per-lane flags computed over `len` lanes, 16 at a time (the inner loop
-/// vectorizes; the packing is a shift per lane).
-#[inline(always)]
-fn mask_of(len: usize, pass: impl Fn(usize) -> bool) -> u64 {
-    let mut mask = 0u64;
-    for base in (0..len).step_by(16) {
-        let mut lanes = [false; 16];
-        for (l, slot) in lanes.iter_mut().enumerate() {
-            *slot = pass(base + l);
-        }
-        for (l, &p) in lanes.iter().enumerate() {
-            mask |= (p as u64) << (base + l);
-        }
-    }
-    mask & (u64::MAX >> (64 - len.max(1)))
-}
-
 impl Frusta {
     /// Frustum `f` from `origin` to the light's (s, t) rectangle `rect`: its corner rays and its
     /// box-test bounds.
@@ -129,8 +115,8 @@ impl Frusta {
             d.to_array()
         });
         for (q, d) in corners.iter().enumerate() {
-            for a in 0..3 {
-                self.corner[q][a][f] = d[a];
+            for (axis, &x) in self.corner[q].iter_mut().zip(d) {
+                axis[f] = x;
             }
             self.corner_len_sq[q][f] = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
         }
@@ -162,44 +148,52 @@ impl Frusta {
         }
     }
 
-    /// The frusta of `candidates` whose rays may meet `b` (interval-arithmetic slab test on
-    /// `o + u·D`, u ∈ [0, 1]): a ray in the box at `u` has, per axis, `u` between the products of
-    /// the slab's relative bounds and the reciprocal interval's ends.
+    /// The frusta of `candidates` whose rays may meet `b`: an interval-arithmetic slab test on
+    /// `o + u·D`, u ∈ [0, 1] (a ray in the box at `u` has, per axis, `u` between the products of
+    /// the slab's relative bounds and the reciprocal interval's ends), and the four side planes.
+    /// 16 frusta per pass of plain lane loops, which LLVM vectorizes.
     #[inline(always)]
     pub fn box_mask(&self, b: &Aabb, candidates: u64, m: &Margins) -> u64 {
         let lo = (b.min - Vec3::splat(m.distance)).to_array();
         let hi = (b.max + Vec3::splat(m.distance)).to_array();
         let len = 64 - candidates.leading_zeros() as usize;
-        let pass = mask_of(len, |f| {
-            let mut near = 0.0f32;
-            let mut far = 1.0f32;
+        let mut mask = 0u64;
+        for base in (0..len).step_by(W) {
+            let lanes = |x: &Lanes| -> [f32; W] { x[base..base + W].try_into().unwrap() };
+            let mut near = [0.0f32; W];
+            let mut far = [1.0f32; W];
+            let mut depth = [[0.0f32; W]; 4];
             for a in 0..3 {
-                let (x0, x1) = (lo[a] - self.origin[a][f], hi[a] - self.origin[a][f]);
-                let (r0, r1) = (self.rcp[a][0][f], self.rcp[a][1][f]);
-                let (p, q, r, s) = (x0 * r0, x0 * r1, x1 * r0, x1 * r1);
-                let enter = p.min(q).min(r.min(s));
-                let leave = p.max(q).max(r.max(s));
-                // Products are rounded: widen by a relative 1e-6 (rounding is 1.2e-7).
-                let enter = enter - 1e-6 * enter.abs();
-                let leave = leave + 1e-6 * leave.abs();
-                let free = self.free[a][f];
-                near = near.max(if free { f32::NEG_INFINITY } else { enter });
-                far = far.min(if free { f32::INFINITY } else { leave });
-            }
-            let mut inside = near <= far;
-            for k in 0..4 {
-                // The box corner deepest inside plane k, relative to the origin.
-                let mut depth = 0.0f32;
-                for a in 0..3 {
-                    let n = self.side[k][a][f];
-                    let x = if n > 0.0 { lo[a] } else { hi[a] } - self.origin[a][f];
-                    depth += n * x;
+                let (o, r0, r1) = (lanes(&self.origin[a]), lanes(&self.rcp[a][0]), lanes(&self.rcp[a][1]));
+                let free: [bool; W] = self.free[a][base..base + W].try_into().unwrap();
+                let sides: [[f32; W]; 4] = std::array::from_fn(|k| lanes(&self.side[k][a]));
+                for l in 0..W {
+                    let (x0, x1) = (lo[a] - o[l], hi[a] - o[l]);
+                    let (p, q, r, s) = (x0 * r0[l], x0 * r1[l], x1 * r0[l], x1 * r1[l]);
+                    let enter = p.min(q).min(r.min(s));
+                    let leave = p.max(q).max(r.max(s));
+                    // Products are rounded: widen by a relative 1e-6 (rounding is 1.2e-7).
+                    let enter = enter - 1e-6 * enter.abs();
+                    let leave = leave + 1e-6 * leave.abs();
+                    near[l] = near[l].max(if free[l] { f32::NEG_INFINITY } else { enter });
+                    far[l] = far[l].min(if free[l] { f32::INFINITY } else { leave });
+                    // Per side plane, the box corner deepest inside it.
+                    for k in 0..4 {
+                        let n = sides[k][l];
+                        depth[k][l] += n * if n > 0.0 { x0 } else { x1 };
+                    }
                 }
-                inside &= depth <= self.side_slack[k][f];
             }
-            inside
-        });
-        pass & candidates
+            let slack: [[f32; W]; 4] = std::array::from_fn(|k| lanes(&self.side_slack[k]));
+            for l in 0..W {
+                let mut inside = near[l] <= far[l];
+                for k in 0..4 {
+                    inside &= depth[k][l] <= slack[k][l];
+                }
+                mask |= (inside as u64) << (base + l);
+            }
+        }
+        mask & candidates
     }
 }
 
