@@ -207,7 +207,7 @@ pub fn trace_block<S: Stats>(
                 break;
             }
             let tri = &bvh.triangles[t];
-            let keep = keep_mask(frusta, tri, candidates, margins);
+            let keep = keep_mask(frusta, tri, candidates);
             if S::ENABLED {
                 stats.event(Event::TrianglesAccessed, 1);
                 stats.event(Event::TrianglesKept, (keep != 0) as u64);
@@ -223,7 +223,15 @@ pub fn trace_block<S: Stats>(
                 if generated & 1 << f == 0 {
                     generated |= 1 << f;
                     let point_occluded = &mut occluded[f * words..(f + 1) * words];
-                    generate(query, targets, first + f, point_alive, point_occluded, simd, stats);
+                    generate(
+                        query,
+                        targets,
+                        first + f,
+                        point_alive,
+                        point_occluded,
+                        simd,
+                        stats,
+                    );
                 }
                 for (g, ray) in simd.iter_mut().enumerate() {
                     let word = &mut point_alive[g / 4];

@@ -11,26 +11,33 @@
 //!   triangle (the plane through the origin and the edge), every ray of the frustum does, since
 //!   each is a convex combination of the corners.
 //!
-//! Both keep a margin for rounding (`Margins`): a triangle is culled only when the test holds with
+//! Both keep a margin for rounding, relative to the magnitudes involved: a triangle is culled only when the test holds with
 //! room to spare, so culling never removes a triangle a sample ray hits (property test in
 //! `tests`).
 
-use glam::Vec3;
-
 use crate::geometry::Triangle;
-use crate::tracers::mft::frusta::{Frusta, Margins, MAX_FRUSTA, W};
+use crate::tracers::mft::frusta::{Frusta, MAX_FRUSTA, W};
 
-/// Relative angle below which an edge-plane test does not cull (f32 rounding of the edge
-/// normals and of the normalized sample directions is ~1e-7).
+/// Relative angle below which an edge-plane test does not cull, squared: `v − o` is rounded
+/// relative to its own length, as the watertight test rounds it, and the sample directions are
+/// normalized in f32, so both are off by ~1e-7 rad.
 const ANGLE_TOLERANCE_SQ: f32 = 1e-10;
+
+/// Rounding allowance per unit of magnitude in the plane test (f32 rounding is 6e-8; a few
+/// roundings of the dot products and of the normalized sample rays stay well under 1e-6).
+const RELATIVE_ROUNDING: f32 = 1e-6;
 
 /// The frusta of `candidates` that `tri` cannot be culled for: 16 frusta per pass of plain lane
 /// loops, which LLVM vectorizes.
 #[inline(always)]
-pub fn keep_mask(frusta: &Frusta, tri: &Triangle, candidates: u64, m: &Margins) -> u64 {
+pub fn keep_mask(frusta: &Frusta, tri: &Triangle, candidates: u64) -> u64 {
     let [v0, v1, v2] = tri.v.map(|v| v.to_array());
-    let n = (tri.v[1] - tri.v[0]).cross(tri.v[2] - tri.v[0]).to_array();
-    let plane_slack = 4.0 * Vec3::from_array(n).length() * m.distance;
+    let (e1, e2) = (tri.v[1] - tri.v[0], tri.v[2] - tri.v[0]);
+    let n = e1.cross(e2).to_array();
+    // The plane test's rounding: relative to |n| and the lengths it is computed from, times the
+    // distances involved (`RELATIVE_ROUNDING` per unit).
+    let tri_scale = RELATIVE_ROUNDING * (e1.cross(e2).length() + e1.length() * e2.length());
+    let tri_extent = e1.abs().element_sum() + e2.abs().element_sum();
     let len = 64 - candidates.leading_zeros() as usize;
     let dot = |a: [f32; 3], b: [f32; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
     let cross = |a: [f32; 3], b: [f32; 3]| {
@@ -47,27 +54,27 @@ pub fn keep_mask(frusta: &Frusta, tri: &Triangle, candidates: u64, m: &Margins) 
         let d: [[[f32; W]; 3]; 4] =
             std::array::from_fn(|q| std::array::from_fn(|a| lanes(&frusta.corner[q][a])));
         let d_len_sq: [[f32; W]; 4] = std::array::from_fn(|q| lanes(&frusta.corner_len_sq[q]));
+        let reach = lanes(&frusta.reach);
         for l in 0..W {
             let origin = [o[0][l], o[1][l], o[2][l]];
             let corner = |q: usize| [d[q][0][l], d[q][1][l], d[q][2][l]];
             let rel = |v: [f32; 3]| [v[0] - origin[0], v[1] - origin[1], v[2] - origin[2]];
             // Plane culling: origin and corner targets on one side.
-            let at_origin = -dot(n, rel(v0));
+            let to_v0 = rel(v0);
+            let at_origin = -dot(n, to_v0);
+            let distances = to_v0[0].abs() + to_v0[1].abs() + to_v0[2].abs() + reach[l];
+            let plane_slack = tri_scale * (distances + tri_extent);
             let (s0, s1) = (at_origin + dot(n, corner(0)), at_origin + dot(n, corner(1)));
             let (s2, s3) = (at_origin + dot(n, corner(2)), at_origin + dot(n, corner(3)));
             let all_above = at_origin.min(s0).min(s1.min(s2)).min(s3) > plane_slack;
             let all_below = at_origin.max(s0).max(s1.max(s2)).max(s3) < -plane_slack;
             // Corner-ray culling against the three edge planes through the origin.
-            let e = [rel(v0), rel(v1), rel(v2)];
+            let e = [to_v0, rel(v1), rel(v2)];
             let e_len_sq = [dot(e[0], e[0]), dot(e[1], e[1]), dot(e[2], e[2])];
-            // Rounding of `e` is relative to the scene scale, not to `|e|`: near triangles need
-            // more room.
-            let nearest = e_len_sq[0].min(e_len_sq[1]).min(e_len_sq[2]);
-            let tolerance_sq = ANGLE_TOLERANCE_SQ * (1.0 + 1e10 * m.distance_sq / nearest);
             let mut outside = false;
             for (i, j, k) in [(0, 1, 2), (1, 2, 0), (2, 0, 1)] {
                 let normal = cross(e[i], e[j]);
-                let room = tolerance_sq * dot(normal, normal);
+                let room = ANGLE_TOLERANCE_SQ * dot(normal, normal);
                 let third = dot(normal, e[k]);
                 let mut all_out = third * third > room * e_len_sq[k];
                 for q in 0..4 {

@@ -24,22 +24,18 @@ type Lanes = [f32; MAX_FRUSTA];
 /// Frusta per pass of a lane loop (one AVX-512 register of f32).
 pub const W: usize = 16;
 
-/// The rounding allowances of the conservative tests, from the scale of the scene.
+/// The rounding allowance of the box test, from the scale of the scene.
 #[derive(Clone, Copy, Debug)]
 pub struct Margins {
     /// Distance by which boxes are grown and planes thickened: 1e-5 × the largest coordinate of
     /// the scene, the light and the origins (f32 rounding is 6e-8 of it).
     pub distance: f32,
-    /// The same, squared (corner-ray culling compares squares).
-    pub distance_sq: f32,
 }
 
 impl Margins {
     pub fn new(scale: f32) -> Margins {
-        let distance = 1e-5 * scale.max(f32::MIN_POSITIVE);
         Margins {
-            distance,
-            distance_sq: distance * distance,
+            distance: 1e-5 * scale.max(f32::MIN_POSITIVE),
         }
     }
 }
@@ -53,6 +49,8 @@ pub struct Frusta {
     pub corner: [[Lanes; 3]; 4],
     /// `|D_q|²`.
     pub corner_len_sq: [Lanes; 4],
+    /// The longest corner ray in the 1-norm (a bound of every ray's length, for rounding margins).
+    pub reach: Lanes,
     /// Per axis, the interval `[1/D_max, 1/D_min]` of reciprocal directions (ordered either
     /// way); `free` when the directions straddle 0 and the axis bounds nothing.
     pub rcp: [[Lanes; 2]; 3],
@@ -73,6 +71,7 @@ impl Default for Frusta {
             origin: [[0.0; MAX_FRUSTA]; 3],
             corner: [[[0.0; MAX_FRUSTA]; 3]; 4],
             corner_len_sq: [[0.0; MAX_FRUSTA]; 4],
+            reach: [0.0; MAX_FRUSTA],
             rcp: [[[0.0; MAX_FRUSTA]; 2]; 3],
             free: [[true; MAX_FRUSTA]; 3],
             side: [[[0.0; MAX_FRUSTA]; 3]; 4],
@@ -114,6 +113,10 @@ impl Frusta {
             let d = light.point(s, t) - origin;
             d.to_array()
         });
+        self.reach[f] = corners
+            .iter()
+            .map(|d| d[0].abs() + d[1].abs() + d[2].abs())
+            .fold(0.0, f32::max);
         for (q, d) in corners.iter().enumerate() {
             for (axis, &x) in self.corner[q].iter_mut().zip(d) {
                 axis[f] = x;
@@ -164,7 +167,11 @@ impl Frusta {
             let mut far = [1.0f32; W];
             let mut depth = [[0.0f32; W]; 4];
             for a in 0..3 {
-                let (o, r0, r1) = (lanes(&self.origin[a]), lanes(&self.rcp[a][0]), lanes(&self.rcp[a][1]));
+                let (o, r0, r1) = (
+                    lanes(&self.origin[a]),
+                    lanes(&self.rcp[a][0]),
+                    lanes(&self.rcp[a][1]),
+                );
                 let free: [bool; W] = self.free[a][base..base + W].try_into().unwrap();
                 let sides: [[f32; W]; 4] = std::array::from_fn(|k| lanes(&self.side[k][a]));
                 for l in 0..W {

@@ -15,7 +15,9 @@
 //!   corner-ray culling per frustum.
 //! - **Shrinking** (§5.3, Table 2): `cr` recomputes a frustum's corner rays around its live
 //!   samples after a leaf where it lost rays; `fs` also recomputes its traversal bounds (and
-//!   implies `cr`). Both off by default (the paper found CR worth at most 10 %, FS not paying).
+//!   implies `cr`). CR is on by default: it cuts the frustum–triangle tests by a quarter or more
+//!   and was 8–10 % faster on conference and sibenik (the paper: up to 10 %); FS is off (the
+//!   paper found it not paying).
 //! - **Exact answers**: the sample rays meet triangles through the reference tracer's watertight
 //!   test, and all culling is conservative with rounding margins, so the bits equal the reference
 //!   tracer's on the same rays.
@@ -68,7 +70,7 @@ impl Default for MftConfig {
     fn default() -> Self {
         MftConfig {
             block: 16,
-            cr: false,
+            cr: true,
             fs: false,
         }
     }

@@ -99,7 +99,7 @@ fn bits_equal_the_reference_tracers_on_the_same_rays() {
             ..MftConfig::default()
         },
         MftConfig {
-            cr: true,
+            cr: false,
             ..MftConfig::default()
         },
         MftConfig {
@@ -141,7 +141,11 @@ fn shrinking_culls_more_triangles_and_changes_no_answer() {
         let v = answer(&MftTracer::new(bvh.clone(), config), query, &mut counters);
         (v, counters)
     };
-    let (plain, plain_counts) = run(MftConfig::default());
+    let plain = MftConfig {
+        cr: false,
+        ..MftConfig::default()
+    };
+    let (plain, plain_counts) = run(plain);
     let cr = MftConfig {
         cr: true,
         ..MftConfig::default()
@@ -226,8 +230,13 @@ fn culling_never_removes_what_a_sample_ray_hits() {
         let mut rays = Vec::new();
         for f in 0..MAX_FRUSTA {
             // Origins below, inside and above the soup; some on a triangle's corner.
+            let tri = &triangles[rng.next_u64() as usize % triangles.len()];
             let origin = if f % 9 == 0 {
-                triangles[rng.next_u64() as usize % triangles.len()].v[0]
+                tri.v[0]
+            } else if f % 9 == 1 {
+                // A shading point's origin: just off a surface, either side.
+                let side = if rng.unit() < 0.5 { -1.0 } else { 1.0 };
+                tri.centroid() + tri.normal().normalize_or_zero() * (side * 1.5e-5)
             } else {
                 rng.vec3(-1.5, 1.5)
             };
@@ -251,7 +260,7 @@ fn culling_never_removes_what_a_sample_ray_hits() {
             );
         }
         for tri in &triangles {
-            let keep = keep_mask(&frusta, tri, u64::MAX, &margins);
+            let keep = keep_mask(&frusta, tri, u64::MAX);
             let bounds = Aabb::from_points(&tri.v);
             let reach = frusta.box_mask(&bounds, u64::MAX, &margins);
             for (f, frustum_rays) in rays.iter().enumerate() {
@@ -297,13 +306,14 @@ fn blocks_out_of_range_are_refused() {
         let params = Params::new().with("block", block);
         assert!(MftConfig::from_params(&params).is_err());
     }
-    let params = Params::new().with("block", 64).with("cr", true);
+    let params = Params::new().with("block", 64).with("cr", false);
     assert_eq!(
         MftConfig::from_params(&params).unwrap(),
         MftConfig {
             block: 64,
-            cr: true,
+            cr: false,
             fs: false
         }
     );
+    assert!(MftConfig::from_params(&Params::new().with("cr", "maybe")).is_err());
 }
