@@ -83,8 +83,14 @@ fn every_tracer_sees_the_same_light_samples() {
         ("stream", Params::new().with("width", 4).with("stream", 64)),
         ("embree1", Params::new()),
         ("mft", Params::new()),
-        ("mft", Params::new().with("cr", false)),
-        ("mft", Params::new().with("fs", true).with("block", 64)),
+        (
+            "mft",
+            Params::new()
+                .with("cr", false)
+                .with("fs", false)
+                .with("leaf_rays", false),
+        ),
+        ("mft", Params::new().with("fs", false).with("block", 64)),
     ];
     for (name, scene) in scenes() {
         let (expected, rays) = visibility(&scene, "embree16", &oracle_params());

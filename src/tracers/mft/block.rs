@@ -201,8 +201,12 @@ pub fn trace_block<S: Stats>(
             stats.event(Event::LeafActiveRays, live_rays as u64);
         }
         let mut newly_occluded = 0u64;
+        // `leaf_rays` (§5.3 "Ray-AABB"): frusta whose live rays were tested against the leaf's
+        // box, and those none of whose rays meets it (robust slabs, as the reference tracer
+        // enters a leaf), which skip the leaf.
+        let (mut box_tested, mut box_missed) = (0u64, 0u64);
         for t in node.first as usize..(node.first + node.count) as usize {
-            let candidates = mask & live;
+            let candidates = mask & live & !box_missed;
             if candidates == 0 {
                 break;
             }
@@ -232,6 +236,18 @@ pub fn trace_block<S: Stats>(
                         simd,
                         stats,
                     );
+                }
+                if config.leaf_rays && box_tested & 1 << f == 0 {
+                    box_tested |= 1 << f;
+                    if S::ENABLED {
+                        let lanes: u32 = point_alive.iter().map(|w| w.count_ones()).sum();
+                        (0..lanes).for_each(|_| stats.aabb_test(depth(index)));
+                    }
+                    let (lo, hi) = (node.bounds.min.to_array(), node.bounds.max.to_array());
+                    if !simd.iter().any(|ray| ray.hits_box(lo, hi)) {
+                        box_missed |= 1 << f;
+                        continue;
+                    }
                 }
                 for (g, ray) in simd.iter_mut().enumerate() {
                     let word = &mut point_alive[g / 4];

@@ -100,12 +100,19 @@ fn bits_equal_the_reference_tracers_on_the_same_rays() {
         },
         MftConfig {
             cr: false,
-            ..MftConfig::default()
+            fs: false,
+            leaf_rays: false,
+            block: 16,
         },
         MftConfig {
             cr: true,
-            fs: true,
+            fs: false,
+            leaf_rays: false,
             block: 37,
+        },
+        MftConfig {
+            fs: false,
+            ..MftConfig::default()
         },
     ];
     for (seed, per_point, side) in [(1, 16, 1.0), (2, 100, 2.5), (3, 4, 0.0)] {
@@ -141,15 +148,14 @@ fn shrinking_culls_more_triangles_and_changes_no_answer() {
         let v = answer(&MftTracer::new(bvh.clone(), config), query, &mut counters);
         (v, counters)
     };
-    let plain = MftConfig {
+    let none = MftConfig {
         cr: false,
+        fs: false,
+        leaf_rays: false,
         ..MftConfig::default()
     };
-    let (plain, plain_counts) = run(plain);
-    let cr = MftConfig {
-        cr: true,
-        ..MftConfig::default()
-    };
+    let (plain, plain_counts) = run(none);
+    let cr = MftConfig { cr: true, ..none };
     let (with_cr, cr_counts) = run(cr);
     let (with_fs, fs_counts) = run(MftConfig { fs: true, ..cr });
     assert_eq!(with_cr, plain);
@@ -306,13 +312,14 @@ fn blocks_out_of_range_are_refused() {
         let params = Params::new().with("block", block);
         assert!(MftConfig::from_params(&params).is_err());
     }
-    let params = Params::new().with("block", 64).with("cr", false);
+    let params = Params::new().with("block", 64).with("fs", false);
     assert_eq!(
         MftConfig::from_params(&params).unwrap(),
         MftConfig {
             block: 64,
-            cr: false,
-            fs: false
+            cr: true,
+            fs: false,
+            leaf_rays: true
         }
     );
     assert!(MftConfig::from_params(&Params::new().with("cr", "maybe")).is_err());
