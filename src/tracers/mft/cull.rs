@@ -15,6 +15,9 @@
 //! room to spare, so culling never removes a triangle a sample ray hits (property test in
 //! `tests`).
 
+// Lane loops index several lane arrays in lock step: the indexed form is what LLVM vectorizes.
+#![allow(clippy::needless_range_loop)]
+
 use crate::geometry::Triangle;
 use crate::tracers::mft::frusta::{Frusta, MAX_FRUSTA, W};
 
