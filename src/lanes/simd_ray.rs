@@ -423,6 +423,49 @@ mod tests {
     }
 
     #[test]
+    fn lanes_set_one_by_one_equal_loaded_lanes() {
+        let mut rng = SplitMix64::new(11);
+        let mut rays: Vec<Ray> = (0..16)
+            .map(|_| {
+                Ray::new(
+                    rng.vec3(-2.0, 2.0),
+                    rng.direction(),
+                    0.0,
+                    rng.range(1.0, 9.0),
+                )
+            })
+            .collect();
+        // Ill-formed: becomes padding either way.
+        rays[5].dir = Vec3::ZERO;
+        let mut loaded = SimdRay::<16>::default();
+        loaded.load(&batch(&rays).view(), 0, 16);
+        let mut set = SimdRay::<16>::default();
+        for (l, ray) in rays.iter().enumerate() {
+            set.set_lane(l, Some(ray));
+        }
+        set.set_common_axes();
+        let bits = |x: &[[f32; 16]; 3]| x.map(|a| a.map(f32::to_bits));
+        // A padding lane's frame is free (`set_common_axes` gives it a live lane's).
+        let live_frames = |x: [[u32; 16]; 3]| {
+            x.map(|mut a| {
+                a[5] = 0;
+                a
+            })
+        };
+        assert_eq!(bits(&set.origin), bits(&loaded.origin));
+        assert_eq!(bits(&set.inv_dir), bits(&loaded.inv_dir));
+        assert_eq!(
+            live_frames(bits(&set.shear)),
+            live_frames(bits(&loaded.shear))
+        );
+        assert_eq!(set.negative, loaded.negative);
+        assert_eq!(live_frames(set.axes), live_frames(loaded.axes));
+        assert_eq!(set.tmin.map(f32::to_bits), loaded.tmin.map(f32::to_bits));
+        assert_eq!(set.tmax.map(f32::to_bits), loaded.tmax.map(f32::to_bits));
+        assert_eq!(set.live_mask(), 0xffff & !(1 << 5));
+    }
+
+    #[test]
     fn zero_edge_functions_take_the_f64_path_like_the_scalar_test() {
         // Rays through the shared vertex and along the edge of a triangle: exact zeros.
         let tri = Triangle::new(Vec3::ZERO, Vec3::X, Vec3::Y);
