@@ -55,10 +55,23 @@ pub enum Event {
     /// SIMD lanes shading issues: each sub-stream rounded up to whole groups of the SIMD width.
     /// `ShadeLanesActive / ShadeLanesIssued` = shading's SIMD utilisation.
     ShadeLanesIssued,
+    /// Box tests of a block of frusta (multi-frusta tracing): one per box, for all the block's
+    /// frusta at once (Benthin & Wald 2009 Table 1 "#AABB tests").
+    FrustumBoxTests,
+    /// Frusta tested at inner nodes, summed: ÷ inner-node visits = frusta per node.
+    FrustaAtNodes,
+    /// Triangles fetched at leaves, once per block (Benthin & Wald 2009 "#tris", Fig. 6).
+    TrianglesAccessed,
+    /// Of those, triangles left to at least one frustum after culling ("#tris +culling").
+    TrianglesKept,
+    /// (Frustum, triangle) pairs tested with the frustum's rays ("#isec").
+    FrustumTriangleTests,
+    /// Rays generated on demand inside frusta at leaves.
+    RaysOnDemand,
 }
 
 impl Event {
-    pub const ALL: [Event; 16] = [
+    pub const ALL: [Event; 22] = [
         Event::Packets,
         Event::MailboxHits,
         Event::TrianglesCulled,
@@ -75,6 +88,12 @@ impl Event {
         Event::ShadeFilters,
         Event::ShadeLanesActive,
         Event::ShadeLanesIssued,
+        Event::FrustumBoxTests,
+        Event::FrustaAtNodes,
+        Event::TrianglesAccessed,
+        Event::TrianglesKept,
+        Event::FrustumTriangleTests,
+        Event::RaysOnDemand,
     ];
     pub const COUNT: usize = Event::ALL.len();
 
@@ -97,6 +116,12 @@ impl Event {
             Event::ShadeFilters => "shade_filters",
             Event::ShadeLanesActive => "shade_lanes_active",
             Event::ShadeLanesIssued => "shade_lanes_issued",
+            Event::FrustumBoxTests => "frustum_box_tests",
+            Event::FrustaAtNodes => "frusta_at_nodes",
+            Event::TrianglesAccessed => "triangles_accessed",
+            Event::TrianglesKept => "triangles_kept",
+            Event::FrustumTriangleTests => "frustum_triangle_tests",
+            Event::RaysOnDemand => "rays_on_demand",
         }
     }
 }

@@ -1,4 +1,4 @@
-//! The foundation's correctness bar: the reference, obvhs, cgt, packet and stream tracers agree
+//! The foundation's correctness bar: the reference, obvhs, cgt, packet, stream and mft tracers agree
 //! with Embree (robust mode) on well over a million rays — primary, shadow and diffuse bounces —
 //! over three built-in scenes and two real ones (conference, bunny), with zero unexplained
 //! disagreements; and the reference, packet and stream tracers agree on Whitted's reflection and
@@ -202,4 +202,11 @@ fn stream_agrees_with_embree() {
         let params = Params::new().with("width", width).with("stream", stream);
         agrees_with_embree_with("stream", &params);
     }
+}
+
+/// The multi-frusta tracer on ordinary ray batches (4×4 packets; its native light-visibility
+/// answer is checked against Embree in tests/visibility.rs).
+#[test]
+fn mft_agrees_with_embree() {
+    agrees_with_embree("mft");
 }

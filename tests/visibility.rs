@@ -1,6 +1,6 @@
 //! The light-visibility query gives every tracer the same rays, so every tracer must give the same
-//! occlusion bits: reference, packet (each traversal), stream, obvhs, cgt, grid-dda and Embree
-//! (robust), on the room and the conference room with a quad light and on a BART scene with one added —
+//! occlusion bits: reference, packet (each traversal), stream, obvhs, cgt, grid-dda, mft (multi-
+//! frusta, answering natively: with and without CR / FS) and Embree (robust), on the room and the conference room with a quad light and on a BART scene with one added —
 //! the soft-shadow workload of the runner (16 interleaved light samples per primary hit).
 
 use glam::Vec3;
@@ -90,6 +90,15 @@ fn every_tracer_sees_the_same_light_samples() {
         ("stream", Params::new()),
         ("stream", Params::new().with("width", 4).with("stream", 64)),
         ("embree1", Params::new()),
+        ("mft", Params::new()),
+        (
+            "mft",
+            Params::new()
+                .with("cr", false)
+                .with("fs", false)
+                .with("leaf_rays", false),
+        ),
+        ("mft", Params::new().with("fs", false).with("block", 64)),
     ];
     for (name, scene) in scenes() {
         let (expected, rays) = visibility(&scene, "embree16", &oracle_params());
@@ -116,6 +125,20 @@ fn every_tracer_sees_the_same_light_samples() {
                 differing.len(),
                 &differing[..differing.len().min(5)]
             );
+        }
+    }
+}
+
+/// The multi-frusta tracer answers natively (its rays made on demand inside frusta); the reference
+/// tracer answers by tracing the same sample rays as ordinary shadow rays: the bits must be equal.
+#[test]
+fn mft_bits_equal_the_reference_tracers_shadow_rays() {
+    for (name, scene) in scenes() {
+        let (expected, rays) = visibility(&scene, "reference", &Params::new());
+        for block in [4, 16, 64] {
+            let params = Params::new().with("block", block);
+            let (got, _) = visibility(&scene, "mft", &params);
+            assert_eq!(got, expected, "{name}: mft block {block} ({rays} rays)");
         }
     }
 }

@@ -26,7 +26,7 @@ use super::watertight::{
     accept, common_axes, edge_functions, in_lane_frames, needs_f64, redo_edges_in_f64, Permuted,
 };
 use super::LaneMask;
-use crate::geometry::{Hit, Rays, Triangle, WatertightRay};
+use crate::geometry::{Hit, Ray, Rays, Triangle, WatertightRay};
 
 /// `L` rays, their current closest hits, and what the box and triangle tests precompute.
 #[derive(Clone, Copy, Debug)]
@@ -127,6 +127,56 @@ impl<const L: usize> SimdRay<L> {
             }
         }
         self.common_axes = common_axes(&self.axes, used);
+    }
+
+    /// Lane `l` becomes `ray`, exactly as `load` makes a lane (an ill-formed ray or `None`
+    /// becomes padding, which nothing hits). For rays made one at a time (multi-frusta tracing
+    /// generates them on demand); `set_common_axes` must follow once all lanes are set.
+    #[inline(always)]
+    pub fn set_lane(&mut self, l: usize, ray: Option<&Ray>) {
+        let (origin, dir, tmin, tmax, time) = match ray {
+            Some(r) if r.is_well_formed() => (r.origin, r.dir, r.tmin, r.tmax, r.time),
+            _ => (Vec3::ZERO, Vec3::ONE, f32::INFINITY, f32::NEG_INFINITY, 0.0),
+        };
+        let (_, k, shear) = WatertightRay::new(Vec3::ZERO, dir).parts();
+        for a in 0..3 {
+            self.origin[a][l] = origin[a];
+            self.inv_dir[a][l] = 1.0 / dir[a];
+            self.negative[a][l] = dir[a].is_sign_negative() as u32;
+            self.axes[a][l] = k[a] as u32;
+            self.shear[a][l] = shear[a];
+        }
+        (self.tmin[l], self.tmax[l], self.time[l]) = (tmin, tmax, time);
+        self.prim[l] = Hit::NO_PRIM;
+    }
+
+    /// After `set_lane`: all `L` lanes are in use (padding lanes have `tmax = −∞`); the frame
+    /// shared by the live lanes, if any. Padding lanes take a live lane's frame so they do not
+    /// prevent sharing.
+    pub fn set_common_axes(&mut self) {
+        self.used = L as u32;
+        let live = (0..L).find(|&l| self.tmax[l] != f32::NEG_INFINITY);
+        if let Some(live) = live {
+            for l in 0..L {
+                if self.tmax[l] == f32::NEG_INFINITY {
+                    for a in 0..3 {
+                        self.axes[a][l] = self.axes[a][live];
+                        self.shear[a][l] = self.shear[a][live];
+                    }
+                }
+            }
+        }
+        self.common_axes = common_axes(&self.axes, L);
+    }
+
+    /// The lanes not ended (`tmax > −∞`): in occlusion mode, the live lanes not yet occluded.
+    #[inline(always)]
+    pub fn live_mask(&self) -> u64 {
+        let mut mask = 0u64;
+        for l in 0..L {
+            mask |= ((self.tmax[l] != f32::NEG_INFINITY) as u64) << l;
+        }
+        mask
     }
 
     /// Whether any lane's segment `[tmin, tmax]` meets the box `[lo, hi]` (`RayBoxTest::hit` per
@@ -370,6 +420,49 @@ mod tests {
         lanes_agree_with_the_scalar_tests::<4>();
         lanes_agree_with_the_scalar_tests::<8>();
         lanes_agree_with_the_scalar_tests::<16>();
+    }
+
+    #[test]
+    fn lanes_set_one_by_one_equal_loaded_lanes() {
+        let mut rng = SplitMix64::new(11);
+        let mut rays: Vec<Ray> = (0..16)
+            .map(|_| {
+                Ray::new(
+                    rng.vec3(-2.0, 2.0),
+                    rng.direction(),
+                    0.0,
+                    rng.range(1.0, 9.0),
+                )
+            })
+            .collect();
+        // Ill-formed: becomes padding either way.
+        rays[5].dir = Vec3::ZERO;
+        let mut loaded = SimdRay::<16>::default();
+        loaded.load(&batch(&rays).view(), 0, 16);
+        let mut set = SimdRay::<16>::default();
+        for (l, ray) in rays.iter().enumerate() {
+            set.set_lane(l, Some(ray));
+        }
+        set.set_common_axes();
+        let bits = |x: &[[f32; 16]; 3]| x.map(|a| a.map(f32::to_bits));
+        // A padding lane's frame is free (`set_common_axes` gives it a live lane's).
+        let live_frames = |x: [[u32; 16]; 3]| {
+            x.map(|mut a| {
+                a[5] = 0;
+                a
+            })
+        };
+        assert_eq!(bits(&set.origin), bits(&loaded.origin));
+        assert_eq!(bits(&set.inv_dir), bits(&loaded.inv_dir));
+        assert_eq!(
+            live_frames(bits(&set.shear)),
+            live_frames(bits(&loaded.shear))
+        );
+        assert_eq!(set.negative, loaded.negative);
+        assert_eq!(live_frames(set.axes), live_frames(loaded.axes));
+        assert_eq!(set.tmin.map(f32::to_bits), loaded.tmin.map(f32::to_bits));
+        assert_eq!(set.tmax.map(f32::to_bits), loaded.tmax.map(f32::to_bits));
+        assert_eq!(set.live_mask(), 0xffff & !(1 << 5));
     }
 
     #[test]

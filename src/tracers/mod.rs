@@ -5,6 +5,7 @@ pub mod batch;
 pub mod cgt;
 pub mod dda;
 pub mod embree;
+pub mod mft;
 pub mod obvhs;
 pub mod packet;
 pub mod reference;

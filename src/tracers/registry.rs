@@ -15,6 +15,7 @@ use crate::tracers::cgt::{CgtConfig, CgtTracer};
 use crate::tracers::embree::{
     Coherence, EmbreeTracer, Packets16, Packets4, Packets8, Single, Stream, Submission,
 };
+use crate::tracers::mft::{MftConfig, MftTracer};
 use crate::tracers::packet::{PacketConfig, PacketTracer};
 use crate::tracers::stream::{StreamConfig, StreamTracer};
 use crate::tracers::{
@@ -205,6 +206,15 @@ pub const TRACERS: &[TracerInfo] = &[
         about: "large ray packets (Overbeck et al. 2008): n×n packets (packet ∈ 2,4,8,16,32) of L-lane SIMD rays (lanes ∈ 4,8,16) through the SAH BVH by masked, ranged, partition or ia (Wald et al. 2007 first hit + interval arithmetic) traversal, front to back by direction signs; frustum culling of boxes and triangles (shared-origin, shared-end-point or general frustum, from the data); exact closest hits (watertight, robust slabs per lane)",
         make: |params, accel| Ok(Box::new(PacketTracer::from_params(accel.bvh()?.clone(), params)?)),
         motion_blur: true,
+        chunk_rays: CHUNK_RAYS,
+    },
+    TracerInfo {
+        name: "mft",
+        accel: AccelKind::Bvh,
+        params: MftConfig::PARAMS,
+        about: "multi-frusta tracing (Benthin & Wald 2009): light-visibility queries as blocks of shadow frusta (block points, ≤ 64) through the SAH BVH together, rays generated on demand at leaves, box culling for all frusta at once, plane and corner-ray triangle culling, occlusion bits, corner-ray recomputation (cr), frustum shrinking (fs) and leaf ray–box tests (leaf_rays); ordinary ray batches by 4×4 packets; exact answers (watertight)",
+        make: |params, accel| Ok(Box::new(MftTracer::from_params(accel.bvh()?.clone(), params)?)),
+        motion_blur: false,
         chunk_rays: CHUNK_RAYS,
     },
     TracerInfo {

@@ -1,0 +1,351 @@
+//! One block of shading points through the BVH as a block of shadow frusta (Benthin & Wald 2009
+//! §4, App. A): a stack of (node, mask of frusta) entries; at an inner node one test per child box
+//! for all frusta of the mask (`Frusta::box_mask`); at a leaf, per triangle, culling for all frusta
+//! (`cull::keep_mask`), then the rays of each remaining frustum, generated on demand when the
+//! frustum first needs them (then kept while the block is traced), against the triangle, 16 rays
+//! at a time. Occlusion is kept as bits; a
+//! frustum retires when all its rays are occluded.
+//!
+//! The rays are `visibility::shadow_ray` of the per-query light points of each sample set (the
+//! per-frame "delta vectors" of §4.4): the very rays of `VisibilityQuery::ray`, bit for bit, tested
+//! by the reference tracer's watertight test, so the answer equals the reference tracer's.
+
+use glam::Vec3;
+
+use crate::accel::Bvh;
+use crate::geometry::Ray;
+use crate::lanes::SimdRay;
+use crate::stats::{Event, Stats};
+use crate::tracers::mft::cull::keep_mask;
+use crate::tracers::mft::frusta::{bits, Frusta, Margins};
+use crate::tracers::mft::MftConfig;
+use crate::tracers::visibility::{shadow_ray, VisibilityQuery};
+
+/// One worker's state, reused from block to block.
+#[derive(Default)]
+pub struct Scratch {
+    pub frusta: Frusta,
+    /// The light point of every sample of every set (`LightSamples` order).
+    pub targets: Vec<Vec3>,
+    /// Live (not yet occluded, casting a ray) samples: `words` per frustum.
+    alive: Vec<u64>,
+    /// The generated rays, 16 samples to a SIMD ray, `per_point.div_ceil(16)` per frustum.
+    rays: Vec<SimdRay<LANES>>,
+    stack: Vec<(u32, u64)>,
+}
+
+/// Rays per SIMD ray: the paper's 16-wide ray–triangle test, one frustum's 16 samples at once.
+const LANES: usize = 16;
+
+/// The light points of `query`'s sample sets, computed once per query (per frame).
+pub fn light_points(query: &VisibilityQuery<'_>, targets: &mut Vec<Vec3>) {
+    targets.clear();
+    for set in 0..query.samples.sets() {
+        let uv = query.samples.set(set as u32);
+        targets.extend(uv.iter().map(|&[s, t]| query.light.point(s, t)));
+    }
+}
+
+/// The ray of sample `sample` of point `i`: `VisibilityQuery::ray`, from the precomputed light
+/// point.
+#[inline(always)]
+pub fn sample_ray(
+    query: &VisibilityQuery<'_>,
+    targets: &[Vec3],
+    i: usize,
+    sample: usize,
+) -> Option<Ray> {
+    let p = &query.points[i];
+    let target = targets[p.set as usize * query.samples.per_point() + sample];
+    shadow_ray(p.position, p.normal, p.origin, target).map(|r| r.at_time(p.time))
+}
+
+/// Block `first..first + len` of `query`: `occluded` (the block's words) must hold every sample
+/// occluded on entry; the samples found visible are cleared.
+#[allow(clippy::too_many_arguments)]
+pub fn trace_block<S: Stats>(
+    bvh: &Bvh,
+    config: &MftConfig,
+    margins: &Margins,
+    query: &VisibilityQuery<'_>,
+    first: usize,
+    len: usize,
+    occluded: &mut [u64],
+    scratch: &mut Scratch,
+    stats: &mut S,
+) {
+    let per_point = query.samples.per_point();
+    let words = query.samples.words_per_point();
+    let Scratch {
+        frusta,
+        targets,
+        alive,
+        rays,
+        stack,
+    } = scratch;
+    alive.clear();
+    alive.resize(len * words, 0);
+    let groups = per_point.div_ceil(LANES);
+    if rays.len() < len * groups {
+        rays.resize(len * groups, SimdRay::default());
+    }
+    frusta.len = len;
+    let uv = |set: u32| query.samples.set(set);
+
+    // Frusta: the samples in front of each point's surface (`shadow_ray`'s test) are live, and
+    // bounded by the (s, t) rectangle of those samples.
+    let mut live = 0u64;
+    for f in 0..len {
+        let p = &query.points[first + f];
+        let set_targets = &targets[p.set as usize * per_point..][..per_point];
+        let mut rect = [
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+        ];
+        for (s, target) in set_targets.iter().enumerate() {
+            if (*target - p.position).dot(p.normal) > 0.0 {
+                alive[f * words + s / 64] |= 1 << (s % 64);
+                let [u, v] = uv(p.set)[s];
+                rect = [
+                    rect[0].min(u),
+                    rect[1].max(u),
+                    rect[2].min(v),
+                    rect[3].max(v),
+                ];
+                if S::ENABLED {
+                    stats.ray();
+                }
+            }
+        }
+        // A point without a finite origin casts only ill-formed rays, which meet nothing (as in
+        // the reference tracer): its samples stay live and end visible, without a frustum.
+        if rect[0] <= rect[1] && p.origin.is_finite() {
+            frusta.set(f, p.origin, &query.light, rect, margins);
+            live |= 1 << f;
+        }
+    }
+    if live == 0 || bvh.is_empty() {
+        return finish(occluded, alive, words, len);
+    }
+
+    // Children are visited nearer first along the block's mean direction to the light.
+    let towards = query.light.point(0.5, 0.5) - query.points[first].origin;
+    let depth = |i: u32| {
+        if S::ENABLED {
+            bvh.depth[i as usize] as usize
+        } else {
+            0
+        }
+    };
+    let root = &bvh.nodes[Bvh::ROOT];
+    if S::ENABLED {
+        stats.event(Event::FrustumBoxTests, 1);
+        (0..live.count_ones()).for_each(|_| stats.aabb_test(0));
+    }
+    // Frusta whose rays exist: made at the first leaf that needs them, kept for the block.
+    let mut generated = 0u64;
+    stack.clear();
+    stack.push((
+        Bvh::ROOT as u32,
+        frusta.box_mask(&root.bounds, live, margins),
+    ));
+    while let Some((index, mask)) = stack.pop() {
+        let mask = mask & live;
+        if mask == 0 {
+            continue;
+        }
+        let node = &bvh.nodes[index as usize];
+        if S::ENABLED {
+            stats.node(depth(index));
+        }
+        if !node.is_leaf() {
+            let (a, b) = (node.first, node.first + 1);
+            let (box_a, box_b) = (&bvh.nodes[a as usize].bounds, &bvh.nodes[b as usize].bounds);
+            let mask_a = frusta.box_mask(box_a, mask, margins);
+            let mask_b = frusta.box_mask(box_b, mask, margins);
+            if S::ENABLED {
+                stats.event(Event::FrustumBoxTests, 2);
+                stats.event(Event::FrustaAtNodes, mask.count_ones() as u64);
+                stats.event(
+                    Event::BoxesCulled,
+                    (mask_a == 0) as u64 + (mask_b == 0) as u64,
+                );
+                for _ in 0..mask.count_ones() {
+                    stats.aabb_test(depth(a));
+                    stats.aabb_test(depth(b));
+                }
+            }
+            let a_first = (box_a.min + box_a.max - box_b.min - box_b.max).dot(towards) <= 0.0;
+            let (near, far) = if a_first {
+                ((a, mask_a), (b, mask_b))
+            } else {
+                ((b, mask_b), (a, mask_a))
+            };
+            for entry in [far, near] {
+                if entry.1 != 0 {
+                    stack.push(entry);
+                }
+            }
+            continue;
+        }
+
+        // A leaf: per triangle, cull for all frusta, then the remaining frusta's rays.
+        if S::ENABLED {
+            stats.event(Event::LeavesVisited, 1);
+            let live_rays: u32 = bits(mask)
+                .flat_map(|f| &alive[f * words..(f + 1) * words])
+                .map(|w| w.count_ones())
+                .sum();
+            stats.event(Event::LeafActiveRays, live_rays as u64);
+        }
+        let mut newly_occluded = 0u64;
+        // `leaf_rays` (§5.3 "Ray-AABB"): frusta whose live rays were tested against the leaf's
+        // box, and those none of whose rays meets it (robust slabs, as the reference tracer
+        // enters a leaf), which skip the leaf.
+        let (mut box_tested, mut box_missed) = (0u64, 0u64);
+        for t in node.first as usize..(node.first + node.count) as usize {
+            let candidates = mask & live & !box_missed;
+            if candidates == 0 {
+                break;
+            }
+            let tri = &bvh.triangles[t];
+            let keep = keep_mask(frusta, tri, candidates);
+            if S::ENABLED {
+                stats.event(Event::TrianglesAccessed, 1);
+                stats.event(Event::TrianglesKept, (keep != 0) as u64);
+                stats.event(Event::FrustumTriangleTests, keep.count_ones() as u64);
+                stats.event(
+                    Event::TrianglesCulled,
+                    (candidates & !keep).count_ones() as u64,
+                );
+            }
+            for f in bits(keep) {
+                let point_alive = &mut alive[f * words..(f + 1) * words];
+                let simd = &mut rays[f * groups..(f + 1) * groups];
+                if generated & 1 << f == 0 {
+                    generated |= 1 << f;
+                    let point_occluded = &mut occluded[f * words..(f + 1) * words];
+                    generate(
+                        query,
+                        targets,
+                        first + f,
+                        point_alive,
+                        point_occluded,
+                        simd,
+                        stats,
+                    );
+                }
+                if config.leaf_rays && box_tested & 1 << f == 0 {
+                    box_tested |= 1 << f;
+                    if S::ENABLED {
+                        let lanes: u32 = point_alive.iter().map(|w| w.count_ones()).sum();
+                        (0..lanes).for_each(|_| stats.aabb_test(depth(index)));
+                    }
+                    let (lo, hi) = (node.bounds.min.to_array(), node.bounds.max.to_array());
+                    if !simd.iter().any(|ray| ray.hits_box(lo, hi)) {
+                        box_missed |= 1 << f;
+                        continue;
+                    }
+                }
+                for (g, ray) in simd.iter_mut().enumerate() {
+                    let word = &mut point_alive[g / 4];
+                    let shift = 16 * (g % 4);
+                    let lanes = *word >> shift & 0xffff;
+                    if lanes == 0 {
+                        continue;
+                    }
+                    if S::ENABLED {
+                        (0..lanes.count_ones()).for_each(|_| stats.triangle_test(depth(index)));
+                    }
+                    if ray.intersect::<true>(tri, 0) > 0 {
+                        *word &= !((lanes & !ray.live_mask()) << shift);
+                        newly_occluded |= 1 << f;
+                    }
+                }
+                if point_alive.iter().all(|&w| w == 0) {
+                    live &= !(1 << f);
+                }
+            }
+        }
+        // §5.3: after the leaf, shrink the frusta that lost rays here (CR: corner rays; FS: also
+        // the traversal bounds).
+        if config.cr || config.fs {
+            for f in bits(newly_occluded & live) {
+                frusta.rect[f] = live_rect(query, first + f, &alive[f * words..(f + 1) * words]);
+                frusta.aim(f, &query.light, config.fs.then_some(margins));
+            }
+        }
+        if live == 0 {
+            break;
+        }
+    }
+    finish(occluded, alive, words, len)
+}
+
+/// Generates the rays of point `i`'s live samples into its SIMD rays, sample `s` in lane `s % 16`
+/// of ray `s / 16` (dead samples are padding). A sample whose ray is ill-formed is answered at
+/// once, as the reference tracer answers such a ray: not occluded.
+#[inline(always)]
+fn generate<S: Stats>(
+    query: &VisibilityQuery<'_>,
+    targets: &[Vec3],
+    i: usize,
+    alive: &mut [u64],
+    occluded: &mut [u64],
+    simd: &mut [SimdRay<LANES>],
+    stats: &mut S,
+) {
+    for (g, lanes) in simd.iter_mut().enumerate() {
+        for l in 0..LANES {
+            let s = g * LANES + l;
+            let (w, b) = (s / 64, s % 64);
+            let ray = if s < query.samples.per_point() && alive[w] >> b & 1 == 1 {
+                if S::ENABLED {
+                    stats.event(Event::RaysOnDemand, 1);
+                }
+                let ray = sample_ray(query, targets, i, s).filter(Ray::is_well_formed);
+                if ray.is_none() {
+                    alive[w] &= !(1 << b);
+                    occluded[w] &= !(1 << b);
+                }
+                ray
+            } else {
+                None
+            };
+            lanes.set_lane(l, ray.as_ref());
+        }
+        lanes.set_common_axes();
+    }
+}
+
+/// The (s, t) rectangle of point `i`'s live samples (§5.3 CR).
+fn live_rect(query: &VisibilityQuery<'_>, i: usize, alive: &[u64]) -> [f32; 4] {
+    let uv = query.samples.set(query.points[i].set);
+    let mut rect = [
+        f32::INFINITY,
+        f32::NEG_INFINITY,
+        f32::INFINITY,
+        f32::NEG_INFINITY,
+    ];
+    for (w, &word) in alive.iter().enumerate() {
+        for b in bits(word) {
+            let [u, v] = uv[w * 64 + b];
+            rect = [
+                rect[0].min(u),
+                rect[1].max(u),
+                rect[2].min(v),
+                rect[3].max(v),
+            ];
+        }
+    }
+    rect
+}
+
+/// The samples still live at the end see the light: their bits are cleared.
+fn finish(occluded: &mut [u64], alive: &[u64], words: usize, len: usize) {
+    for (o, a) in occluded[..len * words].iter_mut().zip(alive) {
+        *o &= !a;
+    }
+}

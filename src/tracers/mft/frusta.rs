@@ -1,0 +1,245 @@
+//! A block of shadow frusta (Benthin & Wald 2009 §4.4): one frustum per shading point, from the
+//! point's ray origin to the rectangle of the light, in (s, t), that bounds the point's live
+//! samples. Stored lane by lane (structure of arrays over frusta), so the box test of every
+//! frustum against one BVH box is one loop the compiler vectorizes (§4: "one SIMD test per node
+//! for all frusta").
+//!
+//! A frustum is described by its origin `o` and its four corner rays `D_q = corner_q − o`, not
+//! normalized: every live sample ray is `o + u·D`, u ∈ [0, 1], with `D` a convex combination of
+//! the `D_q` (the light is affine in (s, t)). So bounds taken over the corners bound every ray,
+//! exactly in real arithmetic; the margins of `Margins` cover rounding (the sample rays are
+//! normalized, the corners are not).
+
+use glam::Vec3;
+
+use crate::geometry::Aabb;
+use crate::tracers::visibility::QuadLight;
+
+/// The most frusta traced together: the live mask of a block is one `u64`.
+pub const MAX_FRUSTA: usize = 64;
+
+/// Lanes per frustum field: `MAX_FRUSTA` floats.
+type Lanes = [f32; MAX_FRUSTA];
+
+/// Frusta per pass of a lane loop (one AVX-512 register of f32).
+pub const W: usize = 16;
+
+/// The rounding allowance of the box test, from the scale of the scene.
+#[derive(Clone, Copy, Debug)]
+pub struct Margins {
+    /// Distance by which boxes are grown and planes thickened: 1e-5 × the largest coordinate of
+    /// the scene, the light and the origins (f32 rounding is 6e-8 of it).
+    pub distance: f32,
+}
+
+impl Margins {
+    pub fn new(scale: f32) -> Margins {
+        Margins {
+            distance: 1e-5 * scale.max(f32::MIN_POSITIVE),
+        }
+    }
+}
+
+/// The frusta of one block of shading points; lane `f` is frustum `f`.
+#[derive(Clone)]
+pub struct Frusta {
+    pub len: usize,
+    pub origin: [Lanes; 3],
+    /// Corner rays `D_q` (q = 0..4), per axis.
+    pub corner: [[Lanes; 3]; 4],
+    /// `|D_q|²`.
+    pub corner_len_sq: [Lanes; 4],
+    /// The longest corner ray in the 1-norm (a bound of every ray's length, for rounding margins).
+    pub reach: Lanes,
+    /// Per axis, the interval `[1/D_max, 1/D_min]` of reciprocal directions (ordered either
+    /// way); `free` when the directions straddle 0 and the axis bounds nothing.
+    pub rcp: [[Lanes; 2]; 3],
+    pub free: [[bool; MAX_FRUSTA]; 3],
+    /// The four side planes through the origin (normals per axis, pointing out of the frustum)
+    /// and the slack of each (`|n|` × the distance margin): the interval test alone keeps every
+    /// box along an axis the directions straddle, as shadow frusta straight under a light do.
+    pub side: [[Lanes; 3]; 4],
+    pub side_slack: [Lanes; 4],
+    /// The (s, t) rectangle `[s0, s1] × [t0, t1]` of each frustum's live samples.
+    pub rect: [[f32; 4]; MAX_FRUSTA],
+}
+
+impl Default for Frusta {
+    fn default() -> Self {
+        Frusta {
+            len: 0,
+            origin: [[0.0; MAX_FRUSTA]; 3],
+            corner: [[[0.0; MAX_FRUSTA]; 3]; 4],
+            corner_len_sq: [[0.0; MAX_FRUSTA]; 4],
+            reach: [0.0; MAX_FRUSTA],
+            rcp: [[[0.0; MAX_FRUSTA]; 2]; 3],
+            free: [[true; MAX_FRUSTA]; 3],
+            side: [[[0.0; MAX_FRUSTA]; 3]; 4],
+            side_slack: [[0.0; MAX_FRUSTA]; 4],
+            rect: [[0.0; 4]; MAX_FRUSTA],
+        }
+    }
+}
+
+/// The bits of `mask` in increasing order.
+#[inline(always)]
+pub fn bits(mut mask: u64) -> impl Iterator<Item = usize> {
+    std::iter::from_fn(move || {
+        (mask != 0).then(|| {
+            let f = mask.trailing_zeros() as usize;
+            mask &= mask - 1;
+            f
+        })
+    })
+}
+
+impl Frusta {
+    /// Frustum `f` from `origin` to the light's (s, t) rectangle `rect`: its corner rays and its
+    /// box-test bounds.
+    pub fn set(&mut self, f: usize, origin: Vec3, light: &QuadLight, rect: [f32; 4], m: &Margins) {
+        for (a, o) in origin.to_array().into_iter().enumerate() {
+            self.origin[a][f] = o;
+        }
+        self.rect[f] = rect;
+        self.aim(f, light, Some(m));
+    }
+
+    /// Recomputes frustum `f`'s corner rays from its rectangle and, given `bounds`, its box-test
+    /// bounds (interval reciprocals and side planes).
+    pub fn aim(&mut self, f: usize, light: &QuadLight, bounds: Option<&Margins>) {
+        let origin = Vec3::new(self.origin[0][f], self.origin[1][f], self.origin[2][f]);
+        let [s0, s1, t0, t1] = self.rect[f];
+        let corners = [(s0, t0), (s1, t0), (s0, t1), (s1, t1)].map(|(s, t)| {
+            let d = light.point(s, t) - origin;
+            d.to_array()
+        });
+        self.reach[f] = corners
+            .iter()
+            .map(|d| d[0].abs() + d[1].abs() + d[2].abs())
+            .fold(0.0, f32::max);
+        for (q, d) in corners.iter().enumerate() {
+            for (axis, &x) in self.corner[q].iter_mut().zip(d) {
+                axis[f] = x;
+            }
+            self.corner_len_sq[q][f] = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+        }
+        if let Some(m) = bounds {
+            // Corners in cyclic order around the rectangle: 0, 1, 3, 2.
+            let d = corners.map(Vec3::from_array);
+            let ring = [d[0], d[1], d[3], d[2]];
+            let centre = d[0] + d[1] + d[2] + d[3];
+            for k in 0..4 {
+                let n = ring[k].cross(ring[(k + 1) % 4]);
+                let n = if n.dot(centre) > 0.0 { -n } else { n };
+                for a in 0..3 {
+                    self.side[k][a][f] = n[a];
+                }
+                self.side_slack[k][f] = n.length() * m.distance;
+            }
+            for a in 0..3 {
+                let lo = corners.iter().map(|d| d[a]).fold(f32::INFINITY, f32::min);
+                let hi = corners
+                    .iter()
+                    .map(|d| d[a])
+                    .fold(f32::NEG_INFINITY, f32::max);
+                // Not (lo > 0 || hi < 0) also catches NaN: no bound.
+                let free = !(lo > 0.0 || hi < 0.0);
+                self.free[a][f] = free;
+                self.rcp[a][0][f] = if free { 0.0 } else { 1.0 / hi };
+                self.rcp[a][1][f] = if free { 0.0 } else { 1.0 / lo };
+            }
+        }
+    }
+
+    /// The frusta of `candidates` whose rays may meet `b`: an interval-arithmetic slab test on
+    /// `o + u·D`, u ∈ [0, 1] (a ray in the box at `u` has, per axis, `u` between the products of
+    /// the slab's relative bounds and the reciprocal interval's ends), and the four side planes.
+    /// 16 frusta per pass of plain lane loops, which LLVM vectorizes.
+    #[inline(always)]
+    pub fn box_mask(&self, b: &Aabb, candidates: u64, m: &Margins) -> u64 {
+        let lo = (b.min - Vec3::splat(m.distance)).to_array();
+        let hi = (b.max + Vec3::splat(m.distance)).to_array();
+        let len = 64 - candidates.leading_zeros() as usize;
+        let mut mask = 0u64;
+        for base in (0..len).step_by(W) {
+            let lanes = |x: &Lanes| -> [f32; W] { x[base..base + W].try_into().unwrap() };
+            let mut near = [0.0f32; W];
+            let mut far = [1.0f32; W];
+            let mut depth = [[0.0f32; W]; 4];
+            for a in 0..3 {
+                let (o, r0, r1) = (
+                    lanes(&self.origin[a]),
+                    lanes(&self.rcp[a][0]),
+                    lanes(&self.rcp[a][1]),
+                );
+                let free: [bool; W] = self.free[a][base..base + W].try_into().unwrap();
+                let sides: [[f32; W]; 4] = std::array::from_fn(|k| lanes(&self.side[k][a]));
+                for l in 0..W {
+                    let (x0, x1) = (lo[a] - o[l], hi[a] - o[l]);
+                    let (p, q, r, s) = (x0 * r0[l], x0 * r1[l], x1 * r0[l], x1 * r1[l]);
+                    let enter = p.min(q).min(r.min(s));
+                    let leave = p.max(q).max(r.max(s));
+                    // Products are rounded: widen by a relative 1e-6 (rounding is 1.2e-7).
+                    let enter = enter - 1e-6 * enter.abs();
+                    let leave = leave + 1e-6 * leave.abs();
+                    near[l] = near[l].max(if free[l] { f32::NEG_INFINITY } else { enter });
+                    far[l] = far[l].min(if free[l] { f32::INFINITY } else { leave });
+                    // Per side plane, the box corner deepest inside it.
+                    for k in 0..4 {
+                        let n = sides[k][l];
+                        depth[k][l] += n * if n > 0.0 { x0 } else { x1 };
+                    }
+                }
+            }
+            let slack: [[f32; W]; 4] = std::array::from_fn(|k| lanes(&self.side_slack[k]));
+            for l in 0..W {
+                let mut inside = near[l] <= far[l];
+                for k in 0..4 {
+                    inside &= depth[k][l] <= slack[k][l];
+                }
+                mask |= (inside as u64) << (base + l);
+            }
+        }
+        mask & candidates
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bits_come_in_order() {
+        assert_eq!(
+            bits(0b1011 | 1 << 63).collect::<Vec<_>>(),
+            vec![0, 1, 3, 63]
+        );
+        assert_eq!(bits(0).count(), 0);
+    }
+
+    #[test]
+    fn a_frustum_meets_the_boxes_its_rays_cross_and_misses_the_others() {
+        // From the origin to a 2 × 2 light at height 10 over x, z ∈ [−1, 1].
+        let light = QuadLight {
+            corner: Vec3::new(-1.0, 10.0, -1.0),
+            edge_u: Vec3::new(2.0, 0.0, 0.0),
+            edge_v: Vec3::new(0.0, 0.0, 2.0),
+        };
+        let mut frusta = Frusta {
+            len: 1,
+            ..Frusta::default()
+        };
+        let m = Margins::new(10.0);
+        frusta.set(0, Vec3::ZERO, &light, [0.0, 1.0, 0.0, 1.0], &m);
+        assert!(frusta.free[0][0] && !frusta.free[1][0] && frusta.free[2][0]);
+        let cube = |c: Vec3| Aabb::new(c - Vec3::splat(0.1), c + Vec3::splat(0.1));
+        // At height 5 the frustum spans x, z ∈ [−0.5, 0.5].
+        assert_eq!(frusta.box_mask(&cube(Vec3::new(0.5, 5.0, 0.0)), 1, &m), 1);
+        assert_eq!(frusta.box_mask(&cube(Vec3::new(0.0, 9.95, 0.95)), 1, &m), 1);
+        // Beside it (only the side planes see it), above the light, below the origin.
+        assert_eq!(frusta.box_mask(&cube(Vec3::new(0.0, 1.0, 0.5)), 1, &m), 0);
+        assert_eq!(frusta.box_mask(&cube(Vec3::new(-0.5, 2.0, 0.0)), 1, &m), 0);
+        assert_eq!(frusta.box_mask(&cube(Vec3::new(0.0, 11.0, 0.0)), 1, &m), 0);
+        assert_eq!(frusta.box_mask(&cube(Vec3::new(0.0, -1.0, 0.0)), 1, &m), 0);
+    }
+}

@@ -1,0 +1,326 @@
+use std::sync::Arc;
+
+use glam::Vec3;
+
+use super::*;
+use crate::accel::BvhConfig;
+use crate::geometry::{Aabb, Triangle, WatertightRay};
+use crate::random::SplitMix64;
+use crate::stats::{Counters, Event};
+use crate::test_util::Soup;
+use crate::tracers::reference::ReferenceTracer;
+use crate::tracers::visibility::{
+    shadow_ray, LightSamples, QuadLight, ShadingPoint, ShadingPoints, Visibility,
+};
+
+/// A light of side `side` centred over the soup at height 3.
+fn light(side: f32) -> QuadLight {
+    QuadLight {
+        corner: Vec3::new(-side / 2.0, 3.0, -side / 2.0),
+        edge_u: Vec3::new(side, 0.0, 0.0),
+        edge_v: Vec3::new(0.0, 0.0, side),
+    }
+}
+
+/// `n` points under the soup (y = −1.5), in rows as a primary-ray block order would give; every
+/// seventh faces sideways (some samples behind it), one faces away, one has a NaN origin.
+fn points(n: usize, sets: u32, seed: u64) -> ShadingPoints {
+    let mut rng = SplitMix64::new(seed);
+    let mut points = ShadingPoints::default();
+    for i in 0..n {
+        let position = Vec3::new(
+            -1.2 + 2.4 * (i % 16) as f32 / 15.0 + rng.range(-0.05, 0.05),
+            -1.5,
+            -1.2 + 2.4 * (i / 16) as f32 / (n / 16).max(1) as f32,
+        );
+        let normal = match i % 7 {
+            0 => Vec3::new(0.6, 0.2, 0.0).normalize(),
+            _ if i == 5 => -Vec3::Y,
+            _ => Vec3::Y,
+        };
+        let origin = if i == 9 {
+            Vec3::NAN
+        } else {
+            position + normal * 1e-4
+        };
+        let point = ShadingPoint {
+            position,
+            normal,
+            origin,
+            time: 0.0,
+            set: i as u32 % sets,
+        };
+        points.push(point, true);
+    }
+    points
+}
+
+fn samples(per_point: usize, sets: usize, seed: u64) -> LightSamples {
+    let mut rng = SplitMix64::new(seed);
+    let uv = (0..per_point * sets)
+        .map(|_| [rng.unit(), rng.unit()])
+        .collect();
+    LightSamples::new(per_point, uv).unwrap()
+}
+
+fn soup(seed: u64) -> Vec<Triangle> {
+    let soup = Soup {
+        long: Some((11, 6.0)),
+        collinear_every: Some(37),
+        ..Soup::unit(0.12)
+    };
+    soup.triangles(400, seed)
+}
+
+fn bvh(triangles: &[Triangle]) -> Arc<Bvh> {
+    Arc::new(Bvh::build(triangles, BvhConfig::default()))
+}
+
+fn answer<K: Kernel>(
+    kernel: &K,
+    query: VisibilityQuery<'_>,
+    counters: &mut Counters,
+) -> Visibility {
+    let mut v = Visibility::new(query.len(), query.samples);
+    kernel.light_visibility_with(query, &mut v.words, counters);
+    v
+}
+
+#[test]
+fn bits_equal_the_reference_tracers_on_the_same_rays() {
+    let configs = [
+        MftConfig::default(),
+        MftConfig {
+            block: 1,
+            ..MftConfig::default()
+        },
+        MftConfig {
+            block: 64,
+            ..MftConfig::default()
+        },
+        MftConfig {
+            cr: false,
+            fs: false,
+            leaf_rays: false,
+            block: 16,
+        },
+        MftConfig {
+            cr: true,
+            fs: false,
+            leaf_rays: false,
+            block: 37,
+        },
+        MftConfig {
+            fs: false,
+            ..MftConfig::default()
+        },
+    ];
+    for (seed, per_point, side) in [(1, 16, 1.0), (2, 100, 2.5), (3, 4, 0.0)] {
+        let bvh = bvh(&soup(seed));
+        let reference = ReferenceTracer::new(bvh.clone());
+        let points = points(160, 4, seed);
+        let samples = samples(per_point, 4, seed);
+        let query = VisibilityQuery::new(&points, light(side), &samples).unwrap();
+        let expected = answer(&reference, query, &mut Counters::default());
+        let occluded = expected.total_occluded();
+        assert!(
+            occluded > query.ray_count() / 10 && occluded < 160 * per_point * 9 / 10,
+            "seed {seed}: both answers occur ({occluded} occluded)"
+        );
+        for config in configs {
+            let mft = MftTracer::new(bvh.clone(), config);
+            let mut counters = Counters::default();
+            let got = answer(&mft, query, &mut counters);
+            assert_eq!(got, expected, "seed {seed}, {config:?}");
+            assert_eq!(counters.rays as usize, query.ray_count());
+        }
+    }
+}
+
+#[test]
+fn shrinking_culls_more_triangles_and_changes_no_answer() {
+    let bvh = bvh(&soup(4));
+    let points = points(256, 4, 4);
+    let samples = samples(16, 4, 4);
+    let query = VisibilityQuery::new(&points, light(2.0), &samples).unwrap();
+    let run = |config: MftConfig| {
+        let mut counters = Counters::default();
+        let v = answer(&MftTracer::new(bvh.clone(), config), query, &mut counters);
+        (v, counters)
+    };
+    let none = MftConfig {
+        cr: false,
+        fs: false,
+        leaf_rays: false,
+        ..MftConfig::default()
+    };
+    let (plain, plain_counts) = run(none);
+    let cr = MftConfig { cr: true, ..none };
+    let (with_cr, cr_counts) = run(cr);
+    let (with_fs, fs_counts) = run(MftConfig { fs: true, ..cr });
+    assert_eq!(with_cr, plain);
+    assert_eq!(with_fs, plain);
+    // CR tightens only the corner rays: the same triangles are reached, fewer are tested.
+    let tests = |c: &Counters| c.get(Event::FrustumTriangleTests);
+    assert_eq!(
+        cr_counts.get(Event::TrianglesAccessed),
+        plain_counts.get(Event::TrianglesAccessed)
+    );
+    assert!(tests(&cr_counts) < tests(&plain_counts));
+    // FS also tightens traversal: no more boxes than CR.
+    assert!(fs_counts.get(Event::FrustumBoxTests) <= cr_counts.get(Event::FrustumBoxTests));
+}
+
+#[test]
+fn on_demand_rays_are_the_querys_rays_bit_for_bit() {
+    let points = points(64, 3, 5);
+    let samples = samples(24, 3, 5);
+    let query = VisibilityQuery::new(&points, light(1.5), &samples).unwrap();
+    let mut targets = Vec::new();
+    light_points(&query, &mut targets);
+    let bits = |r: crate::geometry::Ray| {
+        let v = [r.origin, r.dir].map(|v| v.to_array().map(f32::to_bits));
+        (v, [r.tmin, r.tmax, r.time].map(f32::to_bits))
+    };
+    let mut rays = 0;
+    for i in 0..points.len() {
+        for s in 0..24 {
+            let on_demand = sample_ray(&query, &targets, i, s);
+            assert_eq!(on_demand.map(bits), query.ray(i, s).map(bits), "{i} {s}");
+            rays += on_demand.is_some() as usize;
+        }
+    }
+    assert_eq!(rays, query.ray_count());
+    assert!(rays < 64 * 24, "some samples lie behind their surface");
+
+    // One large triangle between every point and the light: each frustum reaches the single leaf
+    // once, so exactly the query's rays are generated, and every well-formed one is occluded.
+    let blocker = Triangle::new(
+        Vec3::new(-20.0, 0.0, -20.0),
+        Vec3::new(20.0, 0.0, -20.0),
+        Vec3::new(0.0, 0.0, 30.0),
+    );
+    // The NaN-origin point's rays are ill-formed: answered visible, as the reference does, and
+    // never generated.
+    let nan_point = (0..24).filter(|&s| query.ray(9, s).is_some()).count();
+    assert!(nan_point > 0);
+    let mft = MftTracer::new(bvh(&[blocker]), MftConfig::default());
+    let mut counters = Counters::default();
+    let v = answer(&mft, query, &mut counters);
+    let generated = query.ray_count() - nan_point;
+    assert_eq!(counters.get(Event::RaysOnDemand) as usize, generated);
+    assert_eq!(counters.triangle_tests as usize, generated);
+    assert_eq!(v.total_occluded(), 64 * 24 - nan_point);
+}
+
+/// Culling never removes a box or a triangle that a sample ray of the frustum hits, and it removes
+/// a fair share of those no ray hits.
+#[test]
+fn culling_never_removes_what_a_sample_ray_hits() {
+    let mut rng = SplitMix64::new(6);
+    let triangles = Soup {
+        long: Some((5, 8.0)),
+        collinear_every: Some(29),
+        ..Soup::unit(0.2)
+    }
+    .triangles(600, 6);
+    let (mut pairs, mut culled_tris, mut culled_boxes, mut hit_pairs) = (0, 0, 0, 0);
+    for round in 0..40 {
+        let side = [0.0, 0.3, 1.0, 4.0][round % 4];
+        let light = light(side);
+        let mut frusta = Frusta {
+            len: MAX_FRUSTA,
+            ..Frusta::default()
+        };
+        let margins = Margins::new(4.0);
+        let mut rays = Vec::new();
+        for f in 0..MAX_FRUSTA {
+            // Origins below, inside and above the soup; some on a triangle's corner.
+            let tri = &triangles[rng.next_u64() as usize % triangles.len()];
+            let origin = if f % 9 == 0 {
+                tri.v[0]
+            } else if f % 9 == 1 {
+                // A shading point's origin: just off a surface, either side.
+                let side = if rng.unit() < 0.5 { -1.0 } else { 1.0 };
+                tri.centroid() + tri.normal().normalize_or_zero() * (side * 1.5e-5)
+            } else {
+                rng.vec3(-1.5, 1.5)
+            };
+            let (s0, t0) = (rng.range(0.0, 0.9), rng.range(0.0, 0.9));
+            let rect = [s0, rng.range(s0, 1.0), t0, rng.range(t0, 1.0)];
+            frusta.set(f, origin, &light, rect, &margins);
+            let corners = [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)];
+            let uv = corners
+                .into_iter()
+                .chain((0..28).map(|_| (rng.unit(), rng.unit())))
+                .map(|(a, b)| {
+                    (
+                        rect[0] + a * (rect[1] - rect[0]),
+                        rect[2] + b * (rect[3] - rect[2]),
+                    )
+                });
+            let towards = light.point(0.5, 0.5) - origin;
+            rays.push(
+                uv.filter_map(|(s, t)| shadow_ray(origin, towards, origin, light.point(s, t)))
+                    .collect::<Vec<_>>(),
+            );
+        }
+        for tri in &triangles {
+            let keep = keep_mask(&frusta, tri, u64::MAX);
+            let bounds = Aabb::from_points(&tri.v);
+            let reach = frusta.box_mask(&bounds, u64::MAX, &margins);
+            for (f, frustum_rays) in rays.iter().enumerate() {
+                pairs += 1;
+                let hit = frustum_rays.iter().any(|r| {
+                    WatertightRay::new(r.origin, r.dir)
+                        .intersect(tri, r.tmin, r.tmax)
+                        .is_some()
+                });
+                hit_pairs += hit as usize;
+                let kept = keep >> f & 1 == 1;
+                let reached = reach >> f & 1 == 1;
+                assert!(
+                    kept || !hit,
+                    "round {round}: culled {tri:?} for frustum {f}"
+                );
+                assert!(
+                    reached || !hit,
+                    "round {round}: culled box of {tri:?} for {f}"
+                );
+                culled_tris += !kept as usize;
+                culled_boxes += !reached as usize;
+            }
+        }
+    }
+    assert!(hit_pairs > 1000, "rays do hit triangles ({hit_pairs})");
+    let share = |n: usize| n as f64 / (pairs - hit_pairs) as f64;
+    assert!(
+        share(culled_tris) > 0.9,
+        "triangles culled {}",
+        share(culled_tris)
+    );
+    assert!(
+        share(culled_boxes) > 0.85,
+        "boxes culled {}",
+        share(culled_boxes)
+    );
+}
+
+#[test]
+fn blocks_out_of_range_are_refused() {
+    for block in [0, 65] {
+        let params = Params::new().with("block", block);
+        assert!(MftConfig::from_params(&params).is_err());
+    }
+    let params = Params::new().with("block", 64).with("fs", false);
+    assert_eq!(
+        MftConfig::from_params(&params).unwrap(),
+        MftConfig {
+            block: 64,
+            cr: true,
+            fs: false,
+            leaf_rays: true
+        }
+    );
+    assert!(MftConfig::from_params(&Params::new().with("cr", "maybe")).is_err());
+}
