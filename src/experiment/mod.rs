@@ -880,6 +880,7 @@ mod tests {
             "packet[frustum=false;lanes=16;packet=8;traversal=ranged]",
             "cgt[packet=16]",
             "stream[stream=65536;width=16]",
+            "mft",
             "obvhs",
             "embree3-16",
             "embree3-stream",
@@ -888,7 +889,7 @@ mod tests {
             expected.push("embree4-16");
         }
         assert_eq!(labels, expected);
-        // Soft shadows only under the quad light: (3 + 3 + 4) kinds × 2 frames × 6 (7) tracers ×
+        // Soft shadows only under the quad light: (3 + 3 + 4) kinds × 2 frames × 7 (8) tracers ×
         // 1 thread count.
         assert_eq!(plan.measurements(), 10 * 2 * expected.len());
     }
