@@ -23,8 +23,12 @@ fn split_generated(text: &str) -> (Vec<(String, String)>, String) {
     while let Some(at) = rest.find(OPEN) {
         outside.push_str(&rest[..at]);
         let after = &rest[at + OPEN.len()..];
-        let (source, body) = after.split_once(" -->\n").expect("a generated marker ends its line");
-        let (block, tail) = body.split_once(CLOSE).expect("every generated block is closed");
+        let (source, body) = after
+            .split_once(" -->\n")
+            .expect("a generated marker ends its line");
+        let (block, tail) = body
+            .split_once(CLOSE)
+            .expect("every generated block is closed");
         blocks.push((source.to_string(), block.to_string()));
         rest = tail;
     }
@@ -47,8 +51,7 @@ fn states_a_measurement(line: &str) -> bool {
     };
     let unit_at = |unit: &str, at: usize| {
         let end = at + unit.len();
-        line[at..].starts_with(unit)
-            && bytes.get(end).is_none_or(|b| !b.is_ascii_alphanumeric())
+        line[at..].starts_with(unit) && bytes.get(end).is_none_or(|b| !b.is_ascii_alphanumeric())
     };
     line.char_indices().any(|(at, c)| {
         (c == '×' && decimal_before(at))

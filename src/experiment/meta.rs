@@ -34,6 +34,10 @@ pub struct Meta<'a> {
     /// A sharded run's part of the sweep (`raylab run --shard`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub shard: Option<ShardMeta>,
+    /// Seconds from the run's start to its results written (a merged sweep has none: its shards
+    /// ran apart).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub wall_seconds: Option<f64>,
     /// A merged run's shards (`raylab merge`), in shard order: where and when each was measured.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub merged_from: Vec<MergedShard>,
@@ -106,6 +110,7 @@ pub fn gather<'a>(
         overrides,
         plan,
         shard: None,
+        wall_seconds: None,
         merged_from: Vec::new(),
     }
 }

@@ -158,6 +158,7 @@ pub fn run(
     // A missing font would otherwise only show after the whole run.
     plots::register_font()?;
     let started = utc::UtcTime::now();
+    let clock = std::time::Instant::now();
     let plan = Plan::derive(exp, load)?;
     overrides.chatter.say(&plan.to_string());
     let part = match overrides.shard {
@@ -222,6 +223,7 @@ pub fn run(
         }
         None => write_outputs(dir, exp, &plan, &cases)?,
     }
+    meta.wall_seconds = Some(clock.elapsed().as_secs_f64());
     meta::write(dir, &meta)?;
     if overrides.shard.is_none() {
         write_summary(dir)?;

@@ -39,6 +39,8 @@ pub struct Summary {
     pub date: String,
     pub commit: String,
     pub cpu: String,
+    /// The run's wall-clock time (meta.json), when it has one.
+    pub wall_seconds: Option<f64>,
     /// The thread count summarised: the largest the run measured.
     pub threads: usize,
     pub frames: usize,
@@ -224,15 +226,19 @@ impl Summary {
         summary.date = meta.date;
         summary.commit = meta.commit;
         summary.cpu = meta.cpu;
+        summary.wall_seconds = meta.wall_seconds;
         Ok(summary)
     }
 
     /// The Markdown table: what `summary.md` holds and the run prints.
     pub fn markdown(&self) -> String {
         let mut s = String::new();
+        let wall = self
+            .wall_seconds
+            .map_or(String::new(), |w| format!(", {w:.0} s wall"));
         let _ = writeln!(
             s,
-            "**{}** run {} ({}), commit {}, {}\n",
+            "**{}** run {} ({}{wall}), commit {}, {}\n",
             self.experiment, self.run_id, self.date, self.commit, self.cpu
         );
         let _ = writeln!(
@@ -343,6 +349,7 @@ struct MetaFacts {
     date: String,
     commit: String,
     cpu: String,
+    wall_seconds: Option<f64>,
 }
 
 fn read_meta(path: &Path) -> Result<MetaFacts> {
@@ -371,6 +378,7 @@ fn read_meta(path: &Path) -> Result<MetaFacts> {
             if dirty == Some(true) { " (dirty)" } else { "" }
         ),
         cpu: format!("{} ({cores} logical cores)", text_at("/cpu/model")?),
+        wall_seconds: meta.pointer("/wall_seconds").and_then(|v| v.as_f64()),
     })
 }
 
@@ -472,6 +480,7 @@ fn summarise(runs: &Table, checks: &BTreeMap<(GroupKey, ConfigKey), Checks>) -> 
         date: String::new(),
         commit: String::new(),
         cpu: String::new(),
+        wall_seconds: None,
         threads,
         frames: frames.len(),
         rows,
