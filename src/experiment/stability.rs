@@ -64,7 +64,7 @@ pub fn run(
     let dir = results.dir();
     write_csv(&dir.join(STABILITY_CSV), &outcomes)?;
     let report = tables_md(&exp.name, &outcomes);
-    print!("{}", summary(&outcomes));
+    overrides.chatter.say(summary(&outcomes).trim_end());
     let path = dir.join(tables::TABLES_MD);
     std::fs::write(&path, report).map_err(|e| Error::io(&path, e))?;
     let meta = meta::gather(
