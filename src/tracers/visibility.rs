@@ -170,6 +170,16 @@ impl LightSamples {
     pub fn words_per_point(&self) -> usize {
         self.per_point.div_ceil(64)
     }
+
+    /// Sets every sample bit of every point in `occluded` (`Visibility`'s layout), the bits past
+    /// the sample count clear: where a light-visibility answer starts, clearing what sees the light.
+    pub fn set_all_occluded(&self, occluded: &mut [u64]) {
+        for point_words in occluded.chunks_exact_mut(self.words_per_point()) {
+            for (w, word) in point_words.iter_mut().enumerate() {
+                *word = u64::MAX >> (64 - (self.per_point - 64 * w).min(64));
+            }
+        }
+    }
 }
 
 /// A light-visibility query over (a chunk of) shading points.
@@ -329,16 +339,10 @@ pub fn occluded_by_rays<K: Kernel + ?Sized, S: Stats>(
     occluded: &mut [u64],
     stats: &mut S,
 ) {
-    let per_point = query.samples.per_point();
     let words = query.samples.words_per_point();
-    // Every sample starts occluded; the rays that get through clear their bit. Samples behind
-    // their surface cast no ray and stay occluded.
-    for point_words in occluded.chunks_exact_mut(words) {
-        for (w, word) in point_words.iter_mut().enumerate() {
-            let samples_in_word = (per_point - 64 * w).min(64);
-            *word = u64::MAX >> (64 - samples_in_word);
-        }
-    }
+    // The rays that get through clear their bit. Samples behind their surface cast no ray and stay
+    // occluded.
+    query.samples.set_all_occluded(occluded);
     SCRATCH.with_borrow_mut(
         |Scratch {
              batch,

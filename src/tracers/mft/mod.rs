@@ -172,14 +172,9 @@ impl Kernel for MftTracer {
         occluded: &mut [u64],
         stats: &mut S,
     ) {
-        let per_point = query.samples.per_point();
         let words = query.samples.words_per_point();
-        // Every sample starts occluded; `trace_block` clears the ones that see the light.
-        for point_words in occluded.chunks_exact_mut(words) {
-            for (w, word) in point_words.iter_mut().enumerate() {
-                *word = u64::MAX >> (64 - (per_point - 64 * w).min(64));
-            }
-        }
+        // `trace_block` clears the samples that see the light.
+        query.samples.set_all_occluded(occluded);
         let margins = self.margins(&query);
         SCRATCH.with_borrow_mut(|scratch| {
             block::light_points(&query, &mut scratch.targets);
