@@ -111,6 +111,9 @@ enum Command {
         /// As JSON.
         #[arg(long)]
         json: bool,
+        /// The rows measured at this thread count (default: the run's largest).
+        #[arg(long)]
+        threads: Option<usize>,
     },
     /// Render a frame to a PNG: ray casting with point-light shadows and Lambert shading, or
     /// Whitted ray tracing (mirror reflection, Fresnel refraction, packet-assembled batches).
@@ -364,8 +367,8 @@ fn execute(command: Command) -> Result<bool> {
                 }
             }
         }
-        Command::Summary { dir, json } => {
-            let summary = Summary::read(&dir)?;
+        Command::Summary { dir, json, threads } => {
+            let summary = Summary::read_at(&dir, threads)?;
             match json {
                 true => print!("{}", summary.json(&dir)),
                 false => print!("{}", summary.markdown()),

@@ -41,8 +41,10 @@ pub struct Summary {
     pub cpu: String,
     /// The run's wall-clock time (meta.json), when it has one.
     pub wall_seconds: Option<f64>,
-    /// The thread count summarised: the largest the run measured.
+    /// The thread count summarised: the largest the run measured unless one was asked for.
     pub threads: usize,
+    /// Whether `threads` is the run's largest.
+    pub largest_threads: bool,
     pub frames: usize,
     pub rows: Vec<SummaryRow>,
     /// Sampled-check totals over every tracer instance, ray kind, scene and frame.
@@ -203,8 +205,14 @@ struct GroupTotals {
 }
 
 impl Summary {
-    /// The summary of the results directory `dir`.
+    /// The summary of the results directory `dir`, at the run's largest thread count.
     pub fn read(dir: &Path) -> Result<Summary> {
+        Self::read_at(dir, None)
+    }
+
+    /// The summary of `dir` at `threads` (`None`: the run's largest thread count); a thread count
+    /// the run did not measure is a usage error naming the ones it did.
+    pub fn read_at(dir: &Path, threads: Option<usize>) -> Result<Summary> {
         let runs_path = dir.join(RUNS_CSV);
         let meta_path = dir.join(META_JSON);
         if !runs_path.is_file() || !meta_path.is_file() {
@@ -220,7 +228,15 @@ impl Summary {
             true => read_checks(&Table::read(&verify_path, &VERIFY_NEEDS)?)?,
             false => BTreeMap::new(),
         };
-        let mut summary = summarise(&runs, &checks)?;
+        let mut summary = summarise(&runs, &checks, threads)?;
+        if summary.rows.is_empty() && threads.is_some() {
+            return Err(Error::usage(format!(
+                "{}: no batch measured at {} threads (the run has: {})",
+                runs_path.display(),
+                summary.threads,
+                thread_counts(&runs)?
+            )));
+        }
         summary.experiment = meta.experiment;
         summary.run_id = meta.run_id;
         summary.date = meta.date;
@@ -243,11 +259,12 @@ impl Summary {
         );
         let _ = writeln!(
             s,
-            "At {} thread{} (the run's largest), over {} frame{}: Mrays/s = rays / fastest pass, both summed over frames. \
+            "At {} thread{}{}, over {} frame{}: Mrays/s = rays / fastest pass, both summed over frames. \
              Ours = the fastest of the papers' tracers; × = Embree best's time / ours (> 1: ours faster); \
              tests per ray are ours; checked = ours against Embree (robust) on sampled rays.\n",
             self.threads,
             plural(self.threads),
+            if self.largest_threads { " (the run's largest)" } else { "" },
             self.frames,
             plural(self.frames)
         );
@@ -415,15 +432,38 @@ fn read_checks(table: &Table) -> Result<BTreeMap<(GroupKey, ConfigKey), Checks>>
     Ok(checks)
 }
 
-/// The summary of runs.csv's `runs` with the checks of verify.csv (meta facts left empty).
-fn summarise(runs: &Table, checks: &BTreeMap<(GroupKey, ConfigKey), Checks>) -> Result<Summary> {
-    let batch_rows: Vec<usize> = (0..runs.rows.len())
+/// The rows of runs.csv that are ray batches (not renders).
+fn batch_rows(runs: &Table) -> Vec<usize> {
+    (0..runs.rows.len())
         .filter(|&i| runs.text(i, "render").is_empty())
-        .collect();
-    let mut threads = 0;
-    for &i in &batch_rows {
-        threads = threads.max(runs.required::<usize>(i, "threads")?);
+        .collect()
+}
+
+/// The thread counts the batches of runs.csv were measured at, as "1, 2".
+fn thread_counts(runs: &Table) -> Result<String> {
+    let mut counts = std::collections::BTreeSet::new();
+    for i in batch_rows(runs) {
+        counts.insert(runs.required::<usize>(i, "threads")?);
     }
+    Ok(counts
+        .iter()
+        .map(usize::to_string)
+        .collect::<Vec<_>>()
+        .join(", "))
+}
+
+/// The summary of runs.csv's `runs` with the checks of verify.csv (meta facts left empty).
+fn summarise(
+    runs: &Table,
+    checks: &BTreeMap<(GroupKey, ConfigKey), Checks>,
+    threads: Option<usize>,
+) -> Result<Summary> {
+    let batch_rows = batch_rows(runs);
+    let mut largest = 0;
+    for &i in &batch_rows {
+        largest = largest.max(runs.required::<usize>(i, "threads")?);
+    }
+    let threads = threads.unwrap_or(largest);
     let mut order: Vec<GroupKey> = Vec::new();
     let mut groups: BTreeMap<GroupKey, GroupTotals> = BTreeMap::new();
     let mut frames = std::collections::BTreeSet::new();
@@ -482,6 +522,7 @@ fn summarise(runs: &Table, checks: &BTreeMap<(GroupKey, ConfigKey), Checks>) -> 
         cpu: String::new(),
         wall_seconds: None,
         threads,
+        largest_threads: threads == largest,
         frames: frames.len(),
         rows,
         checked,
@@ -622,6 +663,24 @@ mod tests {
         .unwrap();
         fs::write(dir.join(VERIFY_CSV), VERIFY).unwrap();
         dir
+    }
+
+    #[test]
+    fn a_thread_count_asked_for_summarises_its_rows_only() {
+        let dir = results("threads", RUNS);
+        let summary = Summary::read_at(&dir, Some(1)).unwrap();
+        assert_eq!((summary.threads, summary.frames), (1, 1));
+        assert!(!summary.largest_threads);
+        assert_eq!(summary.rows.len(), 1);
+        let row = &summary.rows[0];
+        assert_eq!(row.ours.as_ref().unwrap().tracer, "cgt");
+        assert!((row.x_embree_best.unwrap() - 16.0).abs() < 1e-9);
+        assert!(summary.markdown().contains("At 1 thread, over 1 frame"));
+        let e = Summary::read_at(&dir, Some(3)).unwrap_err();
+        assert_eq!(e.exit_code(), 2);
+        assert!(e
+            .to_string()
+            .contains("no batch measured at 3 threads (the run has: 1, 2)"));
     }
 
     #[test]
