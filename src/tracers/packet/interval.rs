@@ -198,6 +198,8 @@ impl IntervalPacket {
             }
         }
         let mut mask = 0;
+        // `culls`'s `enter > exit`, negated as it is (a NaN keeps the box).
+        #[allow(clippy::neg_cmp_op_on_partial_ord)]
         for b in 0..W {
             mask |= (!(enter[b] > exit[b]) as u32) << b;
         }
