@@ -262,12 +262,25 @@ impl<const L: usize> SimdRay<L> {
     #[inline(always)]
     fn permute(&self, p: [f32; 3]) -> Permuted<L> {
         match self.common_axes {
-            Some(axes) => axes.map(|k| {
-                let (x, origin) = (p[k], &self.origin[k]);
-                std::array::from_fn(|l| x - origin[l])
-            }),
+            Some([kx, ky, kz]) => [
+                self.relative(p[kx], kx),
+                self.relative(p[ky], ky),
+                self.relative(p[kz], kz),
+            ],
             None => self.permute_lanes(&p.map(|x| [x; L])),
         }
+    }
+
+    /// Coordinate `x` on axis `axis` relative to every lane's origin (a plain loop: `array::map`
+    /// here was left as an out-of-line call).
+    #[inline(always)]
+    fn relative(&self, x: f32, axis: usize) -> [f32; L] {
+        let origin = &self.origin[axis];
+        let mut out = [0.0f32; L];
+        for l in 0..L {
+            out[l] = x - origin[l];
+        }
+        out
     }
 
     /// As `permute` for a vertex that differs per lane (`p[axis][lane]`).
