@@ -174,21 +174,25 @@ fn tracers_agree_with_embree_on_reflection_and_refraction() {
     }
 }
 
-/// One configuration per traversal, covering every SIMD width and both frustum settings; the
-/// exhaustive grid of configurations is checked against the reference tracer in tests/packet.rs.
+/// One configuration per traversal, covering every SIMD width and both frustum settings, and
+/// ranged over the 4- and 8-wide trees; the exhaustive grid of configurations is checked against
+/// the reference tracer in tests/packet.rs.
 #[test]
 fn packet_agrees_with_embree() {
-    for (traversal, packet, lanes, frustum) in [
-        ("ranged", 16, 16, true),
-        ("partition", 8, 8, true),
-        ("ia", 32, 16, true),
-        ("masked", 4, 4, false),
+    for (traversal, packet, lanes, frustum, width) in [
+        ("ranged", 16, 16, true, 2),
+        ("partition", 8, 8, true, 2),
+        ("ia", 32, 16, true, 2),
+        ("masked", 4, 4, false, 2),
+        ("ranged", 16, 16, false, 4),
+        ("ranged", 8, 8, true, 8),
     ] {
         let params = Params::new()
             .with("traversal", traversal)
             .with("packet", packet)
             .with("lanes", lanes)
-            .with("frustum", frustum);
+            .with("frustum", frustum)
+            .with("width", width);
         agrees_with_embree_with("packet", &params);
     }
 }

@@ -90,8 +90,8 @@ struct Counts {
     leaf_rays: u64,
 }
 
-fn count(traversal: Traversal) -> (Counts, Vec<Hit>) {
-    let tracer = PacketTracer::new(
+fn count(traversal: Traversal, width: usize) -> (Counts, Vec<Hit>) {
+    let tracer = PacketTracer::with_width(
         Arc::new(four_leaf_tree()),
         PacketConfig {
             packet: 4,
@@ -99,6 +99,7 @@ fn count(traversal: Traversal) -> (Counts, Vec<Hit>) {
             traversal,
             frustum: false,
         },
+        width,
     );
     let batch = column_packet([0.5, 10.0, 0.5, 3.5]);
     let mut hits = vec![Hit::MISS; batch.len()];
@@ -118,7 +119,11 @@ fn count(traversal: Traversal) -> (Counts, Vec<Hit>) {
 }
 
 fn assert_counts(t: Traversal, want: [u64; 5]) {
-    let (c, hits) = count(t);
+    assert_counts_at_width(t, 2, want);
+}
+
+fn assert_counts_at_width(t: Traversal, width: usize, want: [u64; 5]) {
+    let (c, hits) = count(t, width);
     let got = [
         c.nodes,
         c.box_lanes,
@@ -155,6 +160,20 @@ fn assert_counts(t: Traversal, want: [u64; 5]) {
 #[test]
 fn ranged_counts_on_the_hand_built_tree() {
     assert_counts(Traversal::Ranged, [7, 60, 16, 2, 16]);
+}
+
+/// The 4-wide tree (`width` = 4): one node, whose four slots the greedy collapse fills with
+/// leaves 4, 3, 5, 6 (node 1 opened first, then node 2). The interval test cannot use x or y
+/// (zero directions) and every box is met at t = 1 along z: all four survive, pushed far to near
+/// by x (the packet's x sum is +0), so popped 3, 4, 5, 6. leaf 3: g0 hits (1), then g1 g2 g3
+/// against its box (3): g0 g2 test its triangle (2). leaf 4: g0..g3 miss (4). leaf 5: (4).
+/// leaf 6: g0 g1 g2 miss, g3 hits (4), triangle for g3 (1). 5 nodes (root + 4 children
+/// tested), 16 box tests = 64 lanes, 3 triangle tests = 12 lanes, 2 leaves with 8 + 4 live
+/// rays. The 8-wide tree is the same single node (four slots empty): the same counts.
+#[test]
+fn wide_counts_on_the_hand_built_tree() {
+    assert_counts_at_width(Traversal::Ranged, 4, [5, 64, 12, 2, 12]);
+    assert_counts_at_width(Traversal::Ranged, 8, [5, 64, 12, 2, 12]);
 }
 
 /// Partition (App. A.2), I = [0 1 2 3], ia = 4. root: all four, g1 misses → I = [0 2 3 1], ia = 3
@@ -211,6 +230,24 @@ fn occlusion_stops_when_every_ray_is_occluded() {
         assert_eq!(c.get(Event::LeavesVisited), 1, "{traversal:?}");
         assert_eq!(c.nodes_visited, 3, "{traversal:?}: root, node 1, leaf 3");
     }
+    for width in [4, 8] {
+        let config = PacketConfig {
+            packet: 4,
+            lanes: 4,
+            traversal: Traversal::Ranged,
+            frustum: false,
+        };
+        let tracer = PacketTracer::with_width(Arc::new(four_leaf_tree()), config, width);
+        let mut flags = vec![false; 16];
+        tracer.occluded(column_packet([0.5, 10.0, 0.5, 3.5]).view(), &mut flags);
+        let want: Vec<bool> = (0..16).map(|i| i / 4 != 1).collect();
+        assert_eq!(flags, want, "width {width}");
+        let mut c = Counters::default();
+        tracer.occluded_counted(column_packet([0.5; 4]).view(), &mut flags, &mut c);
+        assert!(flags.iter().all(|&f| f), "width {width}");
+        assert_eq!(c.get(Event::LeavesVisited), 1, "width {width}");
+        assert_eq!(c.nodes_visited, 2, "width {width}: root, leaf 3");
+    }
 }
 
 /// Whether `got` is `want`, or an exact tie: the same distance, and the ray's watertight test
@@ -245,7 +282,12 @@ fn agrees_with_reference(name: &str, size: Option<u32>) {
     let expected_hits = [&primary, &diffuse].map(|b| trace_hits(&reference, b));
     let expected_shadow = trace_occlusion(&reference, &shadow);
     let mut ties = 0;
-    for traversal in Traversal::ALL {
+    // The wide trees run only ranged traversal.
+    let runs = Traversal::ALL
+        .into_iter()
+        .map(|t| (t, 2))
+        .chain([(Traversal::Ranged, 4), (Traversal::Ranged, 8)]);
+    for (traversal, width) in runs {
         for packet in PacketConfig::PACKET_SIDES {
             for lanes in PacketConfig::LANES {
                 for frustum in [false, true] {
@@ -255,7 +297,7 @@ fn agrees_with_reference(name: &str, size: Option<u32>) {
                         traversal,
                         frustum,
                     };
-                    let tracer = PacketTracer::new(bvh.clone(), config);
+                    let tracer = PacketTracer::with_width(bvh.clone(), config, width);
                     for (batch, expected) in [&primary, &diffuse].iter().zip(&expected_hits) {
                         let got = trace_hits(&tracer, batch);
                         for i in 0..batch.len() {
@@ -263,7 +305,7 @@ fn agrees_with_reference(name: &str, size: Option<u32>) {
                                 let ray = batch.ray(i);
                                 assert!(
                                     same_or_tie(mesh, &ray, &got[i], &expected[i]),
-                                    "{name} {:?} {config:?} ray {i}: {:?} vs reference {:?}",
+                                    "{name} {:?} {config:?} width {width} ray {i}: {:?} vs reference {:?}",
                                     batch.kind(),
                                     got[i],
                                     expected[i]
@@ -276,7 +318,7 @@ fn agrees_with_reference(name: &str, size: Option<u32>) {
                     let wrong = (0..shadow.len())
                         .filter(|&i| occluded[i] != expected_shadow[i])
                         .count();
-                    assert_eq!(wrong, 0, "{name} shadow {config:?}");
+                    assert_eq!(wrong, 0, "{name} shadow {config:?} width {width}");
                 }
             }
         }
@@ -314,6 +356,26 @@ fn bad_parameters_are_rejected() {
             frustum: false
         }
     );
+    let tree = Arc::new(four_leaf_tree());
+    let ranged = Params::new().with("traversal", "ranged");
+    for (extra, ok) in [
+        (ranged.clone().with("width", 4), true),
+        (ranged.clone().with("width", 8), true),
+        (Params::new(), true),
+        (ranged.clone().with("width", 3), false),
+        (ranged.clone().with("width", 16), false),
+        (
+            Params::new().with("traversal", "masked").with("width", 4),
+            false,
+        ),
+        (
+            Params::new().with("traversal", "ia").with("width", 8),
+            false,
+        ),
+    ] {
+        let made = PacketTracer::from_params(tree.clone(), &extra);
+        assert_eq!(made.is_ok(), ok, "{extra}");
+    }
 }
 
 /// Explicit packets (packet assembly) are kept: a 16-ray batch cut into packets of 5, 5, 5 and 1
@@ -333,18 +395,81 @@ fn explicit_packets_are_respected() {
     let tree = Arc::new(four_leaf_tree());
     let want = trace_hits(&ReferenceTracer::new(tree.clone()), &uniform);
     assert_eq!(want.iter().filter(|h| h.is_hit()).count(), 12);
-    for traversal in Traversal::ALL {
+    let runs = Traversal::ALL.into_iter().map(|t| (t, 2));
+    for (traversal, width) in runs.chain([(Traversal::Ranged, 4), (Traversal::Ranged, 8)]) {
         let config = PacketConfig {
             packet: 4,
             lanes: 4,
             traversal,
             frustum: true,
         };
-        let tracer = PacketTracer::new(tree.clone(), config);
+        let tracer = PacketTracer::with_width(tree.clone(), config, width);
         let mut hits = vec![Hit::MISS; 16];
         let mut c = Counters::default();
         tracer.intersect_counted(explicit.view(), &mut hits, &mut c);
-        assert_eq!(c.get(Event::Packets), 4, "{traversal:?}");
-        assert_eq!(hits, want, "{traversal:?}");
+        assert_eq!(c.get(Event::Packets), 4, "{traversal:?} width {width}");
+        assert_eq!(hits, want, "{traversal:?} width {width}");
     }
+}
+
+/// Motion blur on the wide trees: a mesh moving by a translation over the shutter, camera rays at
+/// random times, closest hits and occlusion equal to the reference tracer's over the same moving
+/// binary tree (which the wide trees are collapsed from, swept boxes and all).
+#[test]
+fn wide_trees_trace_moving_geometry_like_the_reference() {
+    let scene = load_scene("room", None).unwrap();
+    let frame = scene.frame(0, 1);
+    let open = &frame.mesh.triangles;
+    let shift = Vec3::new(0.05, 0.02, -0.03) * scene_size(open);
+    let close: Vec<Triangle> = open
+        .iter()
+        .map(|t| Triangle::new(t.v[0] + shift, t.v[1] + shift, t.v[2] + shift))
+        .collect();
+    let bvh = Arc::new(Bvh::build_moving(open, &close, BvhConfig::default()));
+    let reference = ReferenceTracer::new(bvh.clone());
+    let camera = primary_rays(&frame.camera, 64, 64);
+    let mut timed = RayBatch::new(RayKind::Primary);
+    for i in 0..camera.len() {
+        let time = (i * 7919 % 1000) as f32 / 1000.0;
+        timed.push(camera.ray(i).at_time(time), i as u32);
+    }
+    let want = trace_hits(&reference, &timed);
+    assert!(want.iter().filter(|h| h.is_hit()).count() > timed.len() / 2);
+    let want_occluded = trace_occlusion(&reference, &timed);
+    for width in [4, 8] {
+        for frustum in [false, true] {
+            let config = PacketConfig {
+                packet: 8,
+                lanes: 16,
+                traversal: Traversal::Ranged,
+                frustum,
+            };
+            let tracer = PacketTracer::with_width(bvh.clone(), config, width);
+            let got = trace_hits(&tracer, &timed);
+            for i in 0..timed.len() {
+                assert!(
+                    same_or_tie_moving(&got[i], &want[i]),
+                    "width {width} frustum {frustum} ray {i}: {:?} vs reference {:?}",
+                    got[i],
+                    want[i]
+                );
+            }
+            assert_eq!(
+                trace_occlusion(&tracer, &timed),
+                want_occluded,
+                "width {width}"
+            );
+        }
+    }
+}
+
+/// The largest extent of the triangles' box.
+fn scene_size(tris: &[Triangle]) -> f32 {
+    let b = tris.iter().fold(Aabb::EMPTY, |b, t| b.union(t.bounds()));
+    b.extent().max_element()
+}
+
+/// Equal hits, or a tie at exactly the same distance (two moving triangles meeting at an edge).
+fn same_or_tie_moving(got: &Hit, want: &Hit) -> bool {
+    got == want || (got.is_hit() && want.is_hit() && got.t == want.t)
 }

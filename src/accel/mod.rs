@@ -7,6 +7,7 @@ pub mod embree;
 pub mod grid;
 pub mod obvhs;
 pub mod presplit;
+pub mod wide_bvh;
 
 use std::sync::Arc;
 
@@ -20,6 +21,7 @@ use embree::{BuildQuality, Device, EmbreeConfig, EmbreeScene};
 pub use self::obvhs::{ObvhsBvh, ObvhsQuality};
 pub use bvh::{Bvh, BvhConfig, BvhNode};
 pub use grid::{Grid, GridConfig};
+pub use wide_bvh::{WideBvh, WideChild, WideNode};
 
 /// Which structure a tracer traverses.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]

@@ -77,8 +77,10 @@ impl<const L: usize> Default for SimdRay<L> {
 impl<const L: usize> SimdRay<L> {
     /// Loads rays `first .. first + used` of `rays` (`used ≤ L`) into the lanes; the rest become
     /// padding. Lane loops over the batch's arrays, computing exactly what `RayBoxTest::new` and
-    /// `WatertightRay::new` compute per ray.
-    pub fn load(&mut self, rays: &Rays<'_>, first: usize, used: usize) {
+    /// `WatertightRay::new` compute per ray, branch-free so they vectorize (a scalar load was a
+    /// third of the packet tracer's time on camera rays). Returns how many lanes hold a
+    /// well-formed ray.
+    pub fn load(&mut self, rays: &Rays<'_>, first: usize, used: usize) -> u32 {
         debug_assert!(used <= L);
         self.used = used as u32;
         let at = |src: &[f32], fill: f32| -> [f32; L] {
@@ -95,15 +97,29 @@ impl<const L: usize> SimdRay<L> {
         self.origin = [at(rays.ox, 0.0), at(rays.oy, 0.0), at(rays.oz, 0.0)];
         self.tmin = at(rays.tmin, f32::INFINITY);
         self.tmax = at(rays.tmax, f32::NEG_INFINITY);
-        // An ill-formed ray (`Ray::is_well_formed`) is a miss: its lane is loaded as padding.
-        for l in 0..used {
-            if !rays.ray(first + l).is_well_formed() {
-                for a in 0..3 {
-                    self.origin[a][l] = 0.0;
-                    d[a][l] = 1.0;
-                }
-                (self.tmin[l], self.tmax[l]) = (f32::INFINITY, f32::NEG_INFINITY);
+        // An ill-formed ray (`Ray::is_well_formed`, lane by lane) is a miss: its lane is loaded
+        // as padding. Padding lanes (tmin = ∞) are never well formed.
+        let mut well_formed = 0;
+        for l in 0..L {
+            let o = [self.origin[0][l], self.origin[1][l], self.origin[2][l]];
+            let dir = [d[0][l], d[1][l], d[2][l]];
+            let ok = o[0].is_finite()
+                & o[1].is_finite()
+                & o[2].is_finite()
+                & dir[0].is_finite()
+                & dir[1].is_finite()
+                & dir[2].is_finite()
+                & ((dir[0] != 0.0) | (dir[1] != 0.0) | (dir[2] != 0.0))
+                & self.tmin[l].is_finite()
+                & (self.tmin[l] >= 0.0)
+                & (self.tmin[l] < self.tmax[l]);
+            well_formed += ok as u32;
+            for a in 0..3 {
+                self.origin[a][l] = if ok { self.origin[a][l] } else { 0.0 };
+                d[a][l] = if ok { d[a][l] } else { 1.0 };
             }
+            self.tmin[l] = if ok { self.tmin[l] } else { f32::INFINITY };
+            self.tmax[l] = if ok { self.tmax[l] } else { f32::NEG_INFINITY };
         }
         self.time = if rays.time.is_empty() {
             [0.0; L]
@@ -117,16 +133,50 @@ impl<const L: usize> SimdRay<L> {
                 self.negative[a][l] = d[a][l].is_sign_negative() as u32;
             }
         }
-        // Each lane's watertight frame is the one `WatertightRay` picks (bit for bit).
+        // Each lane's watertight frame is the one `WatertightRay::new` picks, by the same
+        // comparisons and divisions (bit for bit), written as selects without short-circuits so
+        // the loop vectorizes.
         for l in 0..L {
-            let dir = Vec3::new(d[0][l], d[1][l], d[2][l]);
-            let (_, k, shear) = WatertightRay::new(Vec3::ZERO, dir).parts();
-            for a in 0..3 {
-                self.axes[a][l] = k[a] as u32;
-                self.shear[a][l] = shear[a];
-            }
+            let (x, y, z) = (d[0][l], d[1][l], d[2][l]);
+            let (ax, ay, az) = (x.abs(), y.abs(), z.abs());
+            let x_major = (ax >= ay) & (ax >= az);
+            let y_major = !x_major & (ay >= az);
+            let kz: u32 = if x_major {
+                0
+            } else if y_major {
+                1
+            } else {
+                2
+            };
+            let dz = if x_major {
+                x
+            } else if y_major {
+                y
+            } else {
+                z
+            };
+            let n1 = if kz == 2 { 0 } else { kz + 1 };
+            let n2 = if n1 == 2 { 0 } else { n1 + 1 };
+            // Swapped when dz < 0, to keep the triangles' winding.
+            let (kx, ky) = if dz < 0.0 { (n2, n1) } else { (n1, n2) };
+            let component = |k: u32| {
+                if k == 0 {
+                    x
+                } else if k == 1 {
+                    y
+                } else {
+                    z
+                }
+            };
+            self.axes[0][l] = kx;
+            self.axes[1][l] = ky;
+            self.axes[2][l] = kz;
+            self.shear[0][l] = component(kx) / dz;
+            self.shear[1][l] = component(ky) / dz;
+            self.shear[2][l] = 1.0 / dz;
         }
         self.common_axes = common_axes(&self.axes, used);
+        well_formed
     }
 
     /// Lane `l` becomes `ray`, exactly as `load` makes a lane (an ill-formed ray or `None`
@@ -204,10 +254,33 @@ impl<const L: usize> SimdRay<L> {
         }
     }
 
-    /// A vertex relative to every lane's origin, in every lane's watertight frame.
+    /// A vertex relative to every lane's origin, in every lane's watertight frame. With a frame
+    /// shared by all lanes each output row is read straight from the origin row it comes from
+    /// (the same subtractions): building the relative vertex first and then picking its rows by
+    /// a run-time index went through the stack and was the costliest step of the packet
+    /// tracer's triangle test.
     #[inline(always)]
     fn permute(&self, p: [f32; 3]) -> Permuted<L> {
-        self.permute_lanes(&p.map(|x| [x; L]))
+        match self.common_axes {
+            Some([kx, ky, kz]) => [
+                self.relative(p[kx], kx),
+                self.relative(p[ky], ky),
+                self.relative(p[kz], kz),
+            ],
+            None => self.permute_lanes(&p.map(|x| [x; L])),
+        }
+    }
+
+    /// Coordinate `x` on axis `axis` relative to every lane's origin (a plain loop: `array::map`
+    /// here was left as an out-of-line call).
+    #[inline(always)]
+    fn relative(&self, x: f32, axis: usize) -> [f32; L] {
+        let origin = &self.origin[axis];
+        let mut out = [0.0f32; L];
+        for l in 0..L {
+            out[l] = x - origin[l];
+        }
+        out
     }
 
     /// As `permute` for a vertex that differs per lane (`p[axis][lane]`).

@@ -14,10 +14,15 @@
 //! a box lying behind every ray's hit is culled at once — our choice: the paper's packets carry one
 //! `tmax` per ray, and this is the packet-wide bound of those.
 
-use crate::geometry::aabb::FAR_SCALE;
-use crate::geometry::Rays;
+// Lane loops index several lane arrays in lock step: the indexed form is what LLVM vectorizes.
+#![allow(clippy::needless_range_loop)]
 
-#[derive(Clone, Copy, Debug)]
+use crate::geometry::aabb::FAR_SCALE;
+#[cfg(test)]
+use crate::geometry::Rays;
+use crate::lanes::SimdRay;
+
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct IntervalPacket {
     origin_lo: [f32; 3],
     origin_hi: [f32; 3],
@@ -29,6 +34,8 @@ pub struct IntervalPacket {
 }
 
 impl IntervalPacket {
+    /// The definition `from_lanes` computes (kept for its test).
+    #[cfg(test)]
     pub fn new(rays: Rays<'_>) -> Self {
         let mut p = IntervalPacket {
             origin_lo: [f32::INFINITY; 3],
@@ -55,6 +62,56 @@ impl IntervalPacket {
                 p.usable[a] &= inv.is_finite() && o[a].is_finite() && neg == p.negative[a];
             }
             p.tmin = p.tmin.min(r.tmin);
+        }
+        p
+    }
+
+    /// `new` from the packet's rays already in SIMD lanes (every lane in use well formed): the
+    /// same bounds, bit for bit (the lanes hold the same origins and the same `1/d`), taken
+    /// lane-wise so they vectorize — built ray by ray they cost as much as the traversal.
+    pub fn from_lanes<const L: usize>(groups: &[SimdRay<L>]) -> Self {
+        let mut p = IntervalPacket {
+            origin_lo: [f32::INFINITY; 3],
+            origin_hi: [f32::NEG_INFINITY; 3],
+            inv_lo: [f32::INFINITY; 3],
+            inv_hi: [f32::NEG_INFINITY; 3],
+            negative: [false; 3],
+            usable: [true; 3],
+            tmin: f32::INFINITY,
+        };
+        let Some(first) = groups.first() else {
+            return p;
+        };
+        for a in 0..3 {
+            let (mut o_lo, mut o_hi) = ([f32::INFINITY; L], [f32::NEG_INFINITY; L]);
+            let (mut i_lo, mut i_hi) = ([f32::INFINITY; L], [f32::NEG_INFINITY; L]);
+            let (mut negatives, mut finite) = ([0u32; L], [true; L]);
+            for g in groups {
+                for l in 0..L {
+                    let used = (l as u32) < g.used;
+                    let (o, inv) = (g.origin[a][l], g.inv_dir[a][l]);
+                    o_lo[l] = if used && o < o_lo[l] { o } else { o_lo[l] };
+                    o_hi[l] = if used && o > o_hi[l] { o } else { o_hi[l] };
+                    i_lo[l] = if used && inv < i_lo[l] { inv } else { i_lo[l] };
+                    i_hi[l] = if used && inv > i_hi[l] { inv } else { i_hi[l] };
+                    negatives[l] += if used { g.negative[a][l] } else { 0 };
+                    finite[l] &= !used || (inv.is_finite() && o.is_finite());
+                }
+            }
+            let rays: u32 = groups.iter().map(|g| g.used).sum();
+            let negative_rays: u32 = negatives.iter().sum();
+            p.origin_lo[a] = o_lo.into_iter().fold(f32::INFINITY, f32::min);
+            p.origin_hi[a] = o_hi.into_iter().fold(f32::NEG_INFINITY, f32::max);
+            p.inv_lo[a] = i_lo.into_iter().fold(f32::INFINITY, f32::min);
+            p.inv_hi[a] = i_hi.into_iter().fold(f32::NEG_INFINITY, f32::max);
+            p.negative[a] = first.negative[a][0] != 0;
+            p.usable[a] =
+                finite.iter().all(|&f| f) && (negative_rays == 0 || negative_rays == rays);
+        }
+        for g in groups {
+            for l in 0..g.used as usize {
+                p.tmin = p.tmin.min(g.tmin[l]);
+            }
         }
         p
     }
@@ -95,6 +152,61 @@ impl IntervalPacket {
     }
 }
 
+impl IntervalPacket {
+    /// `culls` for `W` boxes at once (`lo[axis][box]`, `hi[axis][box]`; a wide BVH node's
+    /// children), by the same operations box by box, so each box gets `culls`'s verdict: bit `b`
+    /// set when box `b` may be met by some ray (is not culled).
+    #[inline(always)]
+    pub fn survivors<const W: usize>(
+        &self,
+        lo: &[[f32; W]; 3],
+        hi: &[[f32; W]; 3],
+        max_t: f32,
+    ) -> u32 {
+        let mut enter = [self.tmin; W];
+        let mut exit = [max_t; W];
+        for a in 0..3 {
+            if !self.usable[a] {
+                continue;
+            }
+            let (near, far) = if self.negative[a] {
+                (&hi[a], &lo[a])
+            } else {
+                (&lo[a], &hi[a])
+            };
+            let (o_lo, o_hi, i_lo, i_hi) = (
+                self.origin_lo[a],
+                self.origin_hi[a],
+                self.inv_lo[a],
+                self.inv_hi[a],
+            );
+            for b in 0..W {
+                let (x0, x1) = (near[b] - o_hi, near[b] - o_lo);
+                let near_min = f32::INFINITY
+                    .min(x0 * i_lo)
+                    .min(x0 * i_hi)
+                    .min(x1 * i_lo)
+                    .min(x1 * i_hi);
+                let (y0, y1) = (far[b] - o_hi, far[b] - o_lo);
+                let far_max = f32::NEG_INFINITY
+                    .max(y0 * i_lo * FAR_SCALE)
+                    .max(y0 * i_hi * FAR_SCALE)
+                    .max(y1 * i_lo * FAR_SCALE)
+                    .max(y1 * i_hi * FAR_SCALE);
+                enter[b] = enter[b].max(near_min);
+                exit[b] = exit[b].min(far_max);
+            }
+        }
+        let mut mask = 0;
+        // `culls`'s `enter > exit`, negated as it is (a NaN keeps the box).
+        #[allow(clippy::neg_cmp_op_on_partial_ord)]
+        for b in 0..W {
+            mask |= (!(enter[b] > exit[b]) as u32) << b;
+        }
+        mask
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -129,5 +241,61 @@ mod tests {
             }
         }
         assert!(culled * 2 > trials, "only {culled} of {trials} culled");
+    }
+
+    #[test]
+    fn bounds_from_lanes_equal_bounds_from_rays() {
+        let mut rng = SplitMix64::new(21);
+        for n in [1usize, 5, 16, 37, 64] {
+            let mut b = RayBatch::new(RayKind::Diffuse);
+            let (o, d) = (rng.vec3(-2.0, 2.0), rng.direction());
+            for i in 0..n {
+                let dir = (d + rng.vec3(-0.4, 0.4)).normalize();
+                let tmin = rng.range(0.0, 0.1);
+                b.push(Ray::new(o + rng.vec3(-0.3, 0.3), dir, tmin, 8.0), i as u32);
+            }
+            let rays = b.view();
+            let mut groups = vec![SimdRay::<16>::default(); n.div_ceil(16)];
+            for (g, group) in groups.iter_mut().enumerate() {
+                group.load(&rays, g * 16, 16.min(n - g * 16));
+            }
+            assert_eq!(
+                IntervalPacket::from_lanes(&groups),
+                IntervalPacket::new(rays),
+                "{n} rays"
+            );
+        }
+    }
+
+    #[test]
+    fn survivors_of_eight_boxes_are_the_boxes_culls_keeps() {
+        let mut rng = SplitMix64::new(9);
+        for _ in 0..500 {
+            let mut b = RayBatch::new(RayKind::Diffuse);
+            let (o, d) = (rng.vec3(-2.0, 2.0), rng.direction());
+            for i in 0..16 {
+                let dir = (d + rng.vec3(-0.2, 0.2)).normalize();
+                b.push(Ray::new(o + rng.vec3(-0.3, 0.3), dir, 0.0, 8.0), i);
+            }
+            let p = IntervalPacket::new(b.view());
+            let (mut lo, mut hi) = ([[0.0f32; 8]; 3], [[0.0f32; 8]; 3]);
+            for c in 0..7 {
+                let l = rng.vec3(-4.0, 4.0);
+                let h = l + rng.vec3(0.0, 1.0);
+                for a in 0..3 {
+                    (lo[a][c], hi[a][c]) = (l[a], h[a]);
+                }
+            }
+            // Slot 7 empty, as a wide node's unused slots (+∞ … −∞).
+            for a in 0..3 {
+                (lo[a][7], hi[a][7]) = (f32::INFINITY, f32::NEG_INFINITY);
+            }
+            let want = (0..8).fold(0u32, |m, c| {
+                let (l, h) = ([0, 1, 2].map(|a| lo[a][c]), [0, 1, 2].map(|a| hi[a][c]));
+                m | (!p.culls(l, h, 6.0) as u32) << c
+            });
+            assert_eq!(want & (1 << 7), 0, "the empty slot is culled");
+            assert_eq!(p.survivors(&lo, &hi, 6.0), want);
+        }
     }
 }

@@ -24,6 +24,12 @@
 //!   triangle says nothing about where it is at the rays' times) but still culls swept boxes.
 //! - **Occlusion**: a lane ends at its first hit (its `tmax` becomes −∞, so it hits nothing
 //!   more) and the packet stops as soon as every lane has.
+//! - **Wide trees** (`width` = 4 or 8; our addition, not the paper's): the binary tree collapsed
+//!   into a 4- or 8-wide one (`accel::WideBvh`, built by the tracer when asked for) and walked by
+//!   `wide`: Ranged traversal with one SIMD interval test of all of a node's children against
+//!   the whole packet. `width` = 2 (the default) is the binary tree and the four traversals
+//!   above, untouched; a wider tree runs only with `traversal = "ranged"`. Motion blur works as
+//!   on the binary tree (the wide boxes are its swept boxes).
 //!
 //! Counters: `ray` per ray; `node(depth)` per node a packet visits (tests in any way);
 //! `aabb_test(depth)` and `triangle_test(depth)` once per lane in use of every SIMD ray tested
@@ -42,12 +48,13 @@ mod order;
 mod partition;
 mod ranged;
 mod walk;
+mod wide;
 mod workspace;
 
 use std::str::FromStr;
 use std::sync::Arc;
 
-use crate::accel::Bvh;
+use crate::accel::{Bvh, WideBvh};
 use crate::error::{Error, Result};
 use crate::geometry::{Hit, Rays};
 use crate::stats::{Event, Stats};
@@ -61,6 +68,7 @@ pub use order::ChildOrder;
 use partition::Partition;
 use ranged::Ranged;
 use walk::traverse;
+use wide::{traverse_wide, WideStack};
 use workspace::{Packet, Tree};
 
 /// The packet traversal algorithm.
@@ -120,9 +128,31 @@ impl Default for PacketConfig {
 }
 
 impl PacketConfig {
-    pub const PARAMS: &'static [&'static str] = &["packet", "lanes", "traversal", "frustum"];
+    pub const PARAMS: &'static [&'static str] =
+        &["packet", "lanes", "traversal", "frustum", "width"];
     pub const PACKET_SIDES: [usize; 5] = [2, 4, 8, 16, 32];
     pub const LANES: [usize; 3] = [4, 8, 16];
+    /// Children per BVH node (`width`): 2 is the binary tree (the paper's), 4 and 8 a wide one
+    /// collapsed from it.
+    pub const WIDTHS: [usize; 3] = [2, 4, 8];
+
+    /// The `width` parameter (default 2), checked against this configuration.
+    pub fn width_from_params(&self, p: &Params) -> Result<usize> {
+        let width = p.get_or("width", 2usize)?;
+        if !Self::WIDTHS.contains(&width) {
+            return Err(Error::usage(format!(
+                "packet tracer: width must be one of {:?} (children per BVH node; got {width})",
+                Self::WIDTHS
+            )));
+        }
+        if width > 2 && self.traversal != Traversal::Ranged {
+            return Err(Error::usage(format!(
+                "packet tracer: width = {width} walks the wide tree by its own ranged traversal; traversal = {:?} runs only on the binary tree (width = 2)",
+                self.traversal.name()
+            )));
+        }
+        Ok(width)
+    }
 
     pub fn from_params(p: &Params) -> Result<Self> {
         let d = PacketConfig::default();
@@ -145,20 +175,48 @@ impl PacketConfig {
     }
 }
 
+/// The tree a packet walks: the binary one, or a wide one collapsed from it.
+enum Nodes {
+    Binary,
+    Four(WideBvh<4>),
+    Eight(WideBvh<8>),
+}
+
 pub struct PacketTracer {
     bvh: Arc<Bvh>,
     order: ChildOrder,
+    nodes: Nodes,
     config: PacketConfig,
 }
 
 impl PacketTracer {
+    /// Over the binary tree (`width` = 2).
     pub fn new(bvh: Arc<Bvh>, config: PacketConfig) -> Self {
+        Self::with_width(bvh, config, 2)
+    }
+
+    /// Over the tree of `width` children per node (one of `PacketConfig::WIDTHS`; a wide tree
+    /// is collapsed from `bvh` here, and only ranged traversal walks it).
+    pub fn with_width(bvh: Arc<Bvh>, config: PacketConfig, width: usize) -> Self {
         let order = ChildOrder::new(&bvh);
-        PacketTracer { bvh, order, config }
+        let nodes = match width {
+            2 => Nodes::Binary,
+            4 => Nodes::Four(WideBvh::collapse(&bvh)),
+            8 => Nodes::Eight(WideBvh::collapse(&bvh)),
+            _ => panic!("width {width}: `width_from_params` admits only 2, 4 and 8"),
+        };
+        PacketTracer {
+            bvh,
+            order,
+            nodes,
+            config,
+        }
     }
 
     pub fn from_params(bvh: Arc<Bvh>, params: &Params) -> Result<Self> {
-        Ok(Self::new(bvh, PacketConfig::from_params(params)?))
+        let config = PacketConfig::from_params(params)?;
+        let width = config.width_from_params(params)?;
+        Ok(Self::with_width(bvh, config, width))
     }
 
     pub fn config(&self) -> PacketConfig {
@@ -185,18 +243,30 @@ impl PacketTracer {
         };
         let traversal = self.config.traversal;
         let mut packet = Packet::<L>::with_capacity(size);
+        let mut wide_stack = WideStack::default();
         for range in rays.packets(size) {
             if S::ENABLED {
                 stats.event(Event::Packets, 1);
             }
             let first = range.start;
-            let interval = traversal == Traversal::Ia;
+            // The wide traversal's node test is the interval test.
+            let interval = traversal == Traversal::Ia || !matches!(self.nodes, Nodes::Binary);
             packet.load(rays.slice(range), &tree, self.config.frustum, interval);
-            match traversal {
-                Traversal::Masked => traverse::<Masked, L, S, ANY>(&mut packet, &tree, stats),
-                Traversal::Ranged => traverse::<Ranged, L, S, ANY>(&mut packet, &tree, stats),
-                Traversal::Partition => traverse::<Partition, L, S, ANY>(&mut packet, &tree, stats),
-                Traversal::Ia => traverse::<FirstHit, L, S, ANY>(&mut packet, &tree, stats),
+            match (&self.nodes, traversal) {
+                (Nodes::Four(wide), _) => {
+                    traverse_wide::<4, L, S, ANY>(&mut packet, &tree, wide, &mut wide_stack, stats)
+                }
+                (Nodes::Eight(wide), _) => {
+                    traverse_wide::<8, L, S, ANY>(&mut packet, &tree, wide, &mut wide_stack, stats)
+                }
+                (Nodes::Binary, traversal) => match traversal {
+                    Traversal::Masked => traverse::<Masked, L, S, ANY>(&mut packet, &tree, stats),
+                    Traversal::Ranged => traverse::<Ranged, L, S, ANY>(&mut packet, &tree, stats),
+                    Traversal::Partition => {
+                        traverse::<Partition, L, S, ANY>(&mut packet, &tree, stats)
+                    }
+                    Traversal::Ia => traverse::<FirstHit, L, S, ANY>(&mut packet, &tree, stats),
+                },
             }
             out(first, &packet);
         }

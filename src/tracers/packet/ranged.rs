@@ -26,18 +26,30 @@ pub fn first_hit<const L: usize, S: Stats>(
     stats: &mut S,
     culls: impl FnOnce(&Packet<L>, &BvhNode, &mut S) -> bool,
 ) -> Option<u32> {
-    let (n, depth, cell) = (
-        packet.groups.len() as u32,
-        tree.depth::<S>(node),
-        tree.node(node),
-    );
-    if packet.hits_box(ia, cell, depth, stats) {
+    let (depth, cell) = (tree.depth::<S>(node), tree.node(node));
+    let (lo, hi) = (cell.bounds.min.to_array(), cell.bounds.max.to_array());
+    first_hit_in(packet, lo, hi, ia, depth, stats, |p, s| culls(p, cell, s))
+}
+
+/// `first_hit` for the box `[lo, hi]` at `depth`.
+#[inline(always)]
+pub fn first_hit_in<const L: usize, S: Stats>(
+    packet: &Packet<L>,
+    lo: [f32; 3],
+    hi: [f32; 3],
+    ia: u32,
+    depth: usize,
+    stats: &mut S,
+    culls: impl FnOnce(&Packet<L>, &mut S) -> bool,
+) -> Option<u32> {
+    let n = packet.groups.len() as u32;
+    if packet.hits_bounds(ia, lo, hi, depth, stats) {
         return Some(ia);
     }
-    if culls(packet, cell, stats) {
+    if culls(packet, stats) {
         return None;
     }
-    (ia + 1..n).find(|&g| packet.hits_box(g, cell, depth, stats))
+    (ia + 1..n).find(|&g| packet.hits_bounds(g, lo, hi, depth, stats))
 }
 
 /// App. A.1 `rangedTraverseBVH`.

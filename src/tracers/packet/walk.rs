@@ -63,7 +63,8 @@ pub fn traverse<R: RaySelection, const L: usize, S: Stats, const ANY: bool>(
                 continue;
             }
             let active = R::at_leaf(packet, tree, node, ia, stats);
-            if packet.leaf::<S, ANY>(tree, cell, depth, active, stats) {
+            let triangles = cell.first as usize..(cell.first + cell.count) as usize;
+            if packet.leaf::<S, ANY>(tree, triangles, depth, active, stats) {
                 return;
             }
         }

@@ -89,32 +89,32 @@ impl<const L: usize> Packet<L> {
             self.identity = (0..count as u32).collect();
         }
         self.groups.truncate(count);
-        let mut sum = [0.0f32; 3];
+        let mut well_formed = 0;
         for (g, group) in self.groups.iter_mut().enumerate() {
             let first = g * L;
-            group.load(&rays, first, L.min(rays.len() - first));
+            well_formed += group.load(&rays, first, L.min(rays.len() - first));
         }
-        for (s, d) in sum.iter_mut().zip([rays.dx, rays.dy, rays.dz]) {
-            *s = d.iter().sum();
-        }
-        self.negative = sum.map(|s| s.is_sign_negative());
+        // Summed lane-wise first (a sequential float sum is one long dependency chain); only
+        // the signs are used.
+        self.negative = [rays.dx, rays.dy, rays.dz].map(|d| lane_sum::<L>(d).is_sign_negative());
         self.index.clear();
         self.index.extend(0..count as u32);
         // Ill-formed rays are misses from the start (`SimdRay::load`); their directions and
-        // intervals would poison the packet's bounds, so such a packet is traced uncullled.
-        let well_formed = (0..rays.len())
-            .filter(|&i| rays.ray(i).is_well_formed())
-            .count();
-        let cull = well_formed == rays.len();
-        self.live = well_formed as u32;
-        self.max_t = (0..rays.len()).fold(f32::NEG_INFINITY, |m, i| m.max(rays.tmax[i]));
+        // intervals would poison the packet's bounds, so such a packet is traced unculled.
+        let cull = well_formed as usize == rays.len();
+        self.live = well_formed;
+        // Read only with culling bounds, so only when every ray is well formed (no NaN).
+        self.max_t = self
+            .groups
+            .iter()
+            .fold(f32::NEG_INFINITY, |m, g| m.max(g.max_tmax()));
         let scene = &tree.bvh.nodes[Bvh::ROOT].bounds;
         self.frustum = if frustum && cull {
             Frustum::build::<L>(rays, scene)
         } else {
             None
         };
-        self.interval = (interval && cull).then(|| IntervalPacket::new(rays));
+        self.interval = (interval && cull).then(|| IntervalPacket::from_lanes(&self.groups));
     }
 
     /// The packet's results, lane by lane.
@@ -127,34 +127,57 @@ impl<const L: usize> Packet<L> {
     /// Whether SIMD ray `g` meets the box of `node`, counting one box test per lane in use.
     #[inline(always)]
     pub fn hits_box<S: Stats>(&self, g: u32, node: &BvhNode, depth: usize, stats: &mut S) -> bool {
+        let (lo, hi) = (node.bounds.min.to_array(), node.bounds.max.to_array());
+        self.hits_bounds(g, lo, hi, depth, stats)
+    }
+
+    /// As `hits_box` for the box `[lo, hi]`.
+    #[inline(always)]
+    pub fn hits_bounds<S: Stats>(
+        &self,
+        g: u32,
+        lo: [f32; 3],
+        hi: [f32; 3],
+        depth: usize,
+        stats: &mut S,
+    ) -> bool {
         let group = &self.groups[g as usize];
         if S::ENABLED {
             (0..group.used).for_each(|_| stats.aabb_test(depth));
         }
-        group.hits_box(node.bounds.min.to_array(), node.bounds.max.to_array())
+        group.hits_box(lo, hi)
     }
 
     /// Whether the frustum culls the box of `node` for the whole packet (counted as a culled box).
     #[inline(always)]
     pub fn frustum_culls<S: Stats>(&self, node: &BvhNode, stats: &mut S) -> bool {
-        let culled = self
-            .frustum
-            .as_ref()
-            .is_some_and(|f| f.culls_box(node.bounds.min.to_array(), node.bounds.max.to_array()));
+        let (lo, hi) = (node.bounds.min.to_array(), node.bounds.max.to_array());
+        self.frustum_culls_bounds(lo, hi, stats)
+    }
+
+    /// As `frustum_culls` for the box `[lo, hi]`.
+    #[inline(always)]
+    pub fn frustum_culls_bounds<S: Stats>(
+        &self,
+        lo: [f32; 3],
+        hi: [f32; 3],
+        stats: &mut S,
+    ) -> bool {
+        let culled = self.frustum.as_ref().is_some_and(|f| f.culls_box(lo, hi));
         if S::ENABLED && culled {
             stats.event(Event::BoxesCulled, 1);
         }
         culled
     }
 
-    /// Fig. 2 lines 21–27: every triangle of `leaf` the frustum does not cull, against the SIMD
-    /// rays `active`. With `ANY` (occlusion) lanes end at their first hit. Returns whether the
+    /// Fig. 2 lines 21–27: every triangle of a leaf (`triangles`, indices into the tree's) the
+    /// frustum does not cull, against the SIMD rays `active`. With `ANY` (occlusion) lanes end at their first hit. Returns whether the
     /// packet is done (occlusion: every lane occluded).
     #[inline(always)]
     pub fn leaf<S: Stats, const ANY: bool>(
         &mut self,
         tree: &Tree,
-        leaf: &BvhNode,
+        triangles: std::ops::Range<usize>,
         depth: usize,
         active: ActiveRays,
         stats: &mut S,
@@ -173,7 +196,7 @@ impl<const L: usize> Packet<L> {
             stats.event(Event::LeafActiveRays, lanes as u64);
         }
         let bvh = tree.bvh;
-        for i in leaf.first as usize..(leaf.first + leaf.count) as usize {
+        for i in triangles {
             let tri = &bvh.triangles[i];
             // A moving triangle is not where `tri` says at the rays' times: no triangle culling
             // (boxes are swept, so box culling stays exact).
@@ -215,6 +238,19 @@ impl<const L: usize> Packet<L> {
         }
         false
     }
+}
+
+/// The sum of `x`, accumulated in `L` lanes.
+fn lane_sum<const L: usize>(x: &[f32]) -> f32 {
+    let mut acc = [0.0f32; L];
+    let chunks = x.chunks_exact(L);
+    let rest: f32 = chunks.remainder().iter().sum();
+    for chunk in chunks {
+        for (a, v) in acc.iter_mut().zip(chunk) {
+            *a += v;
+        }
+    }
+    acc.iter().sum::<f32>() + rest
 }
 
 /// Which SIMD rays a leaf tests.

@@ -1,0 +1,312 @@
+//! A `W`-wide BVH (W = 4 or 8) collapsed from the binary SAH tree (`Bvh`), for packet traversals
+//! that test all of a node's children against a whole packet in one SIMD operation (Wald, Benthin
+//! and Boulos 2008, "Getting rid of packets"; Fuetterling et al. 2015 over large packets).
+//!
+//! Collapse: each wide node starts from a binary interior node's two children and repeatedly
+//! replaces the interior child of largest surface area by its two children until it has `W`
+//! children or only leaves are left (the usual greedy collapse). Leaves are the binary tree's
+//! leaves, unchanged: their triangle ranges index the binary tree's `triangles`, so the wide tree
+//! adds only nodes and shares every triangle with the tree it came from.
+//!
+//! Layout: child boxes in structure-of-arrays lanes (`lo[axis][child]`, `hi[axis][child]`), so a
+//! slab test of one ray interval against all children is a handful of W-wide vector operations.
+//! W = 4 is 128 bytes (two cache lines), W = 8 is 256. Unused child slots hold an empty box
+//! (`lo = +∞`, `hi = −∞`), which no slab test and no interval test can hit.
+
+use super::bvh::Bvh;
+
+/// One child slot: an interior wide node, a leaf's triangle range, or nothing.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum WideChild {
+    Node(u32),
+    /// Triangles `first .. first + count` of the binary tree's `triangles`.
+    Leaf {
+        first: u32,
+        count: u32,
+    },
+    Empty,
+}
+
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(64))]
+pub struct WideNode<const W: usize> {
+    pub lo: [[f32; W]; 3],
+    pub hi: [[f32; W]; 3],
+    /// Interior child: its node index. Leaf child: its first triangle. Empty slot: 0.
+    pub first: [u32; W],
+    /// Leaf child: its triangle count (≥ 1). Interior child and empty slot: 0.
+    pub count: [u32; W],
+    /// Bit `c` set when slot `c` is in use.
+    pub used: u32,
+}
+
+impl<const W: usize> WideNode<W> {
+    const EMPTY: Self = WideNode {
+        lo: [[f32::INFINITY; W]; 3],
+        hi: [[f32::NEG_INFINITY; W]; 3],
+        first: [0; W],
+        count: [0; W],
+        used: 0,
+    };
+
+    #[inline(always)]
+    pub fn child(&self, c: usize) -> WideChild {
+        if self.used & (1 << c) == 0 {
+            WideChild::Empty
+        } else if self.count[c] > 0 {
+            WideChild::Leaf {
+                first: self.first[c],
+                count: self.count[c],
+            }
+        } else {
+            WideChild::Node(self.first[c])
+        }
+    }
+
+    /// Child `c`'s box as `(lo, hi)`.
+    #[inline(always)]
+    pub fn child_box(&self, c: usize) -> ([f32; 3], [f32; 3]) {
+        (
+            [self.lo[0][c], self.lo[1][c], self.lo[2][c]],
+            [self.hi[0][c], self.hi[1][c], self.hi[2][c]],
+        )
+    }
+}
+
+/// The wide tree over a binary `Bvh`'s leaves. Node 0 is the root; an empty binary tree gives an
+/// empty wide tree (no nodes).
+#[derive(Clone, Debug)]
+pub struct WideBvh<const W: usize> {
+    pub nodes: Vec<WideNode<W>>,
+    /// Depth of each wide node (root 0), for the per-depth counters.
+    pub depth: Vec<u8>,
+}
+
+impl<const W: usize> WideBvh<W> {
+    const WIDTH_OK: () = assert!(W >= 2 && W <= 32, "a wide node has 2 to 32 children");
+
+    pub fn collapse(bvh: &Bvh) -> Self {
+        let () = Self::WIDTH_OK;
+        let mut wide = WideBvh {
+            nodes: Vec::new(),
+            depth: Vec::new(),
+        };
+        if bvh.is_empty() {
+            return wide;
+        }
+        wide.nodes.push(WideNode::EMPTY);
+        wide.depth.push(0);
+        // (wide node to fill, binary nodes that become its children)
+        let mut pending = vec![(0usize, wide_children::<W>(bvh, Bvh::ROOT))];
+        while let Some((index, children)) = pending.pop() {
+            let mut node = WideNode::EMPTY;
+            for (c, &b) in children.iter().enumerate() {
+                let binary = &bvh.nodes[b];
+                for a in 0..3 {
+                    node.lo[a][c] = binary.bounds.min[a];
+                    node.hi[a][c] = binary.bounds.max[a];
+                }
+                node.used |= 1 << c;
+                if binary.is_leaf() {
+                    (node.first[c], node.count[c]) = (binary.first, binary.count);
+                } else {
+                    let child = wide.nodes.len();
+                    wide.nodes.push(WideNode::EMPTY);
+                    wide.depth.push(wide.depth[index] + 1);
+                    node.first[c] = child as u32;
+                    pending.push((child, wide_children::<W>(bvh, b)));
+                }
+            }
+            wide.nodes[index] = node;
+        }
+        wide
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.nodes.is_empty()
+    }
+}
+
+/// The binary nodes that become the children of the wide node made from binary node `root`: its
+/// two children, then greedily the interior one of largest surface area replaced by its two
+/// children until there are `W` or no interior one is left. A binary leaf at the root (a tree of
+/// one leaf) is the wide root's only child.
+fn wide_children<const W: usize>(bvh: &Bvh, root: usize) -> Vec<usize> {
+    let node = &bvh.nodes[root];
+    if node.is_leaf() {
+        return vec![root];
+    }
+    let mut children = vec![node.first as usize, node.first as usize + 1];
+    while children.len() < W {
+        let largest = children
+            .iter()
+            .enumerate()
+            .filter(|(_, &c)| !bvh.nodes[c].is_leaf())
+            .max_by(|(_, &a), (_, &b)| {
+                let area = |i: usize| bvh.nodes[i].bounds.surface_area();
+                area(a).total_cmp(&area(b))
+            })
+            .map(|(slot, _)| slot);
+        let Some(slot) = largest else { break };
+        let split = children.swap_remove(slot);
+        let first = bvh.nodes[split].first as usize;
+        children.extend([first, first + 1]);
+    }
+    children
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::Vec3;
+
+    use super::*;
+    use crate::accel::BvhConfig;
+    use crate::geometry::{Aabb, Triangle};
+    use crate::random::SplitMix64;
+
+    fn random_triangles(n: usize) -> Vec<Triangle> {
+        let mut rng = SplitMix64::new(3);
+        (0..n)
+            .map(|_| {
+                let p = rng.vec3(0.0, 10.0);
+                Triangle::new(p, p + rng.vec3(0.0, 0.5), p + rng.vec3(0.0, 0.5))
+            })
+            .collect()
+    }
+
+    /// The box of everything below child slot `c` of `node`, and the leaf ranges reached.
+    fn subtree<const W: usize>(
+        wide: &WideBvh<W>,
+        bvh: &Bvh,
+        child: WideChild,
+        ranges: &mut Vec<(u32, u32)>,
+    ) -> Aabb {
+        match child {
+            WideChild::Empty => Aabb::EMPTY,
+            WideChild::Leaf { first, count } => {
+                ranges.push((first, count));
+                // The binary leaf's box: with early split clipping a triangle may stick out of it
+                // (only its clipped piece is inside), so the triangles' own boxes are checked
+                // only on unsplit trees.
+                let leaf = bvh
+                    .nodes
+                    .iter()
+                    .find(|n| n.is_leaf() && (n.first, n.count) == (first, count))
+                    .expect("a binary leaf");
+                if bvh.config.presplit == 0.0 {
+                    for i in first..first + count {
+                        assert!(leaf.bounds.contains(&bvh.triangles[i as usize].bounds()));
+                    }
+                }
+                leaf.bounds
+            }
+            WideChild::Node(n) => {
+                let node = &wide.nodes[n as usize];
+                let mut total = Aabb::EMPTY;
+                for c in 0..W {
+                    let inner = subtree(wide, bvh, node.child(c), ranges);
+                    if node.child(c) != WideChild::Empty {
+                        let (lo, hi) = node.child_box(c);
+                        let b = Aabb::new(Vec3::from(lo), Vec3::from(hi));
+                        assert!(b.contains(&inner), "a child box misses part of its subtree");
+                        if let WideChild::Node(m) = node.child(c) {
+                            assert_eq!(wide.depth[m as usize], wide.depth[n as usize] + 1);
+                        }
+                        total = total.union(b);
+                    }
+                }
+                total
+            }
+        }
+    }
+
+    fn check<const W: usize>(bvh: &Bvh) {
+        let wide = WideBvh::<W>::collapse(bvh);
+        let mut ranges = Vec::new();
+        subtree(&wide, bvh, WideChild::Node(0), &mut ranges);
+        // Exactly the binary tree's leaves, each reached once: every triangle reference once.
+        let mut binary: Vec<(u32, u32)> = bvh
+            .nodes
+            .iter()
+            .filter(|n| n.is_leaf())
+            .map(|n| (n.first, n.count))
+            .collect();
+        ranges.sort_unstable();
+        binary.sort_unstable();
+        assert_eq!(ranges, binary, "W = {W}");
+        let refs: u32 = ranges.iter().map(|r| r.1).sum();
+        assert_eq!(refs as usize, bvh.triangles.len());
+        // A node is full unless every child is a leaf (nothing left to open).
+        for node in &wide.nodes {
+            let used = node.used.count_ones() as usize;
+            let interior = (0..W).any(|c| matches!(node.child(c), WideChild::Node(_)));
+            assert!((2..=W).contains(&used), "W = {W}: {used} children");
+            assert!(
+                used == W || !interior,
+                "W = {W}: a partial node with interior children"
+            );
+            // Unused slots hold the empty box.
+            for c in (0..W).filter(|&c| node.used & (1 << c) == 0) {
+                let (lo, hi) = node.child_box(c);
+                assert!(lo.iter().all(|&x| x == f32::INFINITY));
+                assert!(hi.iter().all(|&x| x == f32::NEG_INFINITY));
+            }
+        }
+    }
+
+    #[test]
+    fn wide_trees_nest_and_reach_every_leaf_once() {
+        let tris = random_triangles(4000);
+        for config in [
+            BvhConfig::default(),
+            BvhConfig {
+                max_leaf_size: 1,
+                presplit: 0.0,
+                ..BvhConfig::default()
+            },
+        ] {
+            let bvh = Bvh::build(&tris, config);
+            check::<4>(&bvh);
+            check::<8>(&bvh);
+        }
+    }
+
+    #[test]
+    fn a_complete_binary_tree_of_eight_leaves_collapses_by_hand_count() {
+        // Eight evenly spaced single-triangle leaves: SAH splits them 4|4, 2|2, 1|1, a balanced
+        // binary tree of 7 interior nodes. 8-wide: one node of all 8 leaves. 4-wide: the root
+        // opens both halves into their four quarters, each a node of 2 leaves: 5 nodes.
+        let tris: Vec<Triangle> = (0..8)
+            .map(|i| {
+                let p = Vec3::new(i as f32 * 10.0, 0.0, 0.0);
+                Triangle::new(p, p + Vec3::X, p + Vec3::Y)
+            })
+            .collect();
+        let config = BvhConfig {
+            max_leaf_size: 1,
+            presplit: 0.0,
+            ..BvhConfig::default()
+        };
+        let bvh = Bvh::build(&tris, config);
+        assert_eq!(bvh.leaf_count(), 8);
+        assert_eq!(bvh.nodes.len(), 15);
+        let eight = WideBvh::<8>::collapse(&bvh);
+        assert_eq!(eight.nodes.len(), 1);
+        assert_eq!(eight.nodes[0].used.count_ones(), 8);
+        let four = WideBvh::<4>::collapse(&bvh);
+        assert_eq!(four.nodes.len(), 5);
+        assert_eq!(four.nodes[0].used.count_ones(), 4);
+        assert!(four.nodes[1..].iter().all(|n| n.used.count_ones() == 2));
+        let two = WideBvh::<2>::collapse(&bvh);
+        assert_eq!(two.nodes.len(), 7, "a 2-wide collapse is the binary tree");
+        // A single triangle: one leaf under the root.
+        let one = Bvh::build(&tris[..1], config);
+        let wide = WideBvh::<4>::collapse(&one);
+        assert_eq!(wide.nodes.len(), 1);
+        assert_eq!(
+            wide.nodes[0].child(0),
+            WideChild::Leaf { first: 0, count: 1 }
+        );
+        assert!(WideBvh::<4>::collapse(&Bvh::build(&[], config)).is_empty());
+    }
+}
