@@ -147,7 +147,7 @@ pub struct RayBatch {
     /// `camera.pixel_ray(pixel[i])` for every `i` (`push_camera_ray`; any other push clears it,
     /// and code editing rays in place must too). Multi-frusta tracing regenerates such rays on
     /// demand instead of reading them.
-    pub camera: Option<CameraGrid>,
+    pub camera: Option<Box<CameraGrid>>,
 }
 
 impl RayBatch {
@@ -210,7 +210,11 @@ impl RayBatch {
     /// Pushes `grid`'s ray through the centre of pixel id `pixel` (starting an explicit packet
     /// with `packet_start`); the batch keeps `grid` as its camera while all its rays are such.
     pub fn push_camera_ray(&mut self, grid: &CameraGrid, pixel: u32, packet_start: bool) {
-        let camera = (self.is_empty() || self.camera == Some(*grid)).then_some(*grid);
+        let camera = match self.camera.take() {
+            Some(camera) if *camera == *grid => Some(camera),
+            _ if self.is_empty() => Some(Box::new(*grid)),
+            _ => None,
+        };
         let ray = grid.pixel_ray(pixel);
         if packet_start {
             self.push_packet_start(ray, pixel);
@@ -290,7 +294,7 @@ impl RayBatch {
             time: &self.time,
             kind: self.kind(),
             pixel: &self.pixel,
-            camera: self.camera.as_ref(),
+            camera: self.camera.as_deref(),
         }
     }
 }

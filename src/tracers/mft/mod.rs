@@ -197,7 +197,7 @@ impl Kernel for MftTracer {
             Some(grid)
                 if self.config.primary == PrimaryRays::Frusta && self.bvh.motion_end.is_none() =>
             {
-                primary::intersect(&self.bvh, grid, self.config.block, rays, hits, stats)
+                primary::intersect(&self.bvh, grid, &self.config, rays, hits, stats)
             }
             _ => self.packets.intersect_with(rays, hits, stats),
         }

@@ -21,6 +21,11 @@
 //! - **Exact closest hits**: the reference tracer's watertight test in 16-lane SIMD rays
 //!   (`SimdRay`), all culling conservative, so each ray gets the reference's closest hit (up to
 //!   the order in which triangles at exactly equal distance are met).
+//! - **Leaf ray tests** (`leaf_rays`, as for shadow frusta): at a leaf, a frustum's rays are
+//!   tested against the leaf's box (each up to its closest hit so far) before its triangles; a
+//!   frustum none of whose rays meets the box skips the leaf. The frustum hull reaches boxes
+//!   that fall between its 16 rays, and a rays' own closest hits cull far more than the
+//!   frustum's far distance.
 //!
 //! The paper's back-face culling of primary rays is left out (it would change answers on open
 //! meshes); `cull`'s plane test drops triangles behind the camera or beyond `far` instead.
@@ -34,6 +39,7 @@ use crate::lanes::SimdRay;
 use crate::stats::{Event, Stats};
 use crate::tracers::mft::cull::keep_mask;
 use crate::tracers::mft::frusta::{bits, Frusta, Margins, MAX_FRUSTA};
+use crate::tracers::mft::MftConfig;
 
 /// Rays per primary frustum: a 4×4 pixel block, one 16-lane SIMD ray.
 pub const FRUSTUM_RAYS: usize = 16;
@@ -70,11 +76,11 @@ thread_local! {
 }
 
 /// `hits[i]` becomes the closest hit of camera ray `i` of `rays` (`grid`'s rays through the
-/// centres of `rays.pixel`), `block` frusta at a time.
+/// centres of `rays.pixel`), `config.block` frusta at a time.
 pub fn intersect<S: Stats>(
     bvh: &Bvh,
     grid: &CameraGrid,
-    block: usize,
+    config: &MftConfig,
     rays: Rays<'_>,
     hits: &mut [Hit],
     stats: &mut S,
@@ -118,8 +124,15 @@ pub fn intersect<S: Stats>(
         let mut packets = std::mem::take(&mut scratch.packets);
         packets.clear();
         packets.extend(rays.packets(FRUSTUM_RAYS));
-        for group in packets.chunks(block) {
-            trace_block(bvh, grid, &margins, far, group, rays, hits, scratch, stats);
+        for group in packets.chunks(config.block) {
+            let frame = Frame {
+                bvh,
+                grid,
+                margins: &margins,
+                scene_far: far,
+                leaf_rays: config.leaf_rays,
+            };
+            trace_block(&frame, group, rays, hits, scratch, stats);
         }
         scratch.packets = packets;
     })
@@ -137,20 +150,33 @@ fn aim(frusta: &mut Frusta, f: usize, grid: &CameraGrid, far: f32, margins: &Mar
     frusta.set_corners(f, corners, Some(margins));
 }
 
+/// What every block of a batch shares.
+struct Frame<'a> {
+    bvh: &'a Bvh,
+    grid: &'a CameraGrid,
+    margins: &'a Margins,
+    /// A far distance past the scene's box.
+    scene_far: f32,
+    leaf_rays: bool,
+}
+
 /// The frusta of `group` (ray ranges of `rays`, ≤ `MAX_FRUSTA` of them) through the BVH; their
 /// hits into `hits`, which holds misses on entry.
-#[allow(clippy::too_many_arguments)]
 fn trace_block<S: Stats>(
-    bvh: &Bvh,
-    grid: &CameraGrid,
-    margins: &Margins,
-    scene_far: f32,
+    frame: &Frame<'_>,
     group: &[Range<usize>],
     rays: Rays<'_>,
     hits: &mut [Hit],
     scratch: &mut Scratch,
     stats: &mut S,
 ) {
+    let Frame {
+        bvh,
+        grid,
+        margins,
+        scene_far,
+        leaf_rays,
+    } = *frame;
     let Scratch {
         frusta,
         rays: simd,
@@ -254,14 +280,24 @@ fn trace_block<S: Stats>(
             stats.event(Event::LeafActiveRays, leaf_rays as u64);
         }
         let mut hit_frusta = 0u64;
+        // `leaf_rays`: frusta whose rays were tested against the leaf's box, and those none of
+        // whose rays meets it within its closest hit so far, which skip the leaf.
+        let (mut box_tested, mut box_missed) = (0u64, 0u64);
         for t in node.first as usize..(node.first + node.count) as usize {
+            let candidates = mask & !box_missed;
+            if candidates == 0 {
+                break;
+            }
             let tri = &bvh.triangles[t];
-            let keep = keep_mask(frusta, tri, mask);
+            let keep = keep_mask(frusta, tri, candidates);
             if S::ENABLED {
                 stats.event(Event::TrianglesAccessed, 1);
                 stats.event(Event::TrianglesKept, (keep != 0) as u64);
                 stats.event(Event::FrustumTriangleTests, keep.count_ones() as u64);
-                stats.event(Event::TrianglesCulled, (mask & !keep).count_ones() as u64);
+                stats.event(
+                    Event::TrianglesCulled,
+                    (candidates & !keep).count_ones() as u64,
+                );
             }
             let prim = bvh.prim_ids[t];
             for f in bits(keep) {
@@ -269,6 +305,17 @@ fn trace_block<S: Stats>(
                 if generated & 1 << f == 0 {
                     generated |= 1 << f;
                     generate(grid, pixels, &mut simd[f], stats);
+                }
+                if leaf_rays && box_tested & 1 << f == 0 {
+                    box_tested |= 1 << f;
+                    if S::ENABLED {
+                        (0..pixels.len()).for_each(|_| stats.aabb_test(depth(index)));
+                    }
+                    let (lo, hi) = (node.bounds.min.to_array(), node.bounds.max.to_array());
+                    if !simd[f].hits_box(lo, hi) {
+                        box_missed |= 1 << f;
+                        continue;
+                    }
                 }
                 if S::ENABLED {
                     (0..pixels.len()).for_each(|_| stats.triangle_test(depth(index)));

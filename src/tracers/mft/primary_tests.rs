@@ -187,7 +187,10 @@ fn hits_equal_the_reference_tracers_on_room_conference_and_bart() {
 fn on_demand_rays_are_the_batchs_rays_bit_for_bit_and_made_once() {
     let (_, camera) = soup_scene(3);
     let batch = primary_rays(&camera, WIDTH, HEIGHT);
-    let grid = batch.camera.expect("a pinhole batch carries its grid");
+    let grid = *batch
+        .camera
+        .clone()
+        .expect("a pinhole batch carries its grid");
     let rays = batch.view();
     let lanes = |r: &SimdRay<FRUSTUM_RAYS>| {
         let f = |x: &[[f32; FRUSTUM_RAYS]; 3]| x.map(|a| a.map(f32::to_bits));
@@ -346,7 +349,7 @@ fn camera_grids_survive_tiles_and_explicit_packets_and_are_checked() {
     for (i, pixel) in [3u32, 4, 80, 81, 82].into_iter().enumerate() {
         batch.push_camera_ray(&grid, pixel, i % 2 == 0);
     }
-    assert_eq!(batch.camera, Some(grid));
+    assert_eq!(batch.camera.as_deref(), Some(&grid));
     assert_eq!(batch.view().packets(16).count(), 3);
     assert_eq!(batch.view().slice(1..3).camera, Some(&grid));
     // Another camera's ray ends the grid; `clear` forgets it.
@@ -355,7 +358,7 @@ fn camera_grids_survive_tiles_and_explicit_packets_and_are_checked() {
     assert!(batch.camera.is_none());
     batch.clear(RayKind::Primary);
     batch.push_camera_ray(&grid, 7, false);
-    assert_eq!(batch.camera, Some(grid));
+    assert_eq!(batch.camera.as_deref(), Some(&grid));
     assert!(MftConfig::from_params(&Params::new().with("primary", "rays")).is_err());
     assert_eq!(
         MftConfig::from_params(&Params::new().with("primary", "packets"))
