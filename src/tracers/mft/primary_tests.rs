@@ -23,6 +23,14 @@ use crate::tracers::reference::ReferenceTracer;
 const WIDTH: u32 = 72;
 const HEIGHT: u32 = 52;
 
+/// `mft` with primary frusta (the default traces camera rays as packets).
+fn frusta() -> MftConfig {
+    MftConfig {
+        primary: PrimaryRays::Frusta,
+        ..MftConfig::default()
+    }
+}
+
 fn bvh(triangles: &[Triangle]) -> Arc<Bvh> {
     Arc::new(Bvh::build(triangles, BvhConfig::default()))
 }
@@ -72,10 +80,7 @@ fn agrees_with_reference(name: &str, triangles: &[Triangle], batch: &RayBatch) -
     );
     let mut default_counters = None;
     for block in [16, 1, 5, 64] {
-        let config = MftConfig {
-            block,
-            ..MftConfig::default()
-        };
+        let config = MftConfig { block, ..frusta() };
         let mut counters = Counters::default();
         let got = hits_of(&MftTracer::new(bvh.clone(), config), batch, &mut counters);
         let mut ties = 0;
@@ -228,7 +233,7 @@ fn on_demand_rays_are_the_batchs_rays_bit_for_bit_and_made_once() {
         Vec3::new(100.0, -100.0, -20.0),
         Vec3::new(0.0, 200.0, -20.0),
     );
-    let mft = MftTracer::new(bvh(&[wall]), MftConfig::default());
+    let mft = MftTracer::new(bvh(&[wall]), frusta());
     let mut counters = Counters::default();
     let hits = hits_of(&mft, &batch, &mut counters);
     assert!(hits.iter().all(|h| h.prim == 0));
@@ -242,7 +247,7 @@ fn on_demand_rays_are_the_batchs_rays_bit_for_bit_and_made_once() {
     );
     let mut counters = Counters::default();
     let hits = hits_of(
-        &MftTracer::new(bvh(&[behind, wall]), MftConfig::default()),
+        &MftTracer::new(bvh(&[behind, wall]), frusta()),
         &batch,
         &mut counters,
     );
@@ -250,7 +255,7 @@ fn on_demand_rays_are_the_batchs_rays_bit_for_bit_and_made_once() {
     assert_eq!(counters.get(Event::RaysOnDemand) as usize, batch.len());
     let mut counters = Counters::default();
     let hits = hits_of(
-        &MftTracer::new(bvh(&[behind]), MftConfig::default()),
+        &MftTracer::new(bvh(&[behind]), frusta()),
         &batch,
         &mut counters,
     );
@@ -269,7 +274,7 @@ fn batches_that_are_not_a_camera_grid_go_to_packets() {
         &camera_batch,
         &mut Counters::default(),
     );
-    let mft = MftTracer::new(bvh.clone(), MftConfig::default());
+    let mft = MftTracer::new(bvh.clone(), frusta());
     let copy = |edit: &dyn Fn(usize, Ray) -> Ray| {
         let mut b = RayBatch::new(RayKind::Primary);
         for i in 0..camera_batch.len() {
@@ -360,10 +365,7 @@ fn camera_grids_survive_tiles_and_explicit_packets_and_are_checked() {
     batch.push_camera_ray(&grid, 7, false);
     assert_eq!(batch.camera.as_deref(), Some(&grid));
     assert!(MftConfig::from_params(&Params::new().with("primary", "rays")).is_err());
-    assert_eq!(
-        MftConfig::from_params(&Params::new().with("primary", "packets"))
-            .unwrap()
-            .primary,
-        PrimaryRays::Packets
-    );
+    let primary = |v: &str| MftConfig::from_params(&Params::new().with("primary", v));
+    assert_eq!(primary("frusta").unwrap(), frusta());
+    assert_eq!(primary("packets").unwrap(), MftConfig::default());
 }

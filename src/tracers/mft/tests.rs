@@ -322,7 +322,7 @@ fn blocks_out_of_range_are_refused() {
             cr: true,
             fs: false,
             leaf_rays: true,
-            primary: PrimaryRays::Frusta,
+            primary: PrimaryRays::Packets,
         }
     );
     assert!(MftConfig::from_params(&Params::new().with("cr", "maybe")).is_err());
