@@ -26,20 +26,9 @@ pub struct CameraProjection {
 
 impl CameraProjection {
     pub fn new(camera: &Camera, width: u32, height: u32) -> Self {
-        let (right, up, forward) = camera.basis();
-        let half_height = (camera.fov_y_deg.to_radians() * 0.5).tan();
         CameraProjection {
             camera: *camera,
-            grid: CameraGrid {
-                origin: camera.position,
-                forward,
-                right,
-                up,
-                half_width: half_height * width as f32 / height as f32,
-                half_height,
-                width,
-                height,
-            },
+            grid: camera.grid(width, height),
         }
     }
 
@@ -225,6 +214,26 @@ mod tests {
         let mut seen = batch.pixel.clone();
         seen.sort();
         assert!(seen.iter().enumerate().all(|(i, &p)| i as u32 == p));
+    }
+
+    #[test]
+    fn pinhole_batches_carry_their_grid_and_thin_lens_batches_none() {
+        let batch = primary_rays(&Camera::default(), 50, 37);
+        let grid = batch
+            .camera
+            .as_deref()
+            .expect("a pinhole batch carries its grid");
+        assert_eq!(*grid, Camera::default().grid(50, 37));
+        let bits = |r: Ray| [r.origin, r.dir].map(|v| v.to_array().map(f32::to_bits));
+        for i in 0..batch.len() {
+            assert_eq!(bits(grid.pixel_ray(batch.pixel[i])), bits(batch.ray(i)));
+        }
+        let lens = Camera {
+            aperture: 0.1,
+            focus_distance: 4.0,
+            ..Camera::default()
+        };
+        assert!(primary_rays(&lens, 50, 37).camera.is_none());
     }
 
     #[test]

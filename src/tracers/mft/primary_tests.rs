@@ -11,17 +11,35 @@ use super::*;
 use crate::accel::BvhConfig;
 use crate::geometry::{Ray, RayBatch, RayKind, Triangle, WatertightRay};
 use crate::lanes::SimdRay;
-use crate::render::rays::{primary_rays, CameraProjection};
 use crate::scene::library::load_scene;
 use crate::scene::Camera;
 use crate::stats::{Counters, Event, NoStats};
 use crate::test_util::Soup;
 use crate::tracers::reference::ReferenceTracer;
 
-/// Width and height with partial 32×32 tiles at the right and bottom (packets of the Morton order
-/// there are not aligned 4×4 blocks).
-const WIDTH: u32 = 72;
-const HEIGHT: u32 = 52;
+/// Width and height with partial 4×4 blocks at the right and bottom.
+const WIDTH: u32 = 70;
+const HEIGHT: u32 = 50;
+
+/// The camera's rays as `render::rays` makes them (`Camera::grid`, `RayBatch::push_camera_ray`),
+/// 4×4 pixel block by block (partial blocks at the right and bottom edges), each block an explicit
+/// packet with `explicit`, else 16 consecutive rays being a packet (straddling blocks where a
+/// block is partial).
+fn camera_batch(camera: &Camera, width: u32, height: u32, explicit: bool) -> RayBatch {
+    let grid = camera.grid(width, height);
+    let mut batch = RayBatch::new(RayKind::Primary);
+    for by in (0..height).step_by(4) {
+        for bx in (0..width).step_by(4) {
+            for y in by..(by + 4).min(height) {
+                for x in bx..(bx + 4).min(width) {
+                    let first = x == bx && y == by;
+                    batch.push_camera_ray(&grid, y * width + x, explicit && first);
+                }
+            }
+        }
+    }
+    batch
+}
 
 /// `mft` with primary frusta (the default traces camera rays as packets).
 fn frusta() -> MftConfig {
@@ -140,10 +158,12 @@ fn soup_scene(seed: u64) -> (Vec<Triangle>, Camera) {
 fn hits_equal_the_reference_tracers_on_a_triangle_soup() {
     for seed in [1, 2] {
         let (triangles, camera) = soup_scene(seed);
-        let batch = primary_rays(&camera, WIDTH, HEIGHT);
-        let counters = agrees_with_reference(&format!("soup {seed}"), &triangles, &batch);
-        // Rays over the horizon miss: their frusta leave the scene without making rays.
-        assert!((counters.get(Event::RaysOnDemand) as usize) < batch.len());
+        for explicit in [true, false] {
+            let batch = camera_batch(&camera, WIDTH, HEIGHT, explicit);
+            let counters = agrees_with_reference(&format!("soup {seed}"), &triangles, &batch);
+            // Rays over the horizon miss: their frusta leave the scene without making rays.
+            assert!((counters.get(Event::RaysOnDemand) as usize) < batch.len());
+        }
     }
 }
 
@@ -159,7 +179,7 @@ fn hits_equal_the_reference_tracers_on_room_conference_and_bart() {
     for name in scenes {
         let scene = load_scene(name, None).unwrap();
         let frame = scene.frame(0, 1);
-        let batch = primary_rays(&frame.camera, WIDTH * 2, HEIGHT * 2);
+        let batch = camera_batch(&frame.camera, WIDTH * 2, HEIGHT * 2, true);
         let frusta = agrees_with_reference(name, &frame.mesh.triangles, &batch);
         if name != "room" {
             continue;
@@ -191,7 +211,7 @@ fn hits_equal_the_reference_tracers_on_room_conference_and_bart() {
 #[test]
 fn on_demand_rays_are_the_batchs_rays_bit_for_bit_and_made_once() {
     let (_, camera) = soup_scene(3);
-    let batch = primary_rays(&camera, WIDTH, HEIGHT);
+    let batch = camera_batch(&camera, WIDTH, HEIGHT, false);
     let grid = *batch
         .camera
         .clone()
@@ -268,7 +288,7 @@ fn on_demand_rays_are_the_batchs_rays_bit_for_bit_and_made_once() {
 fn batches_that_are_not_a_camera_grid_go_to_packets() {
     let (triangles, camera) = soup_scene(4);
     let bvh = bvh(&triangles);
-    let camera_batch = primary_rays(&camera, WIDTH, HEIGHT);
+    let camera_batch = camera_batch(&camera, WIDTH, HEIGHT, true);
     let expected = hits_of(
         &ReferenceTracer::new(bvh.clone()),
         &camera_batch,
@@ -291,14 +311,7 @@ fn batches_that_are_not_a_camera_grid_go_to_packets() {
     // A grid batch with one other ray pushed after it.
     let mut mixed = camera_batch.clone();
     mixed.push(Ray::new(Vec3::ZERO, Vec3::Y, 0.0, 1.0), 0);
-    // A thin lens: its rays start across the lens, no grid.
-    let lens = Camera {
-        aperture: 0.05,
-        focus_distance: 4.0,
-        ..camera
-    };
-    let lens_batch = primary_rays(&lens, WIDTH, HEIGHT);
-    for b in [&plain, &shortened, &mixed, &lens_batch] {
+    for b in [&plain, &shortened, &mixed] {
         assert!(b.camera.is_none());
     }
     let reference = ReferenceTracer::new(bvh.clone());
@@ -306,7 +319,6 @@ fn batches_that_are_not_a_camera_grid_go_to_packets() {
         ("plain", &plain),
         ("shortened", &shortened),
         ("mixed", &mixed),
-        ("thin lens", &lens_batch),
     ] {
         let want = hits_of(&reference, batch, &mut Counters::default());
         let mut counters = Counters::default();
@@ -346,10 +358,9 @@ fn batches_that_are_not_a_camera_grid_go_to_packets() {
 }
 
 #[test]
-fn camera_grids_survive_tiles_and_explicit_packets_and_are_checked() {
+fn camera_grids_survive_explicit_packets_and_slices_and_end_with_other_rays() {
     let (_, camera) = soup_scene(5);
-    let projection = CameraProjection::new(&camera, WIDTH, HEIGHT);
-    let grid = *projection.pinhole_grid().unwrap();
+    let grid = camera.grid(WIDTH, HEIGHT);
     let mut batch = RayBatch::new(RayKind::Primary);
     for (i, pixel) in [3u32, 4, 80, 81, 82].into_iter().enumerate() {
         batch.push_camera_ray(&grid, pixel, i % 2 == 0);
@@ -358,8 +369,7 @@ fn camera_grids_survive_tiles_and_explicit_packets_and_are_checked() {
     assert_eq!(batch.view().packets(16).count(), 3);
     assert_eq!(batch.view().slice(1..3).camera, Some(&grid));
     // Another camera's ray ends the grid; `clear` forgets it.
-    let other = CameraProjection::new(&Camera::default(), WIDTH, HEIGHT);
-    batch.push_camera_ray(other.pinhole_grid().unwrap(), 0, false);
+    batch.push_camera_ray(&Camera::default().grid(WIDTH, HEIGHT), 0, false);
     assert!(batch.camera.is_none());
     batch.clear(RayKind::Primary);
     batch.push_camera_ray(&grid, 7, false);
