@@ -90,7 +90,7 @@ impl FromStr for PrimaryRays {
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct MftConfig {
-    /// Shading points (frusta) per block traversed together.
+    /// Frusta per block traversed together: shading points, or 4×4 pixel blocks of camera rays.
     pub block: usize,
     /// Corner-ray recomputation (§5.3 CR).
     pub cr: bool,
