@@ -63,10 +63,15 @@ pub fn sample(batch: &RayBatch) -> RayBatch {
         let range = b * stride..(b * stride + BLOCK_RAYS).min(n);
         let starts = |i: usize| i == range.start || batch.packet_start.get(i) == Some(&true);
         for i in range.clone() {
+            let start = !batch.packet_start.is_empty() && starts(i);
+            // Camera rays keep their grid, so multi-frusta tracing is checked as it is timed.
+            if let Some(grid) = batch.camera.as_deref() {
+                out.push_camera_ray(grid, batch.pixel[i], start);
+                continue;
+            }
             let ray = batch.ray(i);
-            match batch.packet_start.is_empty() {
-                true => out.push(ray, batch.pixel[i]),
-                false if starts(i) => out.push_packet_start(ray, batch.pixel[i]),
+            match start {
+                true => out.push_packet_start(ray, batch.pixel[i]),
                 false => out.push(ray, batch.pixel[i]),
             }
         }
@@ -196,6 +201,11 @@ mod tests {
                 assert_eq!(s.pixel[b * BLOCK_RAYS + j], batch.pixel[b * 8192 + j]);
             }
         }
+        // The same rays, still a camera grid (multi-frusta tracing makes them on demand).
+        for i in 0..s.len() {
+            assert_eq!(s.ray(i), batch.ray(i / BLOCK_RAYS * 8192 + i % BLOCK_RAYS));
+        }
+        assert!(s.camera.is_some() && s.camera == batch.camera);
         let small = primary_rays(&frame.camera, 16, 16);
         assert_eq!(sample(&small).pixel, small.pixel);
     }

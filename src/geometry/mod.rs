@@ -1,10 +1,12 @@
 //! Rays, boxes and triangles: the geometric primitives every tracer shares.
 
 pub mod aabb;
+pub mod camera_grid;
 pub mod ray;
 pub mod ray_file;
 pub mod triangle;
 
 pub use aabb::{Aabb, RayBoxTest};
+pub use camera_grid::CameraGrid;
 pub use ray::{Hit, Ray, RayBatch, RayKind, Rays};
 pub use triangle::{Triangle, WatertightRay};

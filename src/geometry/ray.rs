@@ -3,6 +3,8 @@
 
 use glam::Vec3;
 
+use crate::geometry::CameraGrid;
+
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Ray {
     pub origin: Vec3,
@@ -141,6 +143,11 @@ pub struct RayBatch {
     /// Ray times (`Ray::time`, motion blur). Empty when every ray is at time 0, as in every batch
     /// of a single instant; filled from the first ray with a non-zero time on.
     pub time: Vec<f32>,
+    /// The pinhole camera every ray of the batch comes from: `Some` only while ray `i` is
+    /// `camera.pixel_ray(pixel[i])` for every `i` (`push_camera_ray`; any other push clears it,
+    /// and code editing rays in place must too). Multi-frusta tracing regenerates such rays on
+    /// demand instead of reading them.
+    pub camera: Option<Box<CameraGrid>>,
 }
 
 impl RayBatch {
@@ -166,6 +173,7 @@ impl RayBatch {
             pixel: Vec::with_capacity(n),
             packet_start: Vec::new(),
             time: Vec::new(),
+            camera: None,
         }
     }
 
@@ -191,9 +199,32 @@ impl RayBatch {
         }
         self.pixel.clear();
         self.packet_start.clear();
+        self.camera = None;
     }
 
     pub fn push(&mut self, ray: Ray, pixel: u32) {
+        self.camera = None;
+        self.push_ray(ray, pixel);
+    }
+
+    /// Pushes `grid`'s ray through the centre of pixel id `pixel` (starting an explicit packet
+    /// with `packet_start`); the batch keeps `grid` as its camera while all its rays are such.
+    pub fn push_camera_ray(&mut self, grid: &CameraGrid, pixel: u32, packet_start: bool) {
+        let camera = match self.camera.take() {
+            Some(camera) if *camera == *grid => Some(camera),
+            _ if self.is_empty() => Some(Box::new(*grid)),
+            _ => None,
+        };
+        let ray = grid.pixel_ray(pixel);
+        if packet_start {
+            self.push_packet_start(ray, pixel);
+        } else {
+            self.push(ray, pixel);
+        }
+        self.camera = camera;
+    }
+
+    fn push_ray(&mut self, ray: Ray, pixel: u32) {
         if !self.packet_start.is_empty() {
             self.packet_start.push(false);
         }
@@ -222,6 +253,7 @@ impl RayBatch {
     /// Pushes `ray` as the first ray of a new explicit packet; from then on the batch has explicit
     /// packets, and the rays pushed so far form one packet.
     pub fn push_packet_start(&mut self, ray: Ray, pixel: u32) {
+        self.camera = None;
         if self.packet_start.is_empty() {
             // Switch to explicit packets: the rays so far (if any) form the first one.
             self.packet_start.resize(self.len(), false);
@@ -232,7 +264,7 @@ impl RayBatch {
             self.push_lanes(ray, pixel);
             return;
         }
-        self.push(ray, pixel);
+        self.push_ray(ray, pixel);
         *self.packet_start.last_mut().expect("just pushed") = true;
     }
 
@@ -261,6 +293,8 @@ impl RayBatch {
             packet_start: &self.packet_start,
             time: &self.time,
             kind: self.kind(),
+            pixel: &self.pixel,
+            camera: self.camera.as_deref(),
         }
     }
 }
@@ -283,6 +317,10 @@ pub struct Rays<'a> {
     pub time: &'a [f32],
     /// What the rays are for (a tracer may tune itself to it: Embree's coherence hint).
     pub kind: RayKind,
+    /// As `RayBatch::pixel`.
+    pub pixel: &'a [u32],
+    /// As `RayBatch::camera`.
+    pub camera: Option<&'a CameraGrid>,
 }
 
 impl<'a> Rays<'a> {
@@ -334,9 +372,11 @@ impl<'a> Rays<'a> {
             time: if self.time.is_empty() {
                 &[]
             } else {
-                &self.time[range]
+                &self.time[range.clone()]
             },
             kind: self.kind,
+            pixel: &self.pixel[range],
+            camera: self.camera,
         }
     }
 

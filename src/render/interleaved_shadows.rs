@@ -124,12 +124,18 @@ pub fn render_interleaved_shadows(
     let mut camera = RayBatch::new(RayKind::Primary);
     let mut block = None;
     for (x, y) in settings.wave_pixels(&tiles) {
-        let ray = projection.ray(x as f32 + 0.5, y as f32 + 0.5, (0.5, 0.5));
         let pixel = y * width + x;
-        if block.replace((x / K, y / K)) == Some((x / K, y / K)) {
-            camera.push(ray, pixel);
-        } else {
-            camera.push_packet_start(ray, pixel);
+        let starts = block.replace((x / K, y / K)) != Some((x / K, y / K));
+        // A pinhole's rays carry their grid, so multi-frusta tracing can make them on demand.
+        match projection.pinhole_grid() {
+            Some(grid) => camera.push_camera_ray(grid, pixel, starts),
+            None => {
+                let ray = projection.ray(x as f32 + 0.5, y as f32 + 0.5, (0.5, 0.5));
+                match starts {
+                    true => camera.push_packet_start(ray, pixel),
+                    false => camera.push(ray, pixel),
+                }
+            }
         }
     }
     let packets = camera.packet_start.iter().filter(|s| **s).count();

@@ -3,7 +3,7 @@
 
 use glam::Vec3;
 
-use crate::geometry::{Hit, Ray, RayBatch, RayKind, Triangle};
+use crate::geometry::{CameraGrid, Hit, Ray, RayBatch, RayKind, Triangle};
 use crate::render::offset::{coordinate_scale, offset_ray_origin};
 use crate::render::sampling::{concentric_disk, cosine_hemisphere, uniform};
 use crate::scene::{Camera, Light, Mesh, Scene};
@@ -19,66 +19,68 @@ const LENS_SEED: u64 = 0x5EED_1E45;
 /// Precomputed pinhole / thin-lens projection of one camera at one resolution.
 pub struct CameraProjection {
     camera: Camera,
-    right: Vec3,
-    up: Vec3,
-    forward: Vec3,
-    half_width: f32,
-    half_height: f32,
-    width: u32,
-    height: u32,
+    /// The directions through the image (from the lens centre): a pinhole's rays are this grid's,
+    /// and a thin lens aims each ray through the plane in focus along them.
+    grid: CameraGrid,
 }
 
 impl CameraProjection {
     pub fn new(camera: &Camera, width: u32, height: u32) -> Self {
-        let (right, up, forward) = camera.basis();
-        let half_height = (camera.fov_y_deg.to_radians() * 0.5).tan();
         CameraProjection {
             camera: *camera,
-            right,
-            up,
-            forward,
-            half_width: half_height * width as f32 / height as f32,
-            half_height,
-            width,
-            height,
+            grid: camera.grid(width, height),
         }
+    }
+
+    /// The grid of the camera's rays through pixel centres, for a pinhole (a thin lens's rays
+    /// start across the lens).
+    pub fn pinhole_grid(&self) -> Option<&CameraGrid> {
+        (self.camera.aperture <= 0.0).then_some(&self.grid)
     }
 
     /// The ray through image position `(x, y)` in pixels (pixel centres at +0.5), `lens` a sample
     /// in [0,1)² used only when the camera has an aperture.
     pub fn ray(&self, x: f32, y: f32, lens: (f32, f32)) -> Ray {
-        let sx = (2.0 * x / self.width as f32 - 1.0) * self.half_width;
-        let sy = (1.0 - 2.0 * y / self.height as f32) * self.half_height;
-        let dir = (self.forward + self.right * sx + self.up * sy).normalize();
         let c = &self.camera;
         if c.aperture <= 0.0 {
-            return Ray::new(c.position, dir, 0.0, f32::INFINITY);
+            return self.grid.ray_through(x, y);
         }
         // Thin lens: every ray through the pixel meets the others on the plane in focus.
-        let focus = c.position + dir * (c.focus_distance / dir.dot(self.forward));
+        let dir = self.grid.through(x, y).normalize();
+        let focus = c.position + dir * (c.focus_distance / dir.dot(self.grid.forward));
         let (lx, ly) = concentric_disk(lens.0, lens.1);
-        let origin = c.position + (self.right * lx + self.up * ly) * c.aperture;
+        let origin = c.position + (self.grid.right * lx + self.grid.up * ly) * c.aperture;
         Ray::new(origin, (focus - origin).normalize(), 0.0, f32::INFINITY)
     }
 
-    /// Camera rays of the pixels of one tile, Morton order inside the tile.
+    /// Camera rays of the pixels of one tile, Morton order inside the tile; a pinhole's carry
+    /// their grid (`RayBatch::push_camera_ray`).
     pub fn tile_rays(&self, tile_x: u32, tile_y: u32, batch: &mut RayBatch) {
+        let (width, height) = (self.grid.width, self.grid.height);
         for code in 0..TILE * TILE {
             let (dx, dy) = morton_decode(code);
             let (x, y) = (tile_x * TILE + dx, tile_y * TILE + dy);
-            if x < self.width && y < self.height {
-                let pixel = y * self.width + x;
-                let lens = (
-                    uniform(LENS_SEED, pixel as u64, 0),
-                    uniform(LENS_SEED, pixel as u64, 1),
-                );
-                batch.push(self.ray(x as f32 + 0.5, y as f32 + 0.5, lens), pixel);
+            if x < width && y < height {
+                let pixel = y * width + x;
+                match self.pinhole_grid() {
+                    Some(grid) => batch.push_camera_ray(grid, pixel, false),
+                    None => {
+                        let lens = (
+                            uniform(LENS_SEED, pixel as u64, 0),
+                            uniform(LENS_SEED, pixel as u64, 1),
+                        );
+                        batch.push(self.ray(x as f32 + 0.5, y as f32 + 0.5, lens), pixel)
+                    }
+                }
             }
         }
     }
 
     pub fn tiles(&self) -> (u32, u32) {
-        (self.width.div_ceil(TILE), self.height.div_ceil(TILE))
+        (
+            self.grid.width.div_ceil(TILE),
+            self.grid.height.div_ceil(TILE),
+        )
     }
 }
 
@@ -212,6 +214,26 @@ mod tests {
         let mut seen = batch.pixel.clone();
         seen.sort();
         assert!(seen.iter().enumerate().all(|(i, &p)| i as u32 == p));
+    }
+
+    #[test]
+    fn pinhole_batches_carry_their_grid_and_thin_lens_batches_none() {
+        let batch = primary_rays(&Camera::default(), 50, 37);
+        let grid = batch
+            .camera
+            .as_deref()
+            .expect("a pinhole batch carries its grid");
+        assert_eq!(*grid, Camera::default().grid(50, 37));
+        let bits = |r: Ray| [r.origin, r.dir].map(|v| v.to_array().map(f32::to_bits));
+        for i in 0..batch.len() {
+            assert_eq!(bits(grid.pixel_ray(batch.pixel[i])), bits(batch.ray(i)));
+        }
+        let lens = Camera {
+            aperture: 0.1,
+            focus_distance: 4.0,
+            ..Camera::default()
+        };
+        assert!(primary_rays(&lens, 50, 37).camera.is_none());
     }
 
     #[test]

@@ -2,6 +2,8 @@
 
 use glam::Vec3;
 
+use crate::geometry::CameraGrid;
+
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Camera {
     pub position: Vec3,
@@ -39,6 +41,23 @@ impl Camera {
         }
         let right = right.normalize();
         (right, right.cross(forward), forward)
+    }
+
+    /// The grid of rays through the pixel centres of a `width` × `height` image, from the
+    /// camera's position (a pinhole's rays; a thin lens aims through the plane in focus along them).
+    pub fn grid(&self, width: u32, height: u32) -> CameraGrid {
+        let (right, up, forward) = self.basis();
+        let half_height = (self.fov_y_deg.to_radians() * 0.5).tan();
+        CameraGrid {
+            origin: self.position,
+            forward,
+            right,
+            up,
+            half_width: half_height * width as f32 / height as f32,
+            half_height,
+            width,
+            height,
+        }
     }
 
     pub fn lerp(&self, other: &Camera, s: f32) -> Camera {

@@ -212,7 +212,7 @@ pub const TRACERS: &[TracerInfo] = &[
         name: "mft",
         accel: AccelKind::Bvh,
         params: MftConfig::PARAMS,
-        about: "multi-frusta tracing (Benthin & Wald 2009): light-visibility queries as blocks of shadow frusta (block points, ≤ 64) through the SAH BVH together, rays generated on demand at leaves, box culling for all frusta at once, plane and corner-ray triangle culling, occlusion bits, corner-ray recomputation (cr), frustum shrinking (fs) and leaf ray–box tests (leaf_rays); ordinary ray batches by 4×4 packets; exact answers (watertight)",
+        about: "multi-frusta tracing (Benthin & Wald 2009): light-visibility queries as blocks of shadow frusta (block points, ≤ 64) through the SAH BVH together, rays generated on demand at leaves, box culling for all frusta at once, plane and corner-ray triangle culling, occlusion bits, corner-ray recomputation (cr), frustum shrinking (fs) and leaf ray–box tests (leaf_rays); with primary = frusta, pinhole camera batches as blocks of 4×4-pixel primary frusta, their rays made on demand from the camera grid; other ray batches (and camera rays by default) by 4×4 packets; exact answers (watertight)",
         make: |params, accel| Ok(Box::new(MftTracer::from_params(accel.bvh()?.clone(), params)?)),
         motion_blur: false,
         chunk_rays: CHUNK_RAYS,

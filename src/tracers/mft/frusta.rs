@@ -113,6 +113,12 @@ impl Frusta {
             let d = light.point(s, t) - origin;
             d.to_array()
         });
+        self.set_corners(f, corners, bounds);
+    }
+
+    /// Frustum `f`'s corner rays become `corners` (`D_q`, in the order (s0, t0), (s1, t0),
+    /// (s0, t1), (s1, t1) of a parallelogram) and, given `bounds`, its box-test bounds.
+    pub fn set_corners(&mut self, f: usize, corners: [[f32; 3]; 4], bounds: Option<&Margins>) {
         self.reach[f] = corners
             .iter()
             .map(|d| d[0].abs() + d[1].abs() + d[2].abs())

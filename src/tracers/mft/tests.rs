@@ -103,12 +103,14 @@ fn bits_equal_the_reference_tracers_on_the_same_rays() {
             fs: false,
             leaf_rays: false,
             block: 16,
+            ..MftConfig::default()
         },
         MftConfig {
             cr: true,
             fs: false,
             leaf_rays: false,
             block: 37,
+            ..MftConfig::default()
         },
         MftConfig {
             fs: false,
@@ -319,7 +321,8 @@ fn blocks_out_of_range_are_refused() {
             block: 64,
             cr: true,
             fs: false,
-            leaf_rays: true
+            leaf_rays: true,
+            primary: PrimaryRays::Packets,
         }
     );
     assert!(MftConfig::from_params(&Params::new().with("cr", "maybe")).is_err());
