@@ -55,6 +55,9 @@ pub struct Frusta {
     /// way); `free` when the directions straddle 0 and the axis bounds nothing.
     pub rcp: [[Lanes; 2]; 3],
     pub free: [[bool; MAX_FRUSTA]; 3],
+    /// `free` as the box test reads it: +∞ on a free axis (entry −∞, exit +∞: no bound), else 0.
+    /// A select on `free`'s bytes does not vectorize.
+    pub free_inf: [Lanes; 3],
     /// The four side planes through the origin (normals per axis, pointing out of the frustum)
     /// and the slack of each (`|n|` × the distance margin): the interval test alone keeps every
     /// box along an axis the directions straddle, as shadow frusta straight under a light do.
@@ -74,6 +77,7 @@ impl Default for Frusta {
             reach: [0.0; MAX_FRUSTA],
             rcp: [[[0.0; MAX_FRUSTA]; 2]; 3],
             free: [[true; MAX_FRUSTA]; 3],
+            free_inf: [[f32::INFINITY; MAX_FRUSTA]; 3],
             side: [[[0.0; MAX_FRUSTA]; 3]; 4],
             side_slack: [[0.0; MAX_FRUSTA]; 4],
             rect: [[0.0; 4]; MAX_FRUSTA],
@@ -148,9 +152,12 @@ impl Frusta {
                     .iter()
                     .map(|d| d[a])
                     .fold(f32::NEG_INFINITY, f32::max);
-                // Not (lo > 0 || hi < 0) also catches NaN: no bound.
-                let free = !(lo > 0.0 || hi < 0.0);
+                // Not (lo > 0 || hi < 0) also catches NaN; an infinite reciprocal (subnormal
+                // direction) would make 0·∞ in the box test: no bound either.
+                let free =
+                    !(lo > 0.0 || hi < 0.0) || !(1.0 / lo).is_finite() || !(1.0 / hi).is_finite();
                 self.free[a][f] = free;
+                self.free_inf[a][f] = if free { f32::INFINITY } else { 0.0 };
                 self.rcp[a][0][f] = if free { 0.0 } else { 1.0 / hi };
                 self.rcp[a][1][f] = if free { 0.0 } else { 1.0 / lo };
             }
@@ -160,12 +167,16 @@ impl Frusta {
     /// The frusta of `candidates` whose rays may meet `b`: an interval-arithmetic slab test on
     /// `o + u·D`, u ∈ [0, 1] (a ray in the box at `u` has, per axis, `u` between the products of
     /// the slab's relative bounds and the reciprocal interval's ends), and the four side planes.
-    /// 16 frusta per pass of plain lane loops, which LLVM vectorizes.
+    /// 16 frusta per pass of plain lane loops, which LLVM vectorizes. Minima and maxima are
+    /// compare-and-select (one instruction; `f32::min`'s NaN rule costs three): a NaN, which
+    /// finite boxes and reciprocals never make, keeps the running bound, so it never culls.
     #[inline(always)]
     pub fn box_mask(&self, b: &Aabb, candidates: u64, m: &Margins) -> u64 {
         let lo = (b.min - Vec3::splat(m.distance)).to_array();
         let hi = (b.max + Vec3::splat(m.distance)).to_array();
         let len = 64 - candidates.leading_zeros() as usize;
+        let min = |x: f32, y: f32| if x < y { x } else { y };
+        let max = |x: f32, y: f32| if x > y { x } else { y };
         let mut mask = 0u64;
         for base in (0..len).step_by(W) {
             let lanes = |x: &Lanes| -> [f32; W] { x[base..base + W].try_into().unwrap() };
@@ -178,18 +189,18 @@ impl Frusta {
                     lanes(&self.rcp[a][0]),
                     lanes(&self.rcp[a][1]),
                 );
-                let free: [bool; W] = self.free[a][base..base + W].try_into().unwrap();
+                let free_inf = lanes(&self.free_inf[a]);
                 let sides: [[f32; W]; 4] = std::array::from_fn(|k| lanes(&self.side[k][a]));
                 for l in 0..W {
                     let (x0, x1) = (lo[a] - o[l], hi[a] - o[l]);
                     let (p, q, r, s) = (x0 * r0[l], x0 * r1[l], x1 * r0[l], x1 * r1[l]);
-                    let enter = p.min(q).min(r.min(s));
-                    let leave = p.max(q).max(r.max(s));
+                    let enter = min(min(p, q), min(r, s));
+                    let leave = max(max(p, q), max(r, s));
                     // Products are rounded: widen by a relative 1e-6 (rounding is 1.2e-7).
-                    let enter = enter - 1e-6 * enter.abs();
-                    let leave = leave + 1e-6 * leave.abs();
-                    near[l] = near[l].max(if free[l] { f32::NEG_INFINITY } else { enter });
-                    far[l] = far[l].min(if free[l] { f32::INFINITY } else { leave });
+                    let enter = enter - 1e-6 * enter.abs() - free_inf[l];
+                    let leave = leave + 1e-6 * leave.abs() + free_inf[l];
+                    near[l] = max(enter, near[l]);
+                    far[l] = min(leave, far[l]);
                     // Per side plane, the box corner deepest inside it.
                     for k in 0..4 {
                         let n = sides[k][l];
@@ -247,5 +258,31 @@ mod tests {
         assert_eq!(frusta.box_mask(&cube(Vec3::new(-0.5, 2.0, 0.0)), 1, &m), 0);
         assert_eq!(frusta.box_mask(&cube(Vec3::new(0.0, 11.0, 0.0)), 1, &m), 0);
         assert_eq!(frusta.box_mask(&cube(Vec3::new(0.0, -1.0, 0.0)), 1, &m), 0);
+    }
+
+    #[test]
+    fn an_axis_whose_reciprocal_overflows_bounds_nothing() {
+        // A light in the plane y = 1e-39 (subnormal) seen from the origin: every corner ray's y
+        // is 1e-39, whose reciprocal is +∞, so y is free, as is an axis the rays straddle.
+        let light = QuadLight {
+            corner: Vec3::new(-1.0, 1e-39, -1.0),
+            edge_u: Vec3::new(2.0, 0.0, 0.0),
+            edge_v: Vec3::new(0.0, 0.0, 2.0),
+        };
+        let mut frusta = Frusta {
+            len: 1,
+            ..Frusta::default()
+        };
+        let m = Margins::new(1.0);
+        frusta.set(0, Vec3::ZERO, &light, [0.0, 1.0, 0.0, 1.0], &m);
+        assert!(frusta.free[1][0]);
+        assert_eq!(frusta.free_inf[1][0], f32::INFINITY);
+        assert_eq!(
+            [frusta.free_inf[0][0], frusta.free_inf[2][0]],
+            [f32::INFINITY; 2]
+        );
+        // A box the rays cross (at y ≈ 0, inside the light's footprint) is kept.
+        let cube = |c: Vec3| Aabb::new(c - Vec3::splat(0.1), c + Vec3::splat(0.1));
+        assert_eq!(frusta.box_mask(&cube(Vec3::new(0.5, 0.0, 0.5)), 1, &m), 1);
     }
 }
