@@ -1,15 +1,17 @@
-//! The ray stream (Gribble & Ramani 2008 §3.1): the rays of one initial stream, each with what the
-//! box and triangle tests precompute per ray (the reciprocal direction, the watertight frame) and
-//! its index in the chunk, and the stream itself — the rays' slots, which filters reorder in place
-//! (`lanes::stream::partition_by`). Sub-streams are prefixes `0..len` of the stream.
+//! The ray stream (Gribble & Ramani 2008 §3.1): the rays of one initial stream in stream order,
+//! each as one 32-byte record of what the box filter reads (`SlabRecord`: origin, reciprocal
+//! direction, segment) and its slot; by slot, what only the intersection stage reads (the
+//! watertight frame) and the ray's index in the chunk. Filters reorder the stream in place
+//! (`lanes::stream::partition_by`); sub-streams are prefixes `0..len`.
 //!
-//! A filter moves slots, not rays: a partition swaps one `u32` per passing ray instead of every
-//! column of the ray (swapping 13 columns per ray was a quarter of the tracer's time, and the
-//! partition loop around it another third). A box filter reads each of its rays' slab data from
-//! one 32-byte record (`SlabRecord`), one cache line per ray however long the stream.
+//! Moving a ray moves its record (two 32-byte moves) and its slot, not 13 separate columns
+//! (swapping those was a quarter of the tracer's time, and the partition loop around them another
+//! third); a box filter reads its `L` rays from `L` consecutive records. (Keeping the records in
+//! slot order and moving only slots made moves cheap but turned every read into a scattered
+//! one, which cost more than it saved.)
 //!
-//! The stream holds `L` slots past its end, all naming a padding ray that hits nothing, so a group
-//! of `L` lanes can be read from any position of the stream; readers mask lanes past its end.
+//! The stream holds `L` padding rays past its end that hit nothing, so a group of `L` lanes can
+//! be read from any position; readers mask lanes past its end.
 
 // Lane loops index lane arrays in lock step: the indexed form is what LLVM vectorizes.
 #![allow(clippy::needless_range_loop)]
@@ -76,19 +78,19 @@ impl<const L: usize> SlabLanes<L> {
 
 #[derive(Default)]
 pub struct StreamRays<const L: usize> {
-    /// Per ray (by slot; the last slot is the padding ray): slab data, watertight frame, and
-    /// index in the chunk.
+    /// In stream order: each ray's slab record and slot (`L` padding rays at the end, whose
+    /// slot is the last one).
     slab: Vec<SlabRecord>,
+    stream: Vec<u32>,
+    /// By slot: watertight frame and index in the chunk.
     frame: Vec<FrameRecord>,
     id: Vec<u32>,
-    /// The stream: slots, in the order the filters have left them.
-    stream: Vec<u32>,
 }
 
 impl<const L: usize> StreamRays<L> {
     /// Replaces the stream by the well-formed rays among `first .. first + n` of `rays` (ids
     /// `first ..`; an ill-formed ray is a miss and never enters, so it cannot sway the
-    /// stream's direction or cost its neighbours a filter), followed by `L` padding slots, and
+    /// stream's direction or cost its neighbours a filter), followed by `L` padding rays, and
     /// returns the stream's length.
     pub fn load(&mut self, rays: &Rays<'_>, first: usize, n: usize) -> usize {
         self.slab.clear();
@@ -113,7 +115,7 @@ impl<const L: usize> StreamRays<L> {
             self.id.push(i as u32);
         }
         let len = self.slab.len();
-        self.slab.push(PADDING);
+        self.slab.extend(std::iter::repeat_n(PADDING, L));
         self.frame.push(FrameRecord::default());
         self.id.push(0);
         self.stream.clear();
@@ -122,52 +124,36 @@ impl<const L: usize> StreamRays<L> {
         len
     }
 
-    /// The slots of stream positions `base .. base + L`, as indices the compiler knows are in
-    /// bounds (so the lane loops below become gathers rather than bounds-checked scalar loads
-    /// through the stack).
-    #[inline(always)]
-    fn slots(&self, base: usize) -> [usize; L] {
-        let last = self.slab.len() - 1;
-        let slots: &[u32; L] = self.stream[base..base + L].try_into().unwrap();
-        slots.map(|s| (s as usize).min(last))
-    }
-
     /// Rays at stream positions `base .. base + L` as the slab test reads them.
     #[inline(always)]
     pub fn slab_lanes(&self, base: usize) -> SlabLanes<L> {
-        let slots = self.slots(base);
-        let slab = &self.slab[..];
-        let column = |field: fn(&SlabRecord) -> f32| -> [f32; L] {
-            let mut lanes = [0.0; L];
-            for l in 0..L {
-                lanes[l] = field(&slab[slots[l]]);
-            }
-            lanes
+        let records: &[SlabRecord; L] = self.slab[base..base + L].try_into().unwrap();
+        let mut lanes = SlabLanes {
+            origin: [[0.0; L]; 3],
+            inv_dir: [[0.0; L]; 3],
+            negative: [[0; L]; 3],
+            tmin: [0.0; L],
+            tmax: [0.0; L],
         };
-        let inv_dir = [
-            column(|r| r.inv_dir[0]),
-            column(|r| r.inv_dir[1]),
-            column(|r| r.inv_dir[2]),
-        ];
-        SlabLanes {
-            origin: [
-                column(|r| r.origin[0]),
-                column(|r| r.origin[1]),
-                column(|r| r.origin[2]),
-            ],
-            negative: inv_dir.map(|lanes| lanes.map(|x| x.is_sign_negative() as u32)),
-            inv_dir,
-            tmin: column(|r| r.tmin),
-            tmax: column(|r| r.tmax),
+        for l in 0..L {
+            for a in 0..3 {
+                lanes.origin[a][l] = records[l].origin[a];
+                lanes.inv_dir[a][l] = records[l].inv_dir[a];
+                lanes.negative[a][l] = records[l].inv_dir[a].is_sign_negative() as u32;
+            }
+            lanes.tmin[l] = records[l].tmin;
+            lanes.tmax[l] = records[l].tmax;
         }
+        lanes
     }
 
     /// Loads the rays at stream positions `base .. base + used` (`used ≤ L`) into `simd`'s lanes
     /// for the triangle test; the other lanes become padding that hits nothing.
     #[inline(always)]
     pub fn load_triangle_lanes(&self, base: usize, used: usize, simd: &mut SimdRay<L>) {
-        for (l, slot) in self.slots(base).into_iter().enumerate() {
-            let (r, f) = (&self.slab[slot], &self.frame[slot]);
+        let slots = &self.stream[base..base + L];
+        for l in 0..L {
+            let (r, f) = (&self.slab[base + l], &self.frame[slots[l] as usize]);
             for a in 0..3 {
                 simd.origin[a][l] = r.origin[a];
                 simd.shear[a][l] = f.shear[a];
@@ -190,13 +176,13 @@ impl<const L: usize> StreamRays<L> {
     /// The current segment end of the ray at stream position `at`.
     #[inline(always)]
     pub fn tmax(&self, at: usize) -> f32 {
-        self.slab[self.stream[at] as usize].tmax
+        self.slab[at].tmax
     }
 
     /// Shortens the segment of the ray at stream position `at` to `tmax`.
     #[inline(always)]
     pub fn set_tmax(&mut self, at: usize, tmax: f32) {
-        self.slab[self.stream[at] as usize].tmax = tmax;
+        self.slab[at].tmax = tmax;
     }
 }
 
@@ -204,10 +190,12 @@ impl<const L: usize> SoaRays for StreamRays<L> {
     #[inline(always)]
     fn move_ray(&mut self, from: usize, to: usize) {
         self.stream[to] = self.stream[from];
+        self.slab[to] = self.slab[from];
     }
 
     #[inline(always)]
     fn swap_rays(&mut self, a: usize, b: usize) {
         self.stream.swap(a, b);
+        self.slab.swap(a, b);
     }
 }
