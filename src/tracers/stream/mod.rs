@@ -3,9 +3,10 @@
 //!
 //! - **Streams** (`stream` = S rays, or `frame` for the whole work chunk): the chunk is cut into
 //!   streams of S consecutive rays (camera rays come in Morton-ordered 32×32 tiles, so S = 1024
-//!   is the paper's 32×32 initial stream and 4096 its 64×64). A stream is the rays' slots,
-//!   partitioned in place as it goes (§3.1 "Memory management"); each slot holds what the tests
-//!   precompute per ray and the ray's index (`rays`).
+//!   is the paper's 32×32 initial stream and 4096 its 64×64). A stream is one 32-byte record
+//!   per ray (what the box filter reads) with the ray's slot, partitioned in place as it goes
+//!   (§3.1 "Memory management"); the slot holds what only the intersection stage reads and the
+//!   ray's index (`rays`).
 //!   Explicit packets of the batch (packet assembly) play no part: streams need no packets.
 //! - **SIMD width** (`width` = N ∈ 4, 8, 12, 16, 32, 64): N rays per test (§4). 4, 8 and 16 are
 //!   the lane layer's widths; 12 uses 12 of 16 lanes; 32 and 64 are 2 or 4 16-lane groups
