@@ -1,6 +1,6 @@
 //! The stream filtering tracer: exact partitions and counters on a hand-built tree, and agreement
-//! with the reference tracer — every SIMD width × several stream sizes, closest hit and
-//! occlusion, on primary, shadow and diffuse rays of the built-in room, rings and balls scenes.
+//! with the reference tracer — every SIMD width × several stream sizes, with and without the
+//! single-ray hand-off of short sub-streams, closest hit and occlusion, on primary, shadow and diffuse rays of the built-in room, rings and balls scenes.
 
 use std::sync::Arc;
 
@@ -112,9 +112,15 @@ fn counts(c: &Counters) -> [u64; 10] {
 }
 
 fn tracer(stream: usize, width: usize) -> StreamTracer {
+    hybrid_tracer(stream, width, 0)
+}
+
+/// As `tracer`, handing sub-streams of at most `single` rays to single-ray traversal.
+fn hybrid_tracer(stream: usize, width: usize, single: usize) -> StreamTracer {
     let config = StreamConfig {
         stream: StreamSize::Rays(stream),
         width,
+        single,
     };
     StreamTracer::new(Arc::new(two_leaf_tree()), config)
 }
@@ -163,6 +169,39 @@ fn one_stream_partitions_and_counts_as_worked_out() {
         );
         assert!(hits.iter().filter(|h| h.is_hit()).all(|h| h.t == 1.0));
     }
+}
+
+/// The single-ray hand-off, `single` = 8: the root's filter keeps 6 of the 8 rays (8 box tests,
+/// one filter), a sub-stream short enough to hand off, so each of the 6 traverses the tree alone
+/// from the root: root node, both children's boxes tested at once (2 box tests), the one leaf it
+/// meets, its triangle — 2 nodes, 2 box tests, 1 triangle test per ray. 1 + 12 = 13 nodes,
+/// 8 + 12 = 20 box tests, 6 triangle tests, no leaf stream; the same hits and occlusion as
+/// stream filtering to the leaves.
+#[test]
+fn short_sub_streams_finish_one_ray_at_a_time() {
+    let batch = eight_rays();
+    for n in StreamConfig::WIDTHS {
+        let mut hits = vec![Hit::MISS; 8];
+        let mut c = Counters::default();
+        hybrid_tracer(8, n, 8).intersect_counted(batch.view(), &mut hits, &mut c);
+        let traversal = issued(8, n as u64);
+        assert_eq!(
+            counts(&c),
+            [13, 20, 1, 8, traversal, 6, 0, 0, 0, 0],
+            "width {n}"
+        );
+        assert_eq!(hits, trace_hits(&tracer(8, n), &batch), "width {n}");
+        let mut flags = vec![false; 8];
+        let mut c = Counters::default();
+        hybrid_tracer(8, n, 8).occluded_counted(batch.view(), &mut flags, &mut c);
+        assert_eq!(flags, [true, false, true, false, false, true, false, true]);
+        assert_eq!(counts(&c)[..3], [13, 20, 1], "width {n}");
+    }
+    // A threshold below the sub-stream's length changes nothing: stream filtering to the leaves.
+    let mut c = Counters::default();
+    let mut hits = vec![Hit::MISS; 8];
+    hybrid_tracer(8, 4, 5).intersect_counted(batch.view(), &mut hits, &mut c);
+    assert_eq!(counts(&c), [3, 20, 3, 20, 24, 6, 6, 8, 2, 6]);
 }
 
 /// Two streams of four rays, width 4: the same 20 box tests and 6 triangle tests, but in twice
@@ -262,6 +301,7 @@ fn children_are_visited_front_to_back_by_the_streams_majority_direction() {
         let config = StreamConfig {
             stream: StreamSize::Rays(4),
             width: 4,
+            single: 0,
         };
         let mut hits = vec![Hit::MISS; 4];
         let mut c = Counters::default();
@@ -361,8 +401,20 @@ fn agrees_with_reference(name: &str, size: Option<u32>) {
     let info = TracerInfo::find("stream").unwrap();
     let mut ties = 0;
     for width in StreamConfig::WIDTHS {
-        for stream in ["16", "256", "4096", "frame"] {
-            let params = Params::new().with("width", width).with("stream", stream);
+        // single = 0: stream filtering to the leaves (the paper); 8: sub-streams of ≤ 8 rays
+        // finish one ray at a time (the hybrid).
+        for (stream, single) in [
+            ("16", 0),
+            ("256", 0),
+            ("4096", 0),
+            ("frame", 0),
+            ("16", 8),
+            ("4096", 8),
+        ] {
+            let params = Params::new()
+                .with("width", width)
+                .with("stream", stream)
+                .with("single", single);
             let tracer = build_tracer(info, &params, &accel).unwrap();
             for (batch, expected) in [&primary, &diffuse].iter().zip(&expected_hits) {
                 let got = trace_hits(tracer.as_ref(), batch);
@@ -411,6 +463,8 @@ fn bad_parameters_are_rejected() {
         ("stream", "0"),
         ("stream", "-4"),
         ("stream", "all"),
+        ("single", "-1"),
+        ("single", "few"),
     ] {
         let p = Params::new().with(k, v);
         assert!(StreamConfig::from_params(&p).is_err(), "{k} = {v}");
@@ -420,7 +474,8 @@ fn bad_parameters_are_rejected() {
         StreamConfig::from_params(&p).unwrap(),
         StreamConfig {
             stream: StreamSize::Frame,
-            width: 12
+            width: 12,
+            single: 0,
         }
     );
     assert_eq!(

@@ -37,115 +37,128 @@ impl SingleRayKernel for ReferenceTracer {
     #[inline(always)]
     fn trace<S: Stats, const ANY: bool>(&self, ray: &Ray, stats: &mut S) -> Hit {
         let bvh = &*self.bvh;
-        let mut best = Hit::MISS;
         if S::ENABLED {
             stats.ray();
         }
         if bvh.is_empty() {
-            return best;
+            return Hit::MISS;
         }
-        let (tmin, mut tmax) = (ray.tmin, ray.tmax);
-        let depth = |i: u32| {
-            if S::ENABLED {
-                bvh.depth[i as usize] as usize
-            } else {
-                0
-            }
-        };
-
         if S::ENABLED {
             stats.aabb_test(0);
         }
         let root = &bvh.nodes[Bvh::ROOT];
-        let Some(enter) = RayBoxTest::new(ray.origin, ray.dir).hit(&root.bounds, tmin, tmax) else {
-            return best;
-        };
-        let boxes = PairRayTest::new(ray.origin, ray.dir);
-        let tris = WatertightRay::new(ray.origin, ray.dir);
-        // Far children wait here with their entry distance, so a pop can skip boxes that now lie
-        // beyond the closest hit without testing them again.
-        let mut stack = [Pending::default(); BvhConfig::DEPTH_LIMIT + 2];
-        let mut top = 0;
-        let mut node = Pending {
-            index: Bvh::ROOT as u32,
-            first: root.first,
-            count: root.count,
-            enter,
-        };
-        loop {
-            if S::ENABLED {
-                stats.node(depth(node.index));
-            }
-            if node.count > 0 {
-                for i in node.first as usize..(node.first + node.count) as usize {
-                    if S::ENABLED {
-                        stats.triangle_test(depth(node.index));
-                    }
-                    // A moving triangle is tested where it is at the ray's time: the watertight
-                    // test precomputes per ray, not per triangle (Boulos et al. 2007 §4).
-                    let moved;
-                    let tri = match &bvh.motion_end {
-                        None => &bvh.triangles[i],
-                        Some(end) => {
-                            moved = bvh.triangles[i].lerp(&end[i], ray.time);
-                            &moved
-                        }
-                    };
-                    if let Some((t, u, v)) = tris.intersect(tri, tmin, tmax) {
-                        best = Hit {
-                            t,
-                            prim: bvh.prim_ids[i],
-                            u,
-                            v,
-                        };
-                        if ANY {
-                            return best;
-                        }
-                        tmax = t;
-                    }
-                }
-            } else {
-                let pair = &bvh.pairs[node.index as usize];
+        match RayBoxTest::new(ray.origin, ray.dir).hit(&root.bounds, ray.tmin, ray.tmax) {
+            Some(_) => trace_subtree::<S, ANY>(bvh, Bvh::ROOT as u32, ray, stats),
+            None => Hit::MISS,
+        }
+    }
+}
+
+/// The reference traversal of the subtree under `node`, whose box `ray` is known to meet: the
+/// closest hit (`ANY`: the first found) within `[ray.tmin, ray.tmax]`, or a miss. The stream
+/// tracer hands the rays of a short sub-stream to it (`stream`'s `single` parameter).
+#[inline(always)]
+pub fn trace_subtree<S: Stats, const ANY: bool>(
+    bvh: &Bvh,
+    node: u32,
+    ray: &Ray,
+    stats: &mut S,
+) -> Hit {
+    let mut best = Hit::MISS;
+    let (tmin, mut tmax) = (ray.tmin, ray.tmax);
+    let depth = |i: u32| {
+        if S::ENABLED {
+            bvh.depth[i as usize] as usize
+        } else {
+            0
+        }
+    };
+    let boxes = PairRayTest::new(ray.origin, ray.dir);
+    let tris = WatertightRay::new(ray.origin, ray.dir);
+    // Far children wait here with their entry distance, so a pop can skip boxes that now lie
+    // beyond the closest hit without testing them again.
+    let mut stack = [Pending::default(); BvhConfig::DEPTH_LIMIT + 2];
+    let mut top = 0;
+    let start = &bvh.nodes[node as usize];
+    let mut node = Pending {
+        index: node,
+        first: start.first,
+        count: start.count,
+        enter: tmin,
+    };
+    loop {
+        if S::ENABLED {
+            stats.node(depth(node.index));
+        }
+        if node.count > 0 {
+            for i in node.first as usize..(node.first + node.count) as usize {
                 if S::ENABLED {
-                    stats.aabb_test(depth(node.first));
-                    stats.aabb_test(depth(node.first + 1));
+                    stats.triangle_test(depth(node.index));
                 }
-                let (enter, hit) = boxes.test(pair, tmin, tmax);
-                let child = |c: usize| Pending {
-                    index: node.first + c as u32,
-                    first: pair.first[c],
-                    count: pair.count[c],
-                    enter: enter[c],
+                // A moving triangle is tested where it is at the ray's time: the watertight
+                // test precomputes per ray, not per triangle (Boulos et al. 2007 §4).
+                let moved;
+                let tri = match &bvh.motion_end {
+                    None => &bvh.triangles[i],
+                    Some(end) => {
+                        moved = bvh.triangles[i].lerp(&end[i], ray.time);
+                        &moved
+                    }
                 };
-                match hit {
-                    0b11 => {
-                        let (near, far) = if enter[0] <= enter[1] { (0, 1) } else { (1, 0) };
-                        stack[top] = child(far);
-                        top += 1;
-                        node = child(near);
-                        continue;
+                if let Some((t, u, v)) = tris.intersect(tri, tmin, tmax) {
+                    best = Hit {
+                        t,
+                        prim: bvh.prim_ids[i],
+                        u,
+                        v,
+                    };
+                    if ANY {
+                        return best;
                     }
-                    0b01 => {
-                        node = child(0);
-                        continue;
-                    }
-                    0b10 => {
-                        node = child(1);
-                        continue;
-                    }
-                    _ => {}
+                    tmax = t;
                 }
             }
-            // Pop, skipping nodes now beyond the closest hit.
-            loop {
-                if top == 0 {
-                    return best;
+        } else {
+            let pair = &bvh.pairs[node.index as usize];
+            if S::ENABLED {
+                stats.aabb_test(depth(node.first));
+                stats.aabb_test(depth(node.first + 1));
+            }
+            let (enter, hit) = boxes.test(pair, tmin, tmax);
+            let child = |c: usize| Pending {
+                index: node.first + c as u32,
+                first: pair.first[c],
+                count: pair.count[c],
+                enter: enter[c],
+            };
+            match hit {
+                0b11 => {
+                    let (near, far) = if enter[0] <= enter[1] { (0, 1) } else { (1, 0) };
+                    stack[top] = child(far);
+                    top += 1;
+                    node = child(near);
+                    continue;
                 }
-                top -= 1;
-                if stack[top].enter <= tmax {
-                    node = stack[top];
-                    break;
+                0b01 => {
+                    node = child(0);
+                    continue;
                 }
+                0b10 => {
+                    node = child(1);
+                    continue;
+                }
+                _ => {}
+            }
+        }
+        // Pop, skipping nodes now beyond the closest hit.
+        loop {
+            if top == 0 {
+                return best;
+            }
+            top -= 1;
+            if stack[top].enter <= tmax {
+                node = stack[top];
+                break;
             }
         }
     }

@@ -7,8 +7,6 @@
 
 use crate::accel::BvhNode;
 use crate::geometry::Hit;
-use crate::lanes::stream::partition_by;
-use crate::lanes::LaneMask;
 use crate::stats::{Event, Stats};
 
 use super::traverse::{Answer, Walk};
@@ -62,17 +60,12 @@ impl<const L: usize, const N: usize, A: Answer> Walk<'_, L, N, A> {
                 let at = base + g * group;
                 for l in 0..simd.used as usize {
                     if simd.prim[l] != Hit::NO_PRIM {
-                        self.answers[self.rays.id[at + l] as usize].record(simd.hit(l));
-                        self.rays.tmax[at + l] = simd.tmax[l];
+                        self.answers[self.rays.id(at + l)].record(simd.hit(l));
+                        self.rays.set_tmax(at + l, simd.tmax[l]);
                     }
                 }
             }
         }
-        if !A::ANY {
-            return len;
-        }
-        partition_by::<L, _>(self.rays, len, group, |rays, base| {
-            LaneMask::from_fn(|l| rays.tmax[base + l] != f32::NEG_INFINITY)
-        })
+        self.live(len)
     }
 }

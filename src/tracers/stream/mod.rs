@@ -3,8 +3,10 @@
 //!
 //! - **Streams** (`stream` = S rays, or `frame` for the whole work chunk): the chunk is cut into
 //!   streams of S consecutive rays (camera rays come in Morton-ordered 32×32 tiles, so S = 1024
-//!   is the paper's 32×32 initial stream and 4096 its 64×64). A stream is SoA columns that carry
-//!   each ray's index (`rays`), partitioned in place as it goes (§3.1 "Memory management").
+//!   is the paper's 32×32 initial stream and 4096 its 64×64). A stream is one 32-byte record
+//!   per ray (what the box filter reads) with the ray's slot, partitioned in place as it goes
+//!   (§3.1 "Memory management"); the slot holds what only the intersection stage reads and the
+//!   ray's index (`rays`).
 //!   Explicit packets of the batch (packet assembly) play no part: streams need no packets.
 //! - **SIMD width** (`width` = N ∈ 4, 8, 12, 16, 32, 64): N rays per test (§4). 4, 8 and 16 are
 //!   the lane layer's widths; 12 uses 12 of 16 lanes; 32 and 64 are 2 or 4 16-lane groups
@@ -14,6 +16,12 @@
 //!   leaf's intersection stage (`intersect`) or to both children, front to back by the
 //!   sub-stream's dominant direction (the sign most of its rays have along the node's split
 //!   axis; the split axis as the packet tracer's `ChildOrder` finds it).
+//! - **Single-ray hand-off** (`single` = T, 0 by default): a sub-stream of at most T rays at an
+//!   inner node leaves stream filtering, and each of its rays finishes the subtree depth first on
+//!   its own (`reference::trace_subtree`). Not in the paper: deep in the tree the sub-streams are
+//!   a few rays long (Table 4), and a box filter over them costs more than the rays' own
+//!   traversal. T = 0 is the paper's stream filtering to the leaves; the lane counters count the
+//!   filters only, so with T > 0 they describe the stream part of the traversal.
 //! - **Exact hits**: every lane runs the reference tracer's slab and watertight tests bit for
 //!   bit, so each ray gets the reference's closest hit (up to the order in which triangles at
 //!   exactly equal distance are met). Occlusion rays end at their first hit and leave the stream.
@@ -77,6 +85,9 @@ pub struct StreamConfig {
     pub stream: StreamSize,
     /// SIMD width N: rays per box or triangle test.
     pub width: usize,
+    /// Sub-streams of at most this many rays finish their subtree one ray at a time, depth
+    /// first (0: never — the paper's stream filtering all the way to the leaves).
+    pub single: usize,
 }
 
 impl Default for StreamConfig {
@@ -84,12 +95,13 @@ impl Default for StreamConfig {
         StreamConfig {
             stream: StreamSize::Rays(4096),
             width: 16,
+            single: 0,
         }
     }
 }
 
 impl StreamConfig {
-    pub const PARAMS: &'static [&'static str] = &["stream", "width"];
+    pub const PARAMS: &'static [&'static str] = &["stream", "width", "single"];
     pub const WIDTHS: [usize; 6] = [4, 8, 12, 16, 32, 64];
 
     pub fn from_params(p: &Params) -> Result<Self> {
@@ -97,6 +109,7 @@ impl StreamConfig {
         let c = StreamConfig {
             stream: p.get_or("stream", d.stream)?,
             width: p.get_or("width", d.width)?,
+            single: p.get_or("single", d.single)?,
         };
         if !Self::WIDTHS.contains(&c.width) {
             return Err(Error::usage(format!(
@@ -160,6 +173,8 @@ impl StreamTracer {
             let mut walk = Walk::<L, N, A> {
                 bvh: &self.bvh,
                 order: &self.order,
+                input: rays,
+                single: self.config.single,
                 rays: &mut stream,
                 groups: &mut groups,
                 answers,

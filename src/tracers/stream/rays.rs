@@ -1,12 +1,20 @@
-//! The ray stream (Gribble & Ramani 2008 §3.1): the rays of one initial stream in SoA columns,
-//! each carrying what the box and triangle tests precompute per ray and its index in the chunk,
-//! so a filter can reorder them in place (`lanes::stream::partition_by`) and hits still land in
-//! their ray's slot. Sub-streams are prefixes `0..len` of the columns.
+//! The ray stream (Gribble & Ramani 2008 §3.1): the rays of one initial stream in stream order,
+//! each as one 32-byte record of what the box filter reads (`SlabRecord`: origin, reciprocal
+//! direction, segment) and its slot; by slot, what only the intersection stage reads (the
+//! watertight frame) and the ray's index in the chunk. Filters reorder the stream in place
+//! (`lanes::stream::partition_by`); sub-streams are prefixes `0..len`.
 //!
-//! Every column holds `L` slots past the stream, so a group of `L` lanes can be read from any
-//! ray of the stream; lanes past a stream's end are masked off by their readers.
+//! Moving a ray moves its record (two 32-byte moves) and its slot, not 13 separate columns
+//! (swapping those was a quarter of the tracer's time, and the partition loop around them another
+//! third); a box filter reads its `L` rays from `L` consecutive records. (Keeping the records in
+//! slot order and moving only slots made moves cheap but turned every read into a scattered
+//! one, which cost more than it saved.)
+//!
+//! The stream holds `L` padding rays past its end that hit nothing, so a group of `L` lanes can
+//! be read from any position; readers mask lanes past its end.
 
-use glam::Vec3;
+// Lane loops index lane arrays in lock step: the indexed form is what LLVM vectorizes.
+#![allow(clippy::needless_range_loop)]
 
 use crate::geometry::{Hit, Rays, WatertightRay};
 use crate::lanes::slab::SlabRays;
@@ -14,12 +22,32 @@ use crate::lanes::stream::SoaRays;
 use crate::lanes::watertight::common_axes;
 use crate::lanes::SimdRay;
 
-/// `L` consecutive slots of a column from `base`.
-#[inline(always)]
-fn lanes<T: Copy + Default, const L: usize>(column: &[T], base: usize) -> [T; L] {
-    let mut out = [T::default(); L];
-    out.copy_from_slice(&column[base..base + L]);
-    out
+/// What the slab test reads of one ray: origin, `1 / dir` (its sign bit is the direction's,
+/// `1 / −0.0 = −∞`, which is all the slab test needs of the direction), `tmin`, and `tmax`, the
+/// segment's end shortened to the closest hit so far (−∞ once an occlusion ray has hit).
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(32))]
+struct SlabRecord {
+    origin: [f32; 3],
+    inv_dir: [f32; 3],
+    tmin: f32,
+    tmax: f32,
+}
+
+/// The padding ray: its segment is empty, so no box and no triangle meets it.
+const PADDING: SlabRecord = SlabRecord {
+    origin: [0.0; 3],
+    inv_dir: [0.0; 3],
+    tmin: f32::INFINITY,
+    tmax: f32::NEG_INFINITY,
+};
+
+/// The watertight frame of one ray (`WatertightRay::parts`): axes `kx | ky << 2 | kz << 4`, and
+/// shear.
+#[derive(Clone, Copy, Debug, Default)]
+struct FrameRecord {
+    shear: [f32; 3],
+    axes: u32,
 }
 
 /// What the slab test reads for `L` rays, owned (`SlabRays` borrows it).
@@ -48,141 +76,126 @@ impl<const L: usize> SlabLanes<L> {
     }
 }
 
+#[derive(Default)]
 pub struct StreamRays<const L: usize> {
-    origin: [Vec<f32>; 3],
-    /// `1 / dir` per axis; its sign bit is the direction's (`1 / −0.0 = −∞`), which is all the
-    /// slab test needs of the direction.
-    inv_dir: [Vec<f32>; 3],
-    /// The watertight frame (`WatertightRay::parts`): axes `kx | ky << 2 | kz << 4`, and shear.
-    axes: Vec<u32>,
-    shear: [Vec<f32>; 3],
-    tmin: Vec<f32>,
-    /// The segment's end, shortened to the closest hit found so far; −∞ once an occlusion ray
-    /// has hit.
-    pub tmax: Vec<f32>,
-    /// The ray's index in the chunk.
-    pub id: Vec<u32>,
-}
-
-impl<const L: usize> Default for StreamRays<L> {
-    fn default() -> Self {
-        StreamRays {
-            origin: Default::default(),
-            inv_dir: Default::default(),
-            axes: vec![],
-            shear: Default::default(),
-            tmin: vec![],
-            tmax: vec![],
-            id: vec![],
-        }
-    }
+    /// In stream order: each ray's slab record and slot (`L` padding rays at the end, whose
+    /// slot is the last one).
+    slab: Vec<SlabRecord>,
+    stream: Vec<u32>,
+    /// By slot: watertight frame and index in the chunk.
+    frame: Vec<FrameRecord>,
+    id: Vec<u32>,
 }
 
 impl<const L: usize> StreamRays<L> {
     /// Replaces the stream by the well-formed rays among `first .. first + n` of `rays` (ids
     /// `first ..`; an ill-formed ray is a miss and never enters, so it cannot sway the
-    /// stream's direction or cost its neighbours a filter), pads every column with `L` rays that
-    /// hit nothing, and returns the stream's length.
+    /// stream's direction or cost its neighbours a filter), followed by `L` padding rays, and
+    /// returns the stream's length.
     pub fn load(&mut self, rays: &Rays<'_>, first: usize, n: usize) -> usize {
-        let slots = n + L;
-        for c in self.origin.iter_mut().chain(&mut self.inv_dir) {
-            c.resize(slots, 0.0);
-        }
-        for c in &mut self.shear {
-            c.resize(slots, 0.0);
-        }
-        self.axes.resize(slots, 0);
-        self.tmin.resize(slots, f32::INFINITY);
-        self.tmax.resize(slots, f32::NEG_INFINITY);
-        self.id.resize(slots, 0);
-        let mut s = 0;
+        self.slab.clear();
+        self.frame.clear();
+        self.id.clear();
         for i in first..first + n {
-            if !rays.ray(i).is_well_formed() {
+            let ray = rays.ray(i);
+            if !ray.is_well_formed() {
                 continue;
             }
-            let dir = Vec3::new(rays.dx[i], rays.dy[i], rays.dz[i]);
-            let (_, k, shear) = WatertightRay::new(Vec3::ZERO, dir).parts();
-            for a in 0..3 {
-                self.inv_dir[a][s] = 1.0 / dir[a];
-                self.shear[a][s] = shear[a];
-            }
-            self.origin[0][s] = rays.ox[i];
-            self.origin[1][s] = rays.oy[i];
-            self.origin[2][s] = rays.oz[i];
-            self.axes[s] = (k[0] | k[1] << 2 | k[2] << 4) as u32;
-            self.tmin[s] = rays.tmin[i];
-            self.tmax[s] = rays.tmax[i];
-            self.id[s] = i as u32;
-            s += 1;
+            let (_, k, shear) = WatertightRay::new(glam::Vec3::ZERO, ray.dir).parts();
+            self.slab.push(SlabRecord {
+                origin: ray.origin.to_array(),
+                inv_dir: ray.dir.to_array().map(|d| 1.0 / d),
+                tmin: ray.tmin,
+                tmax: ray.tmax,
+            });
+            self.frame.push(FrameRecord {
+                shear,
+                axes: (k[0] | k[1] << 2 | k[2] << 4) as u32,
+            });
+            self.id.push(i as u32);
         }
-        for pad in s..slots {
-            self.tmin[pad] = f32::INFINITY;
-            self.tmax[pad] = f32::NEG_INFINITY;
-        }
-        s
+        let len = self.slab.len();
+        self.slab.extend(std::iter::repeat_n(PADDING, L));
+        self.frame.push(FrameRecord::default());
+        self.id.push(0);
+        self.stream.clear();
+        self.stream.extend(0..len as u32);
+        self.stream.extend(std::iter::repeat_n(len as u32, L));
+        len
     }
 
-    /// Rays `base .. base + L` as the slab test reads them.
+    /// Rays at stream positions `base .. base + L` as the slab test reads them.
     #[inline(always)]
     pub fn slab_lanes(&self, base: usize) -> SlabLanes<L> {
-        let origin = self.origin.each_ref().map(|c| lanes(c, base));
-        let inv_dir: [[f32; L]; 3] = self.inv_dir.each_ref().map(|c| lanes(c, base));
-        SlabLanes {
-            origin,
-            negative: inv_dir.map(|lanes| lanes.map(|x| x.is_sign_negative() as u32)),
-            inv_dir,
-            tmin: lanes(&self.tmin, base),
-            tmax: lanes(&self.tmax, base),
+        let records: &[SlabRecord; L] = self.slab[base..base + L].try_into().unwrap();
+        let mut lanes = SlabLanes {
+            origin: [[0.0; L]; 3],
+            inv_dir: [[0.0; L]; 3],
+            negative: [[0; L]; 3],
+            tmin: [0.0; L],
+            tmax: [0.0; L],
+        };
+        for l in 0..L {
+            for a in 0..3 {
+                lanes.origin[a][l] = records[l].origin[a];
+                lanes.inv_dir[a][l] = records[l].inv_dir[a];
+                lanes.negative[a][l] = records[l].inv_dir[a].is_sign_negative() as u32;
+            }
+            lanes.tmin[l] = records[l].tmin;
+            lanes.tmax[l] = records[l].tmax;
         }
+        lanes
     }
 
-    /// Loads rays `base .. base + used` (`used ≤ L`) into `simd`'s lanes for the triangle test;
-    /// the other lanes become padding that hits nothing.
+    /// Loads the rays at stream positions `base .. base + used` (`used ≤ L`) into `simd`'s lanes
+    /// for the triangle test; the other lanes become padding that hits nothing.
     #[inline(always)]
     pub fn load_triangle_lanes(&self, base: usize, used: usize, simd: &mut SimdRay<L>) {
-        let axes: [u32; L] = lanes(&self.axes, base);
-        simd.origin = self.origin.each_ref().map(|c| lanes(c, base));
-        simd.shear = self.shear.each_ref().map(|c| lanes(c, base));
-        simd.axes = [0, 2, 4].map(|shift| axes.map(|k| k >> shift & 3));
-        simd.tmin = lanes(&self.tmin, base);
-        simd.tmax = lanes(&self.tmax, base);
-        for l in used..L {
-            simd.tmax[l] = f32::NEG_INFINITY;
+        let slots = &self.stream[base..base + L];
+        for l in 0..L {
+            let (r, f) = (&self.slab[base + l], &self.frame[slots[l] as usize]);
+            for a in 0..3 {
+                simd.origin[a][l] = r.origin[a];
+                simd.shear[a][l] = f.shear[a];
+                simd.axes[a][l] = f.axes >> (2 * a) & 3;
+            }
+            simd.tmin[l] = r.tmin;
+            simd.tmax[l] = if l < used { r.tmax } else { f32::NEG_INFINITY };
         }
         simd.prim = [Hit::NO_PRIM; L];
         simd.used = used as u32;
         simd.common_axes = common_axes(&simd.axes, used);
     }
+
+    /// The chunk index of the ray at stream position `at`.
+    #[inline(always)]
+    pub fn id(&self, at: usize) -> usize {
+        self.id[self.stream[at] as usize] as usize
+    }
+
+    /// The current segment end of the ray at stream position `at`.
+    #[inline(always)]
+    pub fn tmax(&self, at: usize) -> f32 {
+        self.slab[at].tmax
+    }
+
+    /// Shortens the segment of the ray at stream position `at` to `tmax`.
+    #[inline(always)]
+    pub fn set_tmax(&mut self, at: usize, tmax: f32) {
+        self.slab[at].tmax = tmax;
+    }
 }
 
 impl<const L: usize> SoaRays for StreamRays<L> {
+    #[inline(always)]
     fn move_ray(&mut self, from: usize, to: usize) {
-        for c in self
-            .origin
-            .iter_mut()
-            .chain(&mut self.inv_dir)
-            .chain(&mut self.shear)
-        {
-            c[to] = c[from];
-        }
-        self.axes[to] = self.axes[from];
-        self.tmin[to] = self.tmin[from];
-        self.tmax[to] = self.tmax[from];
-        self.id[to] = self.id[from];
+        self.stream[to] = self.stream[from];
+        self.slab[to] = self.slab[from];
     }
 
+    #[inline(always)]
     fn swap_rays(&mut self, a: usize, b: usize) {
-        for c in self
-            .origin
-            .iter_mut()
-            .chain(&mut self.inv_dir)
-            .chain(&mut self.shear)
-        {
-            c.swap(a, b);
-        }
-        self.axes.swap(a, b);
-        self.tmin.swap(a, b);
-        self.tmax.swap(a, b);
-        self.id.swap(a, b);
+        self.stream.swap(a, b);
+        self.slab.swap(a, b);
     }
 }

@@ -9,14 +9,17 @@
 //! stream's live rays on the way back up, so no later filter tests it.
 
 use crate::accel::Bvh;
-use crate::geometry::{Hit, Triangle};
-use crate::lanes::stream::SoaRays;
+use crate::geometry::{Hit, Ray, Rays, Triangle};
+use crate::lanes::stream::{partition_by, SoaRays};
+use crate::lanes::LaneMask;
 use crate::lanes::SimdRay;
 use crate::stats::Stats;
 use crate::tracers::packet::ChildOrder;
+use crate::tracers::reference::trace_subtree;
 
 use super::filter::filter;
 use super::rays::StreamRays;
+use super::width::Width;
 
 /// What a query answers per ray: the closest hit, or whether anything is hit (`ANY`: then a ray
 /// ends at its first hit).
@@ -24,6 +27,8 @@ pub trait Answer {
     const ANY: bool;
     /// The triangle test of every lane of `simd` for this query (`SimdRay::intersect::<ANY>`).
     fn intersect<const L: usize>(simd: &mut SimdRay<L>, tri: &Triangle, prim: u32);
+    /// One ray's traversal of the subtree under `node` for this query (`trace_subtree::<ANY>`).
+    fn trace_single<S: Stats>(bvh: &Bvh, node: u32, ray: &Ray, stats: &mut S) -> Hit;
     fn record(&mut self, hit: Hit);
 }
 
@@ -32,6 +37,10 @@ impl Answer for Hit {
     #[inline(always)]
     fn intersect<const L: usize>(simd: &mut SimdRay<L>, tri: &Triangle, prim: u32) {
         simd.intersect::<false>(tri, prim);
+    }
+    #[inline(always)]
+    fn trace_single<S: Stats>(bvh: &Bvh, node: u32, ray: &Ray, stats: &mut S) -> Hit {
+        trace_subtree::<S, false>(bvh, node, ray, stats)
     }
     #[inline(always)]
     fn record(&mut self, hit: Hit) {
@@ -46,16 +55,24 @@ impl Answer for bool {
         simd.intersect::<true>(tri, prim);
     }
     #[inline(always)]
+    fn trace_single<S: Stats>(bvh: &Bvh, node: u32, ray: &Ray, stats: &mut S) -> Hit {
+        trace_subtree::<S, true>(bvh, node, ray, stats)
+    }
+    #[inline(always)]
     fn record(&mut self, _: Hit) {
         *self = true;
     }
 }
 
-/// One stream's walk through the tree: the tree, the stream, the leaf stage's lane groups, and
-/// the answers by ray index.
+/// One stream's walk through the tree: the tree, the chunk's rays, the stream, the leaf stage's
+/// lane groups, and the answers by ray index.
 pub struct Walk<'a, const L: usize, const N: usize, A: Answer> {
     pub bvh: &'a Bvh,
     pub order: &'a ChildOrder,
+    pub input: Rays<'a>,
+    /// Sub-streams of at most this many rays leave stream filtering at an inner node: each of
+    /// their rays finishes the subtree on its own (`single`; 0: never, the paper's traversal).
+    pub single: usize,
     pub rays: &'a mut StreamRays<L>,
     /// One `SimdRay` per `L`-lane part of an `N`-wide group (`Width::GROUPS`).
     pub groups: &'a mut [SimdRay<L>],
@@ -81,6 +98,8 @@ impl<const L: usize, const N: usize, A: Answer> Walk<'_, L, N, A> {
         }
         let live = if cell.is_leaf() {
             self.leaf(&cell, depth, hit, stats)
+        } else if hit <= self.single {
+            self.single_rays(node, hit, stats)
         } else {
             let (near, far) = self.order.near_far(node as usize, cell.first, negative);
             let live = self.visit(near, hit, stats);
@@ -91,6 +110,37 @@ impl<const L: usize, const N: usize, A: Answer> Walk<'_, L, N, A> {
             }
         };
         drop_finished(self.rays, live, hit, len)
+    }
+}
+
+impl<const L: usize, const N: usize, A: Answer> Walk<'_, L, N, A> {
+    /// The rays `0..len`, which meet `node`'s box, each traverse its subtree alone, depth first
+    /// (the reference tracer's traversal, so the hits are the same). Returns how many are still
+    /// live, moved to the front.
+    fn single_rays<S: Stats>(&mut self, node: u32, len: usize, stats: &mut S) -> usize {
+        for at in 0..len {
+            let id = self.rays.id(at);
+            let mut ray = self.input.ray(id);
+            ray.tmax = self.rays.tmax(at);
+            let hit = A::trace_single(self.bvh, node, &ray, stats);
+            if hit.is_hit() {
+                self.answers[id].record(hit);
+                self.rays
+                    .set_tmax(at, if A::ANY { f32::NEG_INFINITY } else { hit.t });
+            }
+        }
+        self.live(len)
+    }
+
+    /// How many of the rays `0..len` are still live (all of them, but for occlusion: those that
+    /// have not hit), moved to the front.
+    pub fn live(&mut self, len: usize) -> usize {
+        if !A::ANY {
+            return len;
+        }
+        partition_by::<L, _>(self.rays, len, Width::<L, N>::GROUP, |rays, base| {
+            LaneMask::from_fn(|l| rays.tmax(base + l) != f32::NEG_INFINITY)
+        })
     }
 }
 
