@@ -230,11 +230,15 @@ impl Summary {
         };
         let mut summary = summarise(&runs, &checks, threads)?;
         if summary.rows.is_empty() && threads.is_some() {
+            let measured = match thread_counts(&runs)? {
+                counts if counts.is_empty() => "none outside renders".to_string(),
+                counts => counts,
+            };
             return Err(Error::usage(format!(
-                "{}: no batch measured at {} threads (the run has: {})",
+                "{}: no ray batch measured at {} thread{} (batches measured at: {measured})",
                 runs_path.display(),
                 summary.threads,
-                thread_counts(&runs)?
+                plural(summary.threads),
             )));
         }
         summary.experiment = meta.experiment;
@@ -680,7 +684,7 @@ mod tests {
         assert_eq!(e.exit_code(), 2);
         assert!(e
             .to_string()
-            .contains("no batch measured at 3 threads (the run has: 1, 2)"));
+            .contains("no ray batch measured at 3 threads (batches measured at: 1, 2)"));
     }
 
     #[test]
