@@ -46,6 +46,7 @@
 
 mod block;
 mod cull;
+mod descend;
 mod frusta;
 mod primary;
 #[cfg(test)]

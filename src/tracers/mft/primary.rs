@@ -38,6 +38,7 @@ use crate::geometry::{CameraGrid, Hit, Rays};
 use crate::lanes::SimdRay;
 use crate::stats::{Event, Stats};
 use crate::tracers::mft::cull::keep_mask;
+use crate::tracers::mft::descend::push_children;
 use crate::tracers::mft::frusta::{bits, Frusta, Margins, MAX_FRUSTA};
 use crate::tracers::mft::MftConfig;
 
@@ -243,33 +244,7 @@ fn trace_block<S: Stats>(
             stats.node(depth(index));
         }
         if !node.is_leaf() {
-            let (a, b) = (node.first, node.first + 1);
-            let (box_a, box_b) = (&bvh.nodes[a as usize].bounds, &bvh.nodes[b as usize].bounds);
-            let mask_a = frusta.box_mask(box_a, mask, margins);
-            let mask_b = frusta.box_mask(box_b, mask, margins);
-            if S::ENABLED {
-                stats.event(Event::FrustumBoxTests, 2);
-                stats.event(Event::FrustaAtNodes, mask.count_ones() as u64);
-                stats.event(
-                    Event::BoxesCulled,
-                    (mask_a == 0) as u64 + (mask_b == 0) as u64,
-                );
-                for _ in 0..mask.count_ones() {
-                    stats.aabb_test(depth(a));
-                    stats.aabb_test(depth(b));
-                }
-            }
-            let a_first = (box_a.min + box_a.max - box_b.min - box_b.max).dot(towards) <= 0.0;
-            let (near, far) = if a_first {
-                ((a, mask_a), (b, mask_b))
-            } else {
-                ((b, mask_b), (a, mask_a))
-            };
-            for entry in [far, near] {
-                if entry.1 != 0 {
-                    stack.push(entry);
-                }
-            }
+            push_children(bvh, node, mask, frusta, margins, towards, stack, stats);
             continue;
         }
 

@@ -34,18 +34,21 @@ pub struct IntervalPacket {
 }
 
 impl IntervalPacket {
+    /// The bounds of no ray, where both constructions start.
+    const EMPTY: IntervalPacket = IntervalPacket {
+        origin_lo: [f32::INFINITY; 3],
+        origin_hi: [f32::NEG_INFINITY; 3],
+        inv_lo: [f32::INFINITY; 3],
+        inv_hi: [f32::NEG_INFINITY; 3],
+        negative: [false; 3],
+        usable: [true; 3],
+        tmin: f32::INFINITY,
+    };
+
     /// The definition `from_lanes` computes (kept for its test).
     #[cfg(test)]
     pub fn new(rays: Rays<'_>) -> Self {
-        let mut p = IntervalPacket {
-            origin_lo: [f32::INFINITY; 3],
-            origin_hi: [f32::NEG_INFINITY; 3],
-            inv_lo: [f32::INFINITY; 3],
-            inv_hi: [f32::NEG_INFINITY; 3],
-            negative: [false; 3],
-            usable: [true; 3],
-            tmin: f32::INFINITY,
-        };
+        let mut p = IntervalPacket::EMPTY;
         for i in 0..rays.len() {
             let r = rays.ray(i);
             let (o, d) = (r.origin.to_array(), r.dir.to_array());
@@ -70,15 +73,7 @@ impl IntervalPacket {
     /// same bounds, bit for bit (the lanes hold the same origins and the same `1/d`), taken
     /// lane-wise so they vectorize — built ray by ray they cost as much as the traversal.
     pub fn from_lanes<const L: usize>(groups: &[SimdRay<L>]) -> Self {
-        let mut p = IntervalPacket {
-            origin_lo: [f32::INFINITY; 3],
-            origin_hi: [f32::NEG_INFINITY; 3],
-            inv_lo: [f32::INFINITY; 3],
-            inv_hi: [f32::NEG_INFINITY; 3],
-            negative: [false; 3],
-            usable: [true; 3],
-            tmin: f32::INFINITY,
-        };
+        let mut p = IntervalPacket::EMPTY;
         let Some(first) = groups.first() else {
             return p;
         };

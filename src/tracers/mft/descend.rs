@@ -1,0 +1,53 @@
+//! The interior-node step both multi-frusta traversals share, shadow blocks (`block`) and
+//! primary frusta (`primary`): Benthin & Wald 2009 §4, all frusta of the block tested against a
+//! child's box at once.
+
+use glam::Vec3;
+
+use crate::accel::{Bvh, BvhNode};
+use crate::stats::{Event, Stats};
+use crate::tracers::mft::frusta::{Frusta, Margins};
+
+/// Tests both children of the interior `node` against the frusta of `mask` (one SIMD box test
+/// per child for all of them), counts the tests, and pushes each child with the frusta that may
+/// enter it, the nearer along `towards` on top.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+pub fn push_children<S: Stats>(
+    bvh: &Bvh,
+    node: &BvhNode,
+    mask: u64,
+    frusta: &Frusta,
+    margins: &Margins,
+    towards: Vec3,
+    stack: &mut Vec<(u32, u64)>,
+    stats: &mut S,
+) {
+    let (a, b) = (node.first, node.first + 1);
+    let (box_a, box_b) = (&bvh.nodes[a as usize].bounds, &bvh.nodes[b as usize].bounds);
+    let mask_a = frusta.box_mask(box_a, mask, margins);
+    let mask_b = frusta.box_mask(box_b, mask, margins);
+    if S::ENABLED {
+        stats.event(Event::FrustumBoxTests, 2);
+        stats.event(Event::FrustaAtNodes, mask.count_ones() as u64);
+        stats.event(
+            Event::BoxesCulled,
+            (mask_a == 0) as u64 + (mask_b == 0) as u64,
+        );
+        for _ in 0..mask.count_ones() {
+            stats.aabb_test(bvh.depth[a as usize] as usize);
+            stats.aabb_test(bvh.depth[b as usize] as usize);
+        }
+    }
+    let a_first = (box_a.min + box_a.max - box_b.min - box_b.max).dot(towards) <= 0.0;
+    let (near, far) = if a_first {
+        ((a, mask_a), (b, mask_b))
+    } else {
+        ((b, mask_b), (a, mask_a))
+    };
+    for entry in [far, near] {
+        if entry.1 != 0 {
+            stack.push(entry);
+        }
+    }
+}
