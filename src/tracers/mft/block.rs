@@ -17,7 +17,7 @@ use crate::geometry::Ray;
 use crate::lanes::SimdRay;
 use crate::stats::{Event, Stats};
 use crate::tracers::mft::cull::keep_mask;
-use crate::tracers::mft::descend::push_children;
+use crate::tracers::mft::descend::{depth, push_children, start_at_root};
 use crate::tracers::mft::frusta::{bits, Frusta, Margins};
 use crate::tracers::mft::MftConfig;
 use crate::tracers::visibility::{shadow_ray, VisibilityQuery};
@@ -133,25 +133,10 @@ pub fn trace_block<S: Stats>(
 
     // Children are visited nearer first along the block's mean direction to the light.
     let towards = query.light.point(0.5, 0.5) - query.points[first].origin;
-    let depth = |i: u32| {
-        if S::ENABLED {
-            bvh.depth[i as usize] as usize
-        } else {
-            0
-        }
-    };
-    let root = &bvh.nodes[Bvh::ROOT];
-    if S::ENABLED {
-        stats.event(Event::FrustumBoxTests, 1);
-        (0..live.count_ones()).for_each(|_| stats.aabb_test(0));
-    }
+    let depth = |i: u32| depth::<S>(bvh, i);
     // Frusta whose rays exist: made at the first leaf that needs them, kept for the block.
     let mut generated = 0u64;
-    stack.clear();
-    stack.push((
-        Bvh::ROOT as u32,
-        frusta.box_mask(&root.bounds, live, margins),
-    ));
+    start_at_root(bvh, live, frusta, margins, stack, stats);
     while let Some((index, mask)) = stack.pop() {
         let mask = mask & live;
         if mask == 0 {

@@ -51,3 +51,36 @@ pub fn push_children<S: Stats>(
         }
     }
 }
+
+/// Starts a block's walk: the root's box against the frusta of `mask`, counted, on an emptied
+/// stack.
+#[inline(always)]
+pub fn start_at_root<S: Stats>(
+    bvh: &Bvh,
+    mask: u64,
+    frusta: &Frusta,
+    margins: &Margins,
+    stack: &mut Vec<(u32, u64)>,
+    stats: &mut S,
+) {
+    if S::ENABLED {
+        stats.event(Event::FrustumBoxTests, 1);
+        (0..mask.count_ones()).for_each(|_| stats.aabb_test(0));
+    }
+    let root = &bvh.nodes[Bvh::ROOT];
+    stack.clear();
+    stack.push((
+        Bvh::ROOT as u32,
+        frusta.box_mask(&root.bounds, mask, margins),
+    ));
+}
+
+/// Node `i`'s depth for the per-depth counters (0 when nothing is counted).
+#[inline(always)]
+pub fn depth<S: Stats>(bvh: &Bvh, i: u32) -> usize {
+    if S::ENABLED {
+        bvh.depth[i as usize] as usize
+    } else {
+        0
+    }
+}

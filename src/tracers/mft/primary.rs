@@ -38,7 +38,7 @@ use crate::geometry::{CameraGrid, Hit, Rays};
 use crate::lanes::SimdRay;
 use crate::stats::{Event, Stats};
 use crate::tracers::mft::cull::keep_mask;
-use crate::tracers::mft::descend::push_children;
+use crate::tracers::mft::descend::{depth, push_children, start_at_root};
 use crate::tracers::mft::frusta::{bits, Frusta, Margins, MAX_FRUSTA};
 use crate::tracers::mft::MftConfig;
 
@@ -216,25 +216,10 @@ fn trace_block<S: Stats>(
     // Children are visited nearer first along the first frustum's middle direction.
     let [x0, x1, y0, y1] = frusta.rect[0];
     let towards = grid.through(0.5 * (x0 + x1), 0.5 * (y0 + y1));
-    let depth = |i: u32| {
-        if S::ENABLED {
-            bvh.depth[i as usize] as usize
-        } else {
-            0
-        }
-    };
-    let root = &bvh.nodes[Bvh::ROOT];
-    if S::ENABLED {
-        stats.event(Event::FrustumBoxTests, 1);
-        (0..group.len()).for_each(|_| stats.aabb_test(0));
-    }
+    let depth = |i: u32| depth::<S>(bvh, i);
     // Frusta whose rays exist: made at the first leaf that needs them.
     let mut generated = 0u64;
-    stack.clear();
-    stack.push((
-        Bvh::ROOT as u32,
-        frusta.box_mask(&root.bounds, all, margins),
-    ));
+    start_at_root(bvh, all, frusta, margins, stack, stats);
     while let Some((index, mask)) = stack.pop() {
         if mask == 0 {
             continue;
