@@ -13,7 +13,7 @@ use raylab::scene::library::load_scene;
 use raylab::scene::Mesh;
 use raylab::stats::{Counters, Event};
 use raylab::tracers::batch::{trace_hits, trace_occlusion};
-use raylab::tracers::packet::{PacketConfig, PacketTracer, Traversal};
+use raylab::tracers::packet::{PacketConfig, PacketTracer, Traversal, TreeWidth};
 use raylab::tracers::reference::ReferenceTracer;
 use raylab::tracers::{Params, Tracer};
 
@@ -99,7 +99,7 @@ fn count(traversal: Traversal, width: usize) -> (Counts, Vec<Hit>) {
             traversal,
             frustum: false,
         },
-        width,
+        TreeWidth::of(width).unwrap(),
     );
     let batch = column_packet([0.5, 10.0, 0.5, 3.5]);
     let mut hits = vec![Hit::MISS; batch.len()];
@@ -237,7 +237,11 @@ fn occlusion_stops_when_every_ray_is_occluded() {
             traversal: Traversal::Ranged,
             frustum: false,
         };
-        let tracer = PacketTracer::with_width(Arc::new(four_leaf_tree()), config, width);
+        let tracer = PacketTracer::with_width(
+            Arc::new(four_leaf_tree()),
+            config,
+            TreeWidth::of(width).unwrap(),
+        );
         let mut flags = vec![false; 16];
         tracer.occluded(column_packet([0.5, 10.0, 0.5, 3.5]).view(), &mut flags);
         let want: Vec<bool> = (0..16).map(|i| i / 4 != 1).collect();
@@ -297,7 +301,11 @@ fn agrees_with_reference(name: &str, size: Option<u32>) {
                         traversal,
                         frustum,
                     };
-                    let tracer = PacketTracer::with_width(bvh.clone(), config, width);
+                    let tracer = PacketTracer::with_width(
+                        bvh.clone(),
+                        config,
+                        TreeWidth::of(width).unwrap(),
+                    );
                     for (batch, expected) in [&primary, &diffuse].iter().zip(&expected_hits) {
                         let got = trace_hits(&tracer, batch);
                         for i in 0..batch.len() {
@@ -403,7 +411,7 @@ fn explicit_packets_are_respected() {
             traversal,
             frustum: true,
         };
-        let tracer = PacketTracer::with_width(tree.clone(), config, width);
+        let tracer = PacketTracer::with_width(tree.clone(), config, TreeWidth::of(width).unwrap());
         let mut hits = vec![Hit::MISS; 16];
         let mut c = Counters::default();
         tracer.intersect_counted(explicit.view(), &mut hits, &mut c);
@@ -444,7 +452,8 @@ fn wide_trees_trace_moving_geometry_like_the_reference() {
                 traversal: Traversal::Ranged,
                 frustum,
             };
-            let tracer = PacketTracer::with_width(bvh.clone(), config, width);
+            let tracer =
+                PacketTracer::with_width(bvh.clone(), config, TreeWidth::of(width).unwrap());
             let got = trace_hits(&tracer, &timed);
             for i in 0..timed.len() {
                 assert!(

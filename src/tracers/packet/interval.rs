@@ -208,18 +208,34 @@ mod tests {
     use crate::geometry::{Aabb, Ray, RayBatch, RayBoxTest, RayKind};
     use crate::random::SplitMix64;
 
+    /// `n` rays about one random origin and direction (origins ±0.3, directions ±`spread`
+    /// before normalising), `tmin` drawn from `tmin` (an empty range: its start), `tmax` 8.
+    fn coherent_batch(
+        rng: &mut SplitMix64,
+        n: usize,
+        spread: f32,
+        tmin: std::ops::Range<f32>,
+    ) -> RayBatch {
+        let mut b = RayBatch::new(RayKind::Diffuse);
+        let (o, d) = (rng.vec3(-2.0, 2.0), rng.direction());
+        for i in 0..n {
+            let dir = (d + rng.vec3(-spread, spread)).normalize();
+            let t0 = match tmin.is_empty() {
+                true => tmin.start,
+                false => rng.range(tmin.start, tmin.end),
+            };
+            b.push(Ray::new(o + rng.vec3(-0.3, 0.3), dir, t0, 8.0), i as u32);
+        }
+        b
+    }
+
     #[test]
     fn interval_culling_never_culls_a_box_a_ray_hits() {
         let mut rng = SplitMix64::new(5);
         let mut culled = 0;
         let trials = 20_000;
         for _ in 0..trials / 100 {
-            let mut b = RayBatch::new(RayKind::Diffuse);
-            let (o, d) = (rng.vec3(-2.0, 2.0), rng.direction());
-            for i in 0..16 {
-                let dir = (d + rng.vec3(-0.2, 0.2)).normalize();
-                b.push(Ray::new(o + rng.vec3(-0.3, 0.3), dir, 0.0, 8.0), i);
-            }
+            let b = coherent_batch(&mut rng, 16, 0.2, 0.0..0.0);
             let p = IntervalPacket::new(b.view());
             for _ in 0..100 {
                 let c = rng.vec3(-4.0, 4.0);
@@ -242,13 +258,7 @@ mod tests {
     fn bounds_from_lanes_equal_bounds_from_rays() {
         let mut rng = SplitMix64::new(21);
         for n in [1usize, 5, 16, 37, 64] {
-            let mut b = RayBatch::new(RayKind::Diffuse);
-            let (o, d) = (rng.vec3(-2.0, 2.0), rng.direction());
-            for i in 0..n {
-                let dir = (d + rng.vec3(-0.4, 0.4)).normalize();
-                let tmin = rng.range(0.0, 0.1);
-                b.push(Ray::new(o + rng.vec3(-0.3, 0.3), dir, tmin, 8.0), i as u32);
-            }
+            let b = coherent_batch(&mut rng, n, 0.4, 0.0..0.1);
             let rays = b.view();
             let mut groups = vec![SimdRay::<16>::default(); n.div_ceil(16)];
             for (g, group) in groups.iter_mut().enumerate() {
@@ -266,12 +276,7 @@ mod tests {
     fn survivors_of_eight_boxes_are_the_boxes_culls_keeps() {
         let mut rng = SplitMix64::new(9);
         for _ in 0..500 {
-            let mut b = RayBatch::new(RayKind::Diffuse);
-            let (o, d) = (rng.vec3(-2.0, 2.0), rng.direction());
-            for i in 0..16 {
-                let dir = (d + rng.vec3(-0.2, 0.2)).normalize();
-                b.push(Ray::new(o + rng.vec3(-0.3, 0.3), dir, 0.0, 8.0), i);
-            }
+            let b = coherent_batch(&mut rng, 16, 0.2, 0.0..0.0);
             let p = IntervalPacket::new(b.view());
             let (mut lo, mut hi) = ([[0.0f32; 8]; 3], [[0.0f32; 8]; 3]);
             for c in 0..7 {

@@ -137,21 +137,16 @@ impl PacketConfig {
     pub const WIDTHS: [usize; 3] = [2, 4, 8];
 
     /// The `width` parameter (default 2), checked against this configuration.
-    pub fn width_from_params(&self, p: &Params) -> Result<usize> {
+    pub fn width_from_params(&self, p: &Params) -> Result<TreeWidth> {
         let width = p.get_or("width", 2usize)?;
-        if !Self::WIDTHS.contains(&width) {
-            return Err(Error::usage(format!(
-                "packet tracer: width must be one of {:?} (children per BVH node; got {width})",
-                Self::WIDTHS
-            )));
-        }
+        let tree = TreeWidth::of(width)?;
         if width > 2 && self.traversal != Traversal::Ranged {
             return Err(Error::usage(format!(
                 "packet tracer: width = {width} walks the wide tree by its own ranged traversal; traversal = {:?} runs only on the binary tree (width = 2)",
                 self.traversal.name()
             )));
         }
-        Ok(width)
+        Ok(tree)
     }
 
     pub fn from_params(p: &Params) -> Result<Self> {
@@ -182,6 +177,30 @@ enum Nodes {
     Eight(WideBvh<8>),
 }
 
+/// Children per node of the tree a packet walks (`width` = 2, 4 or 8).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TreeWidth {
+    /// The binary SAH tree: the paper's.
+    Binary,
+    Four,
+    Eight,
+}
+
+impl TreeWidth {
+    /// The tree of `children` per node, or a usage error naming `PacketConfig::WIDTHS`.
+    pub fn of(children: usize) -> Result<TreeWidth> {
+        match children {
+            2 => Ok(TreeWidth::Binary),
+            4 => Ok(TreeWidth::Four),
+            8 => Ok(TreeWidth::Eight),
+            _ => Err(Error::usage(format!(
+                "packet tracer: width must be one of {:?} (children per BVH node; got {children})",
+                PacketConfig::WIDTHS
+            ))),
+        }
+    }
+}
+
 pub struct PacketTracer {
     bvh: Arc<Bvh>,
     order: ChildOrder,
@@ -192,18 +211,17 @@ pub struct PacketTracer {
 impl PacketTracer {
     /// Over the binary tree (`width` = 2).
     pub fn new(bvh: Arc<Bvh>, config: PacketConfig) -> Self {
-        Self::with_width(bvh, config, 2)
+        Self::with_width(bvh, config, TreeWidth::Binary)
     }
 
-    /// Over the tree of `width` children per node (one of `PacketConfig::WIDTHS`; a wide tree
-    /// is collapsed from `bvh` here, and only ranged traversal walks it).
-    pub fn with_width(bvh: Arc<Bvh>, config: PacketConfig, width: usize) -> Self {
+    /// Over the tree of `width` children per node (a wide tree is collapsed from `bvh` here,
+    /// and only ranged traversal walks it).
+    pub fn with_width(bvh: Arc<Bvh>, config: PacketConfig, width: TreeWidth) -> Self {
         let order = ChildOrder::new(&bvh);
         let nodes = match width {
-            2 => Nodes::Binary,
-            4 => Nodes::Four(WideBvh::collapse(&bvh)),
-            8 => Nodes::Eight(WideBvh::collapse(&bvh)),
-            _ => panic!("width {width}: `width_from_params` admits only 2, 4 and 8"),
+            TreeWidth::Binary => Nodes::Binary,
+            TreeWidth::Four => Nodes::Four(WideBvh::collapse(&bvh)),
+            TreeWidth::Eight => Nodes::Eight(WideBvh::collapse(&bvh)),
         };
         PacketTracer {
             bvh,
