@@ -1,8 +1,8 @@
 //! A block of shadow frusta (Benthin & Wald 2009 §4.4): one frustum per shading point, from the
 //! point's ray origin to the rectangle of the light, in (s, t), that bounds the point's live
 //! samples. Stored lane by lane (structure of arrays over frusta), so the box test of every
-//! frustum against one BVH box is one loop the compiler vectorizes (§4: "one SIMD test per node
-//! for all frusta").
+//! frustum against one BVH box is one pass of vector operations (§4: "one SIMD test per node for
+//! all frusta").
 //!
 //! A frustum is described by its origin `o` and its four corner rays `D_q = corner_q − o`, not
 //! normalized: every live sample ray is `o + u·D`, u ∈ [0, 1], with `D` a convex combination of
@@ -13,6 +13,7 @@
 use glam::Vec3;
 
 use crate::geometry::Aabb;
+use crate::tracers::mft::vector::{Native, Vector};
 use crate::tracers::visibility::QuadLight;
 
 /// The most frusta traced together: the live mask of a block is one `u64`.
@@ -20,9 +21,6 @@ pub const MAX_FRUSTA: usize = 64;
 
 /// Lanes per frustum field: `MAX_FRUSTA` floats.
 type Lanes = [f32; MAX_FRUSTA];
-
-/// Frusta per pass of a lane loop (one AVX-512 register of f32).
-pub const W: usize = 16;
 
 /// The rounding allowance of the box test, from the scale of the scene.
 #[derive(Clone, Copy, Debug)]
@@ -167,55 +165,52 @@ impl Frusta {
     /// The frusta of `candidates` whose rays may meet `b`: an interval-arithmetic slab test on
     /// `o + u·D`, u ∈ [0, 1] (a ray in the box at `u` has, per axis, `u` between the products of
     /// the slab's relative bounds and the reciprocal interval's ends), and the four side planes.
-    /// 16 frusta per pass of plain lane loops, which LLVM vectorizes. Minima and maxima are
-    /// compare-and-select (one instruction; `f32::min`'s NaN rule costs three): a NaN, which
-    /// finite boxes and reciprocals never make, keeps the running bound, so it never culls.
+    /// One vector of frusta per pass, at the machine's width (`vector::Native`).
     #[inline(always)]
     pub fn box_mask(&self, b: &Aabb, candidates: u64, m: &Margins) -> u64 {
+        self.box_mask_with::<Native>(b, candidates, m)
+    }
+
+    /// `box_mask` on vectors `V`. Minima and maxima are compare-and-select (one instruction;
+    /// `f32::min`'s NaN rule costs three): a NaN, which finite boxes and reciprocals never make,
+    /// keeps the running bound, so it never culls.
+    #[inline(always)]
+    pub fn box_mask_with<V: Vector>(&self, b: &Aabb, candidates: u64, m: &Margins) -> u64 {
         let lo = (b.min - Vec3::splat(m.distance)).to_array();
         let hi = (b.max + Vec3::splat(m.distance)).to_array();
         let len = 64 - candidates.leading_zeros() as usize;
-        let min = |x: f32, y: f32| if x < y { x } else { y };
-        let max = |x: f32, y: f32| if x > y { x } else { y };
+        let zero = V::splat(0.0);
+        // Products are rounded: bounds are widened by a relative 1e-6 (rounding is 1.2e-7).
+        let widen = V::splat(1e-6);
         let mut mask = 0u64;
-        for base in (0..len).step_by(W) {
-            let lanes = |x: &Lanes| -> [f32; W] { x[base..base + W].try_into().unwrap() };
-            let mut near = [0.0f32; W];
-            let mut far = [1.0f32; W];
-            let mut depth = [[0.0f32; W]; 4];
+        for base in (0..len).step_by(V::WIDTH) {
+            let lanes = |x: &Lanes| V::load(x, base);
+            let mut near = zero;
+            let mut far = V::splat(1.0);
+            let mut depth = [zero; 4];
             for a in 0..3 {
-                let (o, r0, r1) = (
-                    lanes(&self.origin[a]),
-                    lanes(&self.rcp[a][0]),
-                    lanes(&self.rcp[a][1]),
-                );
+                let o = lanes(&self.origin[a]);
+                let (x0, x1) = (V::splat(lo[a]) - o, V::splat(hi[a]) - o);
+                let (r0, r1) = (lanes(&self.rcp[a][0]), lanes(&self.rcp[a][1]));
+                let (p, q, r, s) = (x0 * r0, x0 * r1, x1 * r0, x1 * r1);
+                let enter = p.min(q).min(r.min(s));
+                let leave = p.max(q).max(r.max(s));
                 let free_inf = lanes(&self.free_inf[a]);
-                let sides: [[f32; W]; 4] = std::array::from_fn(|k| lanes(&self.side[k][a]));
-                for l in 0..W {
-                    let (x0, x1) = (lo[a] - o[l], hi[a] - o[l]);
-                    let (p, q, r, s) = (x0 * r0[l], x0 * r1[l], x1 * r0[l], x1 * r1[l]);
-                    let enter = min(min(p, q), min(r, s));
-                    let leave = max(max(p, q), max(r, s));
-                    // Products are rounded: widen by a relative 1e-6 (rounding is 1.2e-7).
-                    let enter = enter - 1e-6 * enter.abs() - free_inf[l];
-                    let leave = leave + 1e-6 * leave.abs() + free_inf[l];
-                    near[l] = max(enter, near[l]);
-                    far[l] = min(leave, far[l]);
-                    // Per side plane, the box corner deepest inside it.
-                    for k in 0..4 {
-                        let n = sides[k][l];
-                        depth[k][l] += n * if n > 0.0 { x0 } else { x1 };
-                    }
+                let enter = enter - widen * enter.abs() - free_inf;
+                let leave = leave + widen * leave.abs() + free_inf;
+                near = enter.max(near);
+                far = leave.min(far);
+                // Per side plane, the box corner deepest inside it.
+                for (k, depth) in depth.iter_mut().enumerate() {
+                    let n = lanes(&self.side[k][a]);
+                    *depth = *depth + n * V::select(n.gt(zero), x0, x1);
                 }
             }
-            let slack: [[f32; W]; 4] = std::array::from_fn(|k| lanes(&self.side_slack[k]));
-            for l in 0..W {
-                let mut inside = near[l] <= far[l];
-                for k in 0..4 {
-                    inside &= depth[k][l] <= slack[k][l];
-                }
-                mask |= (inside as u64) << (base + l);
+            let mut inside = near.le(far);
+            for (k, depth) in depth.into_iter().enumerate() {
+                inside = inside & depth.le(lanes(&self.side_slack[k]));
             }
+            mask |= V::bits(inside) << base;
         }
         mask & candidates
     }

@@ -249,7 +249,7 @@ fn trace_block<S: Stats>(
                 break;
             }
             let tri = &bvh.triangles[t];
-            let keep = keep_mask(frusta, tri, candidates);
+            let keep = keep_mask(frusta, tri, candidates, false);
             if S::ENABLED {
                 stats.event(Event::TrianglesAccessed, 1);
                 stats.event(Event::TrianglesKept, (keep != 0) as u64);

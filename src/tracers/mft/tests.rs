@@ -268,7 +268,7 @@ fn culling_never_removes_what_a_sample_ray_hits() {
             );
         }
         for tri in &triangles {
-            let keep = keep_mask(&frusta, tri, u64::MAX);
+            let keep = keep_mask(&frusta, tri, u64::MAX, false);
             let bounds = Aabb::from_points(&tri.v);
             let reach = frusta.box_mask(&bounds, u64::MAX, &margins);
             for (f, frustum_rays) in rays.iter().enumerate() {
@@ -314,7 +314,10 @@ fn blocks_out_of_range_are_refused() {
         let params = Params::new().with("block", block);
         assert!(MftConfig::from_params(&params).is_err());
     }
-    let params = Params::new().with("block", 64).with("fs", false);
+    let params = Params::new()
+        .with("block", 64)
+        .with("fs", false)
+        .with("backface", true);
     assert_eq!(
         MftConfig::from_params(&params).unwrap(),
         MftConfig {
@@ -323,7 +326,203 @@ fn blocks_out_of_range_are_refused() {
             fs: false,
             leaf_rays: true,
             primary: PrimaryRays::Packets,
+            backface: true,
         }
     );
     assert!(MftConfig::from_params(&Params::new().with("cr", "maybe")).is_err());
+}
+
+/// A value for a frustum lane, box or vertex coordinate: mostly ordinary, sometimes a signed
+/// zero, an infinity, NaN or a subnormal.
+fn edgy(rng: &mut SplitMix64, lo: f32, hi: f32) -> f32 {
+    const SPECIALS: [f32; 6] = [0.0, -0.0, f32::INFINITY, f32::NEG_INFINITY, f32::NAN, 1e-40];
+    if rng.unit() < 0.06 {
+        SPECIALS[rng.next_u64() as usize % SPECIALS.len()]
+    } else {
+        rng.range(lo, hi)
+    }
+}
+
+/// The box and triangle masks of every vector type the build has equal the portable lanes' (one
+/// and sixteen wide), on real frusta and on frusta, boxes and triangles with NaN, infinite, zero
+/// and subnormal values poked in.
+#[test]
+fn vector_kernels_give_the_portable_lanes_masks() {
+    use super::vector::{Native, Portable, Vector};
+    fn masks<V: Vector>(
+        frusta: &Frusta,
+        b: &Aabb,
+        tri: &Triangle,
+        c: u64,
+        m: &Margins,
+    ) -> [u64; 3] {
+        [
+            frusta.box_mask_with::<V>(b, c, m),
+            cull::keep_mask_with::<V>(frusta, tri, c, false),
+            cull::keep_mask_with::<V>(frusta, tri, c, true),
+        ]
+    }
+    let mut rng = SplitMix64::new(13);
+    let light = light(1.5);
+    let margins = Margins::new(4.0);
+    let (mut compared, mut kept) = (0, [0u32; 3]);
+    for round in 0..300 {
+        let mut frusta = Frusta {
+            len: MAX_FRUSTA,
+            ..Frusta::default()
+        };
+        for f in 0..MAX_FRUSTA {
+            let origin = rng.vec3(-1.5, 1.5);
+            let (s0, t0) = (rng.range(0.0, 0.9), rng.range(0.0, 0.9));
+            let rect = [s0, rng.range(s0, 1.0), t0, rng.range(t0, 1.0)];
+            frusta.set(f, origin, &light, rect, &margins);
+        }
+        if round % 2 == 1 {
+            // Every field of some lanes overwritten with edge values.
+            let mut fields: Vec<&mut [f32; MAX_FRUSTA]> = frusta
+                .origin
+                .iter_mut()
+                .chain(frusta.corner.iter_mut().flatten())
+                .chain(frusta.corner_len_sq.iter_mut())
+                .chain(std::iter::once(&mut frusta.reach))
+                .chain(frusta.rcp.iter_mut().flatten())
+                .chain(frusta.free_inf.iter_mut())
+                .chain(frusta.side.iter_mut().flatten())
+                .chain(frusta.side_slack.iter_mut())
+                .collect();
+            for field in fields.iter_mut() {
+                for x in field.iter_mut() {
+                    *x = edgy(&mut rng, -2.0, 2.0);
+                }
+            }
+        }
+        let edgy_point = |rng: &mut SplitMix64| {
+            Vec3::new(
+                edgy(rng, -1.5, 1.5),
+                edgy(rng, -1.5, 1.5),
+                edgy(rng, -1.5, 1.5),
+            )
+        };
+        for _ in 0..20 {
+            let (a, b) = (edgy_point(&mut rng), rng.vec3(-0.3, 0.3));
+            let bounds = Aabb::new(a, a + b.abs());
+            let tri = Triangle::new(
+                edgy_point(&mut rng),
+                edgy_point(&mut rng),
+                edgy_point(&mut rng),
+            );
+            let candidates = if rng.unit() < 0.5 {
+                u64::MAX
+            } else {
+                rng.next_u64()
+            };
+            let want = masks::<Portable<1>>(&frusta, &bounds, &tri, candidates, &margins);
+            assert_eq!(
+                masks::<Portable<16>>(&frusta, &bounds, &tri, candidates, &margins),
+                want
+            );
+            assert_eq!(
+                masks::<Native>(&frusta, &bounds, &tri, candidates, &margins),
+                want
+            );
+            #[cfg(all(target_arch = "x86_64", target_feature = "avx2"))]
+            assert_eq!(
+                masks::<super::vector::Avx2>(&frusta, &bounds, &tri, candidates, &margins),
+                want
+            );
+            compared += 1;
+            for (k, m) in kept.iter_mut().zip(want) {
+                *k += m.count_ones();
+            }
+        }
+    }
+    // Both answers occur in every mask (random boxes are small: few are reached), and back-face
+    // culling drops more.
+    let pairs = compared * 64;
+    assert!(
+        kept.iter()
+            .all(|&k| k > pairs / 1000 && k < pairs * 99 / 100),
+        "{kept:?} of {pairs}"
+    );
+    assert!(kept[2] < kept[1]);
+}
+
+/// Back-face culling (option `backface`) on a hand-worked triangle: in the plane y = 1 with
+/// normal +y (winding (0,0,1) × (1,0,0)), seen from below by a frustum towards a light above it,
+/// every ray meets its back: culled with the option, kept without; wound the other way, kept.
+#[test]
+fn backface_culling_drops_a_triangle_seen_from_behind() {
+    let light = QuadLight {
+        corner: Vec3::new(0.4, 3.0, 0.4),
+        edge_u: Vec3::new(0.2, 0.0, 0.0),
+        edge_v: Vec3::new(0.0, 0.0, 0.2),
+    };
+    let margins = Margins::new(3.0);
+    let mut frusta = Frusta {
+        len: 1,
+        ..Frusta::default()
+    };
+    frusta.set(
+        0,
+        Vec3::new(0.5, 0.0, 0.5),
+        &light,
+        [0.0, 1.0, 0.0, 1.0],
+        &margins,
+    );
+    let (a, b, c) = (
+        Vec3::new(0.0, 1.0, 0.0),
+        Vec3::new(0.0, 1.0, 2.0),
+        Vec3::new(2.0, 1.0, 0.0),
+    );
+    let facing_up = Triangle::new(a, b, c);
+    assert_eq!(facing_up.normal().normalize(), Vec3::Y);
+    let facing_down = Triangle::new(a, c, b);
+    assert_eq!(keep_mask(&frusta, &facing_up, 1, false), 1);
+    assert_eq!(keep_mask(&frusta, &facing_up, 1, true), 0);
+    assert_eq!(keep_mask(&frusta, &facing_down, 1, true), 1);
+    assert_eq!(keep_mask(&frusta, &facing_down, 1, false), 1);
+}
+
+/// On closed, outward-wound meshes (UV spheres) with every shading point outside them,
+/// back-face culling changes no answer, and it culls more (frustum, triangle) pairs.
+#[test]
+fn backface_culling_changes_no_answer_on_closed_meshes() {
+    use crate::scene::tessellate::Surface;
+    let sphere = Surface::uv_sphere(24, 12);
+    let triangles: Vec<Triangle> = [
+        (-0.8, 0.3, -0.6),
+        (0.5, 1.2, 0.2),
+        (0.0, 0.0, 0.9),
+        (0.9, -0.2, -0.9),
+    ]
+    .into_iter()
+    .flat_map(|(x, y, z)| sphere.triangles(|p| p * 0.45 + Vec3::new(x, y, z)))
+    .collect();
+    let bvh = bvh(&triangles);
+    let points = points(256, 4, 9);
+    let samples = samples(16, 4, 9);
+    let query = VisibilityQuery::new(&points, light(2.0), &samples).unwrap();
+    let expected = answer(
+        &ReferenceTracer::new(bvh.clone()),
+        query,
+        &mut Counters::default(),
+    );
+    let occluded = expected.total_occluded();
+    assert!(occluded > query.ray_count() / 20 && occluded < query.ray_count() * 9 / 10);
+    let run = |backface: bool| {
+        let config = MftConfig {
+            backface,
+            ..MftConfig::default()
+        };
+        let mut counters = Counters::default();
+        let v = answer(&MftTracer::new(bvh.clone(), config), query, &mut counters);
+        (v, counters.get(Event::TrianglesCulled))
+    };
+    let ((plain, plain_culled), (culled, backface_culled)) = (run(false), run(true));
+    assert_eq!(plain, expected);
+    assert_eq!(culled, expected);
+    assert!(
+        backface_culled > plain_culled,
+        "{backface_culled} vs {plain_culled}"
+    );
 }
