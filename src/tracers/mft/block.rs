@@ -1,6 +1,6 @@
 //! One block of shading points through the BVH as a block of shadow frusta (Benthin & Wald 2009
 //! §4, App. A): a stack of (node, mask of frusta) entries; at an inner node one test per child box
-//! for all frusta of the mask (`Frusta::box_mask`); at a leaf, per triangle, culling for all frusta
+//! for all frusta of the mask (`Frusta::box_masks`); at a leaf, per triangle, culling for all frusta
 //! (`cull::keep_mask`), then the rays of each remaining frustum, generated on demand when the
 //! frustum first needs them (then kept while the block is traced), against the triangle, 16 rays
 //! at a time. Occlusion is kept as bits; a
@@ -165,12 +165,11 @@ pub fn trace_block<S: Stats>(
         // box, and those none of whose rays meets it (robust slabs, as the reference tracer
         // enters a leaf), which skip the leaf.
         let (mut box_tested, mut box_missed) = (0u64, 0u64);
-        for t in node.first as usize..(node.first + node.count) as usize {
+        for tri in &bvh.triangles[node.first as usize..][..node.count as usize] {
             let candidates = mask & live & !box_missed;
             if candidates == 0 {
                 break;
             }
-            let tri = &bvh.triangles[t];
             let keep = keep_mask(frusta, tri, candidates, config.backface);
             if S::ENABLED {
                 stats.event(Event::TrianglesAccessed, 1);
@@ -231,10 +230,15 @@ pub fn trace_block<S: Stats>(
         }
         // §5.3: after the leaf, shrink the frusta that lost rays here (CR: corner rays; FS: also
         // the traversal bounds).
+        // A frustum whose live rectangle did not change (samples lost inside it) keeps its
+        // corners and bounds: re-aiming would recompute the same values.
         if config.cr || config.fs {
             for f in bits(newly_occluded & live) {
-                frusta.rect[f] = live_rect(query, first + f, &alive[f * words..(f + 1) * words]);
-                frusta.aim(f, &query.light, config.fs.then_some(margins));
+                let rect = live_rect(query, first + f, &alive[f * words..(f + 1) * words]);
+                if rect != frusta.rect[f] {
+                    frusta.rect[f] = rect;
+                    frusta.aim(f, &query.light, config.fs.then_some(margins));
+                }
             }
         }
         if live == 0 {

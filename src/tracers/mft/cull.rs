@@ -96,20 +96,25 @@ pub fn keep_mask_with<V: Vector>(
             & s3.lt(below_slack);
         // Corner-ray culling against the three edge planes through the origin.
         let e = [to_v0, rel(v[1]), rel(v[2])];
-        let e_len_sq = [dot(e[0], e[0]), dot(e[1], e[1]), dot(e[2], e[2])];
-        let outside = [(0, 1, 2), (1, 2, 0), (2, 0, 1)].map(|(i, j, k)| {
-            let normal = cross(e[i], e[j]);
+        // The corners all strictly outside the plane through the origin and edge (a, b), on
+        // the far side from the third vertex `c`. (A closure called thrice, not an array
+        // `map`, which LLVM leaves as a call passing vectors through memory.)
+        let corners_outside = |a: [V; 3], b: [V; 3], c: [V; 3]| {
+            let normal = cross(a, b);
             let room = tolerance * dot(normal, normal);
-            let third = dot(normal, e[k]);
-            let mut all_out = (third * third).gt(room * e_len_sq[k]);
+            let third = dot(normal, c);
+            let mut all_out = (third * third).gt(room * dot(c, c));
             for q in 0..4 {
-                let c = dot(normal, corner(q));
+                let side = dot(normal, corner(q));
                 let d_len_sq = lanes(&frusta.corner_len_sq[q]);
-                all_out = all_out & (c * third).lt(zero) & (c * c).gt(room * d_len_sq);
+                all_out = all_out & (side * third).lt(zero) & (side * side).gt(room * d_len_sq);
             }
             all_out
-        });
-        let mut culled = all_above | all_below | outside[0] | outside[1] | outside[2];
+        };
+        let outside = corners_outside(e[0], e[1], e[2])
+            | corners_outside(e[1], e[2], e[0])
+            | corners_outside(e[2], e[0], e[1]);
+        let mut culled = all_above | all_below | outside;
         if backface {
             // Back-face culling: the origin behind the triangle's plane (n = e1 × e2), so
             // every ray from it meets the back.

@@ -9,7 +9,7 @@ use crate::stats::{Event, Stats};
 use crate::tracers::mft::frusta::{Frusta, Margins};
 
 /// Tests both children of the interior `node` against the frusta of `mask` (one SIMD box test
-/// per child for all of them), counts the tests, and pushes each child with the frusta that may
+/// for all of them and both boxes), counts the tests, and pushes each child with the frusta that may
 /// enter it, the nearer along `towards` on top.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
@@ -24,9 +24,12 @@ pub fn push_children<S: Stats>(
     stats: &mut S,
 ) {
     let (a, b) = (node.first, node.first + 1);
-    let (box_a, box_b) = (&bvh.nodes[a as usize].bounds, &bvh.nodes[b as usize].bounds);
-    let mask_a = frusta.box_mask(box_a, mask, margins);
-    let mask_b = frusta.box_mask(box_b, mask, margins);
+    // Siblings are adjacent: one bounds check for both.
+    let [child_a, child_b] = &bvh.nodes[a as usize..][..2] else {
+        unreachable!("a slice of two nodes")
+    };
+    let (box_a, box_b) = (&child_a.bounds, &child_b.bounds);
+    let [mask_a, mask_b] = frusta.box_masks([box_a, box_b], mask, margins);
     if S::ENABLED {
         stats.event(Event::FrustumBoxTests, 2);
         stats.event(Event::FrustaAtNodes, mask.count_ones() as u64);
@@ -71,7 +74,7 @@ pub fn start_at_root<S: Stats>(
     stack.clear();
     stack.push((
         Bvh::ROOT as u32,
-        frusta.box_mask(&root.bounds, mask, margins),
+        frusta.box_masks([&root.bounds], mask, margins)[0],
     ));
 }
 

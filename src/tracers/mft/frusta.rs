@@ -162,57 +162,75 @@ impl Frusta {
         }
     }
 
-    /// The frusta of `candidates` whose rays may meet `b`: an interval-arithmetic slab test on
-    /// `o + u·D`, u ∈ [0, 1] (a ray in the box at `u` has, per axis, `u` between the products of
-    /// the slab's relative bounds and the reciprocal interval's ends), and the four side planes.
-    /// One vector of frusta per pass, at the machine's width (`vector::Native`).
+    /// Per box of `boxes`, the frusta of `candidates` whose rays may meet it: an
+    /// interval-arithmetic slab test on `o + u·D`, u ∈ [0, 1] (a ray in the box at `u` has, per
+    /// axis, `u` between the products of the slab's relative bounds and the reciprocal
+    /// interval's ends), and the four side planes. One vector of frusta per pass, at the
+    /// machine's width (`vector::Native`); the frusta are loaded once for all `B` boxes (both
+    /// children of a node).
     #[inline(always)]
-    pub fn box_mask(&self, b: &Aabb, candidates: u64, m: &Margins) -> u64 {
-        self.box_mask_with::<Native>(b, candidates, m)
+    pub fn box_masks<const B: usize>(
+        &self,
+        boxes: [&Aabb; B],
+        candidates: u64,
+        m: &Margins,
+    ) -> [u64; B] {
+        self.box_masks_with::<Native, B>(boxes, candidates, m)
     }
 
-    /// `box_mask` on vectors `V`. Minima and maxima are compare-and-select (one instruction;
+    /// `box_masks` on vectors `V`. Minima and maxima are compare-and-select (one instruction;
     /// `f32::min`'s NaN rule costs three): a NaN, which finite boxes and reciprocals never make,
     /// keeps the running bound, so it never culls.
     #[inline(always)]
-    pub fn box_mask_with<V: Vector>(&self, b: &Aabb, candidates: u64, m: &Margins) -> u64 {
-        let lo = (b.min - Vec3::splat(m.distance)).to_array();
-        let hi = (b.max + Vec3::splat(m.distance)).to_array();
+    pub fn box_masks_with<V: Vector, const B: usize>(
+        &self,
+        boxes: [&Aabb; B],
+        candidates: u64,
+        m: &Margins,
+    ) -> [u64; B] {
+        let lo = boxes.map(|b| (b.min - Vec3::splat(m.distance)).to_array());
+        let hi = boxes.map(|b| (b.max + Vec3::splat(m.distance)).to_array());
         let len = 64 - candidates.leading_zeros() as usize;
         let zero = V::splat(0.0);
         // Products are rounded: bounds are widened by a relative 1e-6 (rounding is 1.2e-7).
         let widen = V::splat(1e-6);
-        let mut mask = 0u64;
+        let mut masks = [0u64; B];
         for base in (0..len).step_by(V::WIDTH) {
             let lanes = |x: &Lanes| V::load(x, base);
-            let mut near = zero;
-            let mut far = V::splat(1.0);
-            let mut depth = [zero; 4];
+            let mut near = [zero; B];
+            let mut far = [V::splat(1.0); B];
+            let mut depth = [[zero; 4]; B];
             for a in 0..3 {
                 let o = lanes(&self.origin[a]);
-                let (x0, x1) = (V::splat(lo[a]) - o, V::splat(hi[a]) - o);
                 let (r0, r1) = (lanes(&self.rcp[a][0]), lanes(&self.rcp[a][1]));
-                let (p, q, r, s) = (x0 * r0, x0 * r1, x1 * r0, x1 * r1);
-                let enter = p.min(q).min(r.min(s));
-                let leave = p.max(q).max(r.max(s));
                 let free_inf = lanes(&self.free_inf[a]);
-                let enter = enter - widen * enter.abs() - free_inf;
-                let leave = leave + widen * leave.abs() + free_inf;
-                near = enter.max(near);
-                far = leave.min(far);
-                // Per side plane, the box corner deepest inside it.
-                for (k, depth) in depth.iter_mut().enumerate() {
-                    let n = lanes(&self.side[k][a]);
-                    *depth = *depth + n * V::select(n.gt(zero), x0, x1);
+                let side: [V; 4] = std::array::from_fn(|k| lanes(&self.side[k][a]));
+                let positive = side.map(|n| n.gt(zero));
+                for i in 0..B {
+                    let (x0, x1) = (V::splat(lo[i][a]) - o, V::splat(hi[i][a]) - o);
+                    let (p, q, r, s) = (x0 * r0, x0 * r1, x1 * r0, x1 * r1);
+                    let enter = p.min(q).min(r.min(s));
+                    let leave = p.max(q).max(r.max(s));
+                    let enter = enter - widen * enter.abs() - free_inf;
+                    let leave = leave + widen * leave.abs() + free_inf;
+                    near[i] = enter.max(near[i]);
+                    far[i] = leave.min(far[i]);
+                    // Per side plane, the box corner deepest inside it.
+                    for k in 0..4 {
+                        depth[i][k] = depth[i][k] + side[k] * V::select(positive[k], x0, x1);
+                    }
                 }
             }
-            let mut inside = near.le(far);
-            for (k, depth) in depth.into_iter().enumerate() {
-                inside = inside & depth.le(lanes(&self.side_slack[k]));
+            let slack: [V; 4] = std::array::from_fn(|k| lanes(&self.side_slack[k]));
+            for i in 0..B {
+                let mut inside = near[i].le(far[i]);
+                for k in 0..4 {
+                    inside = inside & depth[i][k].le(slack[k]);
+                }
+                masks[i] |= V::bits(inside) << base;
             }
-            mask |= V::bits(inside) << base;
         }
-        mask & candidates
+        masks.map(|mask| mask & candidates)
     }
 }
 
@@ -246,13 +264,31 @@ mod tests {
         assert!(frusta.free[0][0] && !frusta.free[1][0] && frusta.free[2][0]);
         let cube = |c: Vec3| Aabb::new(c - Vec3::splat(0.1), c + Vec3::splat(0.1));
         // At height 5 the frustum spans x, z ∈ [−0.5, 0.5].
-        assert_eq!(frusta.box_mask(&cube(Vec3::new(0.5, 5.0, 0.0)), 1, &m), 1);
-        assert_eq!(frusta.box_mask(&cube(Vec3::new(0.0, 9.95, 0.95)), 1, &m), 1);
+        assert_eq!(
+            frusta.box_masks([&cube(Vec3::new(0.5, 5.0, 0.0))], 1, &m),
+            [1]
+        );
+        assert_eq!(
+            frusta.box_masks([&cube(Vec3::new(0.0, 9.95, 0.95))], 1, &m),
+            [1]
+        );
         // Beside it (only the side planes see it), above the light, below the origin.
-        assert_eq!(frusta.box_mask(&cube(Vec3::new(0.0, 1.0, 0.5)), 1, &m), 0);
-        assert_eq!(frusta.box_mask(&cube(Vec3::new(-0.5, 2.0, 0.0)), 1, &m), 0);
-        assert_eq!(frusta.box_mask(&cube(Vec3::new(0.0, 11.0, 0.0)), 1, &m), 0);
-        assert_eq!(frusta.box_mask(&cube(Vec3::new(0.0, -1.0, 0.0)), 1, &m), 0);
+        assert_eq!(
+            frusta.box_masks([&cube(Vec3::new(0.0, 1.0, 0.5))], 1, &m),
+            [0]
+        );
+        assert_eq!(
+            frusta.box_masks([&cube(Vec3::new(-0.5, 2.0, 0.0))], 1, &m),
+            [0]
+        );
+        assert_eq!(
+            frusta.box_masks([&cube(Vec3::new(0.0, 11.0, 0.0))], 1, &m),
+            [0]
+        );
+        assert_eq!(
+            frusta.box_masks([&cube(Vec3::new(0.0, -1.0, 0.0))], 1, &m),
+            [0]
+        );
     }
 
     #[test]
@@ -278,6 +314,9 @@ mod tests {
         );
         // A box the rays cross (at y ≈ 0, inside the light's footprint) is kept.
         let cube = |c: Vec3| Aabb::new(c - Vec3::splat(0.1), c + Vec3::splat(0.1));
-        assert_eq!(frusta.box_mask(&cube(Vec3::new(0.5, 0.0, 0.5)), 1, &m), 1);
+        assert_eq!(
+            frusta.box_masks([&cube(Vec3::new(0.5, 0.0, 0.5))], 1, &m),
+            [1]
+        );
     }
 }

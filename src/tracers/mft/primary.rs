@@ -4,7 +4,7 @@
 //! - **Frusta**: one per packet of ≤ 16 consecutive rays (`Rays::packets`; camera rays come in
 //!   Morton-ordered tiles, so a 4×4 pixel block), from the camera through the rectangle of its
 //!   pixels. `block` frusta (16 by default: a 16×16 pixel block) traverse the BVH together with
-//!   the shadow frusta's machinery: one box test for all frusta per box (`Frusta::box_mask`) and
+//!   the shadow frusta's machinery: one box test for all frusta per box (`Frusta::box_masks`) and
 //!   plane and corner-ray triangle culling (`cull::keep_mask`).
 //! - **Rays on demand**: a frustum's 16 rays are made at the first leaf where a triangle survives
 //!   culling for it, from the batch's camera grid and the rays' pixels (`CameraGrid::pixel_ray`,

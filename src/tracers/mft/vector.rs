@@ -1,4 +1,4 @@
-//! The f32 lane vectors the frusta kernels (`Frusta::box_mask`, `cull::keep_mask`) are written
+//! The f32 lane vectors the frusta kernels (`Frusta::box_masks`, `cull::keep_mask`) are written
 //! against, one lane per frustum, so each kernel exists once and runs at the machine's full width
 //! (§4: "one SIMD test per node for all frusta"). Plain lane loops over the frusta only became
 //! 4- or 8-wide code with the frusta copied to the stack (LLVM prefers 256-bit vectors even on
