@@ -9,11 +9,12 @@ use crate::stats::{Event, Stats};
 use crate::tracers::mft::frusta::{Frusta, Margins};
 
 /// Tests both children of the interior `node` against the frusta of `mask` (one SIMD box test
-/// for all of them and both boxes), counts the tests, and pushes each child with the frusta that may
-/// enter it, the nearer along `towards` on top.
+/// for all of them and both boxes) and counts the tests. Returns the child to visit next with the
+/// frusta that may enter it, the nearer along `towards` that any frustum enters, having pushed the
+/// other when some frustum enters it too; `None` when no frustum enters either.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-pub fn push_children<S: Stats>(
+pub fn visit_children<S: Stats>(
     bvh: &Bvh,
     node: &BvhNode,
     mask: u64,
@@ -22,7 +23,7 @@ pub fn push_children<S: Stats>(
     towards: Vec3,
     stack: &mut Vec<(u32, u64)>,
     stats: &mut S,
-) {
+) -> Option<(u32, u64)> {
     let (a, b) = (node.first, node.first + 1);
     // Siblings are adjacent: one bounds check for both.
     let [child_a, child_b] = &bvh.nodes[a as usize..][..2] else {
@@ -48,10 +49,15 @@ pub fn push_children<S: Stats>(
     } else {
         ((b, mask_b), (a, mask_a))
     };
-    for entry in [far, near] {
-        if entry.1 != 0 {
-            stack.push(entry);
+    // The nearer child entered is visited next without the stack; the other waits on it.
+    match (near.1 != 0, far.1 != 0) {
+        (true, true) => {
+            stack.push(far);
+            Some(near)
         }
+        (true, false) => Some(near),
+        (false, true) => Some(far),
+        (false, false) => None,
     }
 }
 
