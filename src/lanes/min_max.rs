@@ -32,12 +32,48 @@ pub fn min_max<const L: usize, const Q: usize>(
     })
 }
 
+/// The smallest lane, by comparisons (one vector instruction each, where `f32::min` takes
+/// several); a NaN lane is skipped, and `∞` when no lane is a number.
+#[inline(always)]
+pub fn lowest<const L: usize>(lanes: [f32; L]) -> f32 {
+    lanes
+        .into_iter()
+        .fold(f32::INFINITY, |m, x| if x < m { x } else { m })
+}
+
+/// The largest lane, as `lowest`; `−∞` when no lane is a number.
+#[inline(always)]
+pub fn highest<const L: usize>(lanes: [f32; L]) -> f32 {
+    lanes
+        .into_iter()
+        .fold(f32::NEG_INFINITY, |m, x| if x > m { x } else { m })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
     fn slice_min_max<const L: usize>(x: &[f32]) -> [f32; 2] {
         min_max::<L, 1>(x.len(), |i| [x[i]])[0]
+    }
+
+    #[test]
+    fn lowest_and_highest_skip_nans() {
+        let x = [
+            3.0,
+            f32::NAN,
+            -2.5,
+            7.0,
+            f32::NEG_INFINITY,
+            1.0,
+            f32::NAN,
+            0.5,
+        ];
+        assert_eq!(lowest(x), f32::NEG_INFINITY);
+        assert_eq!(highest(x), 7.0);
+        assert_eq!(lowest([f32::NAN; 4]), f32::INFINITY);
+        assert_eq!(highest([f32::NAN; 4]), f32::NEG_INFINITY);
+        assert_eq!(highest([2.0, f32::NEG_INFINITY, 9.5, f32::NAN]), 9.5);
     }
 
     #[test]

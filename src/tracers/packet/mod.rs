@@ -296,11 +296,12 @@ impl PacketTracer {
         hits: &mut [Hit],
         stats: &mut S,
     ) {
-        hits.fill(Hit::MISS);
+        // Every ray is in a packet that writes its hit; an empty tree makes no packets.
+        if self.bvh.is_empty() {
+            hits.fill(Hit::MISS);
+        }
         self.run::<L, S, false>(rays, stats, |first, packet| {
-            for (slot, hit) in hits[first..].iter_mut().zip(packet.hits()) {
-                *slot = hit;
-            }
+            packet.store_hits(&mut hits[first..]);
         });
     }
 
@@ -310,11 +311,11 @@ impl PacketTracer {
         occluded: &mut [bool],
         stats: &mut S,
     ) {
-        occluded.fill(false);
+        if self.bvh.is_empty() {
+            occluded.fill(false);
+        }
         self.run::<L, S, true>(rays, stats, |first, packet| {
-            for (slot, hit) in occluded[first..].iter_mut().zip(packet.hits()) {
-                *slot = hit.is_hit();
-            }
+            packet.store_occluded(&mut occluded[first..]);
         });
     }
 }
