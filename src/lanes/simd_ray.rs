@@ -133,6 +133,10 @@ impl<const L: usize> SimdRay<L> {
         used: usize,
     ) -> u32 {
         let mut well_formed = 0;
+        // Bitwise OR and AND of each frame axis over the lanes in use: equal exactly when every
+        // lane has the same axis. Folded here from registers: reading the stored axes back
+        // (`common_axes`) as one wide vector stalled on store forwarding.
+        let (mut any, mut all) = ([0u32; 3], [u32::MAX; 3]);
         for l in 0..L {
             let (ox, oy, oz) = (origin[0][l], origin[1][l], origin[2][l]);
             let (dx, dy, dz) = (dir[0][l], dir[1][l], dir[2][l]);
@@ -194,16 +198,23 @@ impl<const L: usize> SimdRay<L> {
             // The next axis after kz in cyclic order and the one after it, and their components.
             let (n1, n2) = (axis(1, 2, 0), axis(2, 0, 1));
             let (c1, c2) = (select(y, z, x), select(z, x, y));
-            self.axes[0][l] = if swap { n2 } else { n1 };
-            self.axes[1][l] = if swap { n1 } else { n2 };
-            self.axes[2][l] = axis(0, 1, 2);
+            let k = [
+                if swap { n2 } else { n1 },
+                if swap { n1 } else { n2 },
+                axis(0, 1, 2),
+            ];
+            for a in 0..3 {
+                self.axes[a][l] = k[a];
+                any[a] |= if l < used { k[a] } else { 0 };
+                all[a] &= if l < used { k[a] } else { u32::MAX };
+            }
             self.shear[0][l] = if swap { c2 } else { c1 } / d_kz;
             self.shear[1][l] = if swap { c1 } else { c2 } / d_kz;
             // 1 / d[kz], already computed: the same division, so the same bits.
             self.shear[2][l] = select(ix, iy, iz);
         }
         self.prim = [Hit::NO_PRIM; L];
-        self.common_axes = common_axes(&self.axes, used);
+        self.common_axes = (any == all).then(|| all.map(|k| k as usize));
         well_formed
     }
 

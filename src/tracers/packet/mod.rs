@@ -56,6 +56,7 @@ use std::sync::Arc;
 
 use crate::accel::{Bvh, WideBvh};
 use crate::error::{Error, Result};
+use crate::geometry::ray::prefetch;
 use crate::geometry::{Hit, Rays};
 use crate::stats::{Event, Stats};
 use crate::tracers::{Kernel, Params};
@@ -262,9 +263,13 @@ impl PacketTracer {
         let traversal = self.config.traversal;
         let mut packet = Packet::<L>::with_capacity(size);
         let mut wide_stack = WideStack::default();
-        for range in rays.packets(size) {
+        let mut packets = rays.packets(size).peekable();
+        while let Some(range) = packets.next() {
             if S::ENABLED {
                 stats.event(Event::Packets, 1);
+            }
+            if let Some(next) = packets.peek() {
+                rays.prefetch(next.clone());
             }
             let first = range.start;
             // The wide traversal's node test is the interval test.
@@ -302,6 +307,9 @@ impl PacketTracer {
         }
         self.run::<L, S, false>(rays, stats, |first, packet| {
             packet.store_hits(&mut hits[first..]);
+            // The next packet's slots, cached by the time it has been traced.
+            let next = first + packet.rays;
+            prefetch(&hits[next..(next + packet.rays).min(hits.len())]);
         });
     }
 

@@ -108,7 +108,10 @@ impl<const L: usize> Packet<L> {
         let cull = well_formed as usize == rays.len();
         self.live = well_formed;
         // Read only with culling bounds, so only when every ray is well formed (no NaN).
-        self.max_t = self.farthest_hit();
+        self.max_t = match cull && (frustum || interval) {
+            true => self.farthest_hit(),
+            false => f32::INFINITY,
+        };
         let scene = &tree.bvh.nodes[Bvh::ROOT].bounds;
         self.frustum = if frustum && cull {
             Frustum::build::<L>(rays, scene)
