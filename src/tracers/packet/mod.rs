@@ -31,6 +31,13 @@
 //!   above, untouched; a wider tree runs only with `traversal = "ranged"`. Motion blur works as
 //!   on the binary tree (the wide boxes are its swept boxes).
 //!
+//! - **Per-packet setup and results** (our engineering, not the paper's): a SIMD ray is loaded in
+//!   one vectorized lane pass straight from the batch's arrays (`SimdRay::load`), the packet's
+//!   bounds are folded lane-wise (`Packet::farthest_hit`, `IntervalPacket::from_lanes`) and only
+//!   when a culling bound reads them, the next packet's rays and hit slots are prefetched while
+//!   the current one is traced, and hits go straight into the caller's slice (every ray is
+//!   written by its packet, so the output is not cleared first).
+//!
 //! Counters: `ray` per ray; `node(depth)` per node a packet visits (tests in any way);
 //! `aabb_test(depth)` and `triangle_test(depth)` once per lane in use of every SIMD ray tested
 //! against a box or a triangle — so per-ray averages compare with single-ray tracers, and count
