@@ -482,3 +482,63 @@ fn scene_size(tris: &[Triangle]) -> f32 {
 fn same_or_tie_moving(got: &Hit, want: &Hit) -> bool {
     got == want || (got.is_hit() && want.is_hit() && got.t == want.t)
 }
+
+/// Every ray's result is written by its packet, straight into the caller's buffer (nothing is
+/// cleared first): buffers full of stale results come out as the reference's hits and occlusion
+/// flags — for packets that end in a partial SIMD ray, with ill-formed rays (misses) among them,
+/// at every SIMD width, traversal and tree width.
+#[test]
+fn every_ray_overwrites_a_stale_result() {
+    let bvh = Arc::new(four_leaf_tree());
+    let mut batch = column_packet([0.5, 10.0, 0.5, 3.5]);
+    let down = Vec3::new(0.0, 0.0, -1.0);
+    let extra = [
+        Ray::new(Vec3::new(2.5, 0.2, 1.0), down, 0.0, 100.0),
+        Ray::new(Vec3::new(f32::NAN, 0.2, 1.0), down, 0.0, 100.0),
+        Ray::new(Vec3::new(1.5, 0.2, 1.0), Vec3::ZERO, 0.0, 100.0),
+        Ray::new(Vec3::new(1.5, 0.3, 1.0), down, 0.0, 100.0),
+        Ray::new(Vec3::new(3.5, 0.3, 1.0), down, 5.0, 2.0),
+    ];
+    for (i, ray) in extra.iter().enumerate() {
+        batch.push(*ray, 16 + i as u32);
+    }
+    let reference = trace_hits(&ReferenceTracer::new(bvh.clone()), &batch);
+    let want: Vec<Hit> = (0..batch.len())
+        .map(|i| match batch.ray(i).is_well_formed() {
+            true => reference[i],
+            false => Hit::MISS,
+        })
+        .collect();
+    assert_eq!(want.iter().filter(|h| h.is_hit()).count(), 12 + 2);
+    let stale = Hit {
+        t: 0.25,
+        prim: 2,
+        u: 0.5,
+        v: 0.25,
+    };
+    let runs = Traversal::ALL
+        .into_iter()
+        .map(|t| (t, 2))
+        .chain([(Traversal::Ranged, 4), (Traversal::Ranged, 8)]);
+    for (traversal, width) in runs {
+        for packet in [2, 4, 8] {
+            for lanes in PacketConfig::LANES {
+                let config = PacketConfig {
+                    packet,
+                    lanes,
+                    traversal,
+                    frustum: false,
+                };
+                let width_of = TreeWidth::of(width).unwrap();
+                let tracer = PacketTracer::with_width(bvh.clone(), config, width_of);
+                let mut hits = vec![stale; batch.len()];
+                tracer.intersect(batch.view(), &mut hits);
+                assert_eq!(hits, want, "{config:?} width {width}");
+                let mut occluded = vec![true; batch.len()];
+                tracer.occluded(batch.view(), &mut occluded);
+                let hit: Vec<bool> = want.iter().map(Hit::is_hit).collect();
+                assert_eq!(occluded, hit, "{config:?} width {width}");
+            }
+        }
+    }
+}

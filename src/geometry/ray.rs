@@ -380,6 +380,20 @@ impl<'a> Rays<'a> {
         }
     }
 
+    /// Asks the CPU to bring rays `range` (origins, directions, intervals, times) into its
+    /// caches while it works on earlier ones: a packet tracer calls it for the next packet, whose
+    /// rays would otherwise arrive from memory only when it loads them (a packet's arrays are
+    /// too short, and the traversal in between too long, for the hardware prefetcher).
+    #[inline(always)]
+    pub fn prefetch(&self, range: std::ops::Range<usize>) {
+        let arrays = [self.ox, self.oy, self.oz, self.dx, self.dy, self.dz];
+        for array in arrays.into_iter().chain([self.tmin, self.tmax, self.time]) {
+            if let Some(rays) = array.get(range.clone()) {
+                prefetch(rays);
+            }
+        }
+    }
+
     /// Whether the rays come in explicit packets (`RayBatch::packet_start`).
     pub fn has_explicit_packets(&self) -> bool {
         !self.packet_start.is_empty()
@@ -405,6 +419,20 @@ impl<'a> Rays<'a> {
             begin = end;
             Some(packet)
         })
+    }
+}
+
+/// Prefetches every cache line of `data` into all cache levels (a hint: no effect on results).
+#[inline(always)]
+pub fn prefetch<T>(data: &[T]) {
+    use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T1};
+    const LINE: usize = 64;
+    let bytes = std::mem::size_of_val(data);
+    let start = data.as_ptr() as *const i8;
+    for offset in (0..bytes).step_by(LINE) {
+        // SAFETY: SSE is part of the x86_64 baseline, and a prefetch of an address inside
+        // `data` never faults.
+        unsafe { _mm_prefetch::<_MM_HINT_T1>(start.wrapping_add(offset)) };
     }
 }
 

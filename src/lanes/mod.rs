@@ -12,7 +12,8 @@
 //! - `stream`: in-place compaction and partition of a stream of rays in SoA columns by a lane
 //!   predicate — what coherent grid traversal drops finished rays with, and what stream filtering
 //!   (Gribble & Ramani 2008) is built on.
-//! - `min_max`: running per-lane bounds of a stream (the frusta's extremes).
+//! - `min_max`: running per-lane bounds of a stream (the frusta's extremes); `lowest` and
+//!   `highest` of one lane array.
 //!
 //! A tracer picks `L` once (its `lanes` parameter) and every lane type and test of its kernel
 //! takes that `L`.
@@ -25,7 +26,7 @@ pub mod stream;
 pub mod watertight;
 
 pub use mask::LaneMask;
-pub use min_max::min_max;
+pub use min_max::{highest, lowest, min_max};
 pub use simd_ray::SimdRay;
 
 /// The lane widths a tracer may be built with (`lanes` parameter).

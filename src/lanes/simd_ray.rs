@@ -25,7 +25,7 @@ use super::slab::SlabRays;
 use super::watertight::{
     accept, common_axes, edge_functions, in_lane_frames, needs_f64, redo_edges_in_f64, Permuted,
 };
-use super::LaneMask;
+use super::{highest, LaneMask};
 use crate::geometry::{Hit, Ray, Rays, Triangle, WatertightRay};
 
 /// `L` rays, their current closest hits, and what the box and triangle tests precompute.
@@ -76,106 +76,145 @@ impl<const L: usize> Default for SimdRay<L> {
 
 impl<const L: usize> SimdRay<L> {
     /// Loads rays `first .. first + used` of `rays` (`used ≤ L`) into the lanes; the rest become
-    /// padding. Lane loops over the batch's arrays, computing exactly what `RayBoxTest::new` and
-    /// `WatertightRay::new` compute per ray, branch-free so they vectorize (a scalar load was a
-    /// third of the packet tracer's time on camera rays). Returns how many lanes hold a
-    /// well-formed ray.
+    /// padding. Returns how many lanes hold a well-formed ray. A full group reads the batch's
+    /// arrays in place; only a partial one (a batch's last) is first copied into padded lanes.
     pub fn load(&mut self, rays: &Rays<'_>, first: usize, used: usize) -> u32 {
         debug_assert!(used <= L);
         self.used = used as u32;
-        let at = |src: &[f32], fill: f32| -> [f32; L] {
-            let mut lanes = [fill; L];
-            if used == L {
-                // A constant-length copy: vector moves, not a call to memmove.
-                lanes.copy_from_slice(&src[first..first + L]);
-            } else {
-                lanes[..used].copy_from_slice(&src[first..first + used]);
-            }
-            lanes
-        };
-        let mut d = [at(rays.dx, 1.0), at(rays.dy, 1.0), at(rays.dz, 1.0)];
-        self.origin = [at(rays.ox, 0.0), at(rays.oy, 0.0), at(rays.oz, 0.0)];
-        self.tmin = at(rays.tmin, f32::INFINITY);
-        self.tmax = at(rays.tmax, f32::NEG_INFINITY);
-        // An ill-formed ray (`Ray::is_well_formed`, lane by lane) is a miss: its lane is loaded
-        // as padding. Padding lanes (tmin = ∞) are never well formed.
-        let mut well_formed = 0;
-        for l in 0..L {
-            let o = [self.origin[0][l], self.origin[1][l], self.origin[2][l]];
-            let dir = [d[0][l], d[1][l], d[2][l]];
-            let ok = o[0].is_finite()
-                & o[1].is_finite()
-                & o[2].is_finite()
-                & dir[0].is_finite()
-                & dir[1].is_finite()
-                & dir[2].is_finite()
-                & ((dir[0] != 0.0) | (dir[1] != 0.0) | (dir[2] != 0.0))
-                & self.tmin[l].is_finite()
-                & (self.tmin[l] >= 0.0)
-                & (self.tmin[l] < self.tmax[l]);
-            well_formed += ok as u32;
-            for a in 0..3 {
-                self.origin[a][l] = if ok { self.origin[a][l] } else { 0.0 };
-                d[a][l] = if ok { d[a][l] } else { 1.0 };
-            }
-            self.tmin[l] = if ok { self.tmin[l] } else { f32::INFINITY };
-            self.tmax[l] = if ok { self.tmax[l] } else { f32::NEG_INFINITY };
-        }
-        self.time = if rays.time.is_empty() {
-            [0.0; L]
+        if used == L {
+            // Constant-length views: vector loads straight from the batch.
+            let at = |src| lanes_at::<L>(src, first);
+            self.time = match rays.time.is_empty() {
+                true => [0.0; L],
+                false => *at(rays.time),
+            };
+            self.load_lanes(
+                [at(rays.ox), at(rays.oy), at(rays.oz)],
+                [at(rays.dx), at(rays.dy), at(rays.dz)],
+                [at(rays.tmin), at(rays.tmax)],
+                L,
+            )
         } else {
-            at(rays.time, 0.0)
-        };
-        self.prim = [Hit::NO_PRIM; L];
-        for a in 0..3 {
-            for l in 0..L {
-                self.inv_dir[a][l] = 1.0 / d[a][l];
-                self.negative[a][l] = d[a][l].is_sign_negative() as u32;
-            }
+            let padded = |src: &[f32], fill: f32| -> [f32; L] {
+                let mut lanes = [fill; L];
+                lanes[..used].copy_from_slice(&src[first..first + used]);
+                lanes
+            };
+            self.time = match rays.time.is_empty() {
+                true => [0.0; L],
+                false => padded(rays.time, 0.0),
+            };
+            let origin = [rays.ox, rays.oy, rays.oz].map(|s| padded(s, 0.0));
+            let dir = [rays.dx, rays.dy, rays.dz].map(|s| padded(s, 1.0));
+            let range = [
+                padded(rays.tmin, f32::INFINITY),
+                padded(rays.tmax, f32::NEG_INFINITY),
+            ];
+            self.load_lanes(
+                [&origin[0], &origin[1], &origin[2]],
+                [&dir[0], &dir[1], &dir[2]],
+                [&range[0], &range[1]],
+                used,
+            )
         }
-        // Each lane's watertight frame is the one `WatertightRay::new` picks, by the same
-        // comparisons and divisions (bit for bit), written as selects without short-circuits so
-        // the loop vectorizes.
+    }
+
+    /// `load`'s work on `L` lanes of rays (`range`: tmin, tmax; padding lanes come with
+    /// tmin = ∞, which no well-formed ray has), the first `used` in use (a constant for full
+    /// groups). One branch-free pass over the lanes computing exactly what `RayBoxTest::new` and
+    /// `WatertightRay::new` compute per ray, written with plain scalars and selects so LLVM
+    /// vectorizes it (a scalar load was a third of the packet tracer's time on camera rays).
+    #[inline(always)]
+    fn load_lanes(
+        &mut self,
+        origin: [&[f32; L]; 3],
+        dir: [&[f32; L]; 3],
+        range: [&[f32; L]; 2],
+        used: usize,
+    ) -> u32 {
+        let mut well_formed = 0;
+        // Bitwise OR and AND of each frame axis over the lanes in use: equal exactly when every
+        // lane has the same axis. Folded here from registers: reading the stored axes back
+        // (`common_axes`) as one wide vector stalled on store forwarding.
+        let (mut any, mut all) = ([0u32; 3], [u32::MAX; 3]);
         for l in 0..L {
-            let (x, y, z) = (d[0][l], d[1][l], d[2][l]);
+            let (ox, oy, oz) = (origin[0][l], origin[1][l], origin[2][l]);
+            let (dx, dy, dz) = (dir[0][l], dir[1][l], dir[2][l]);
+            let (tmin, tmax) = (range[0][l], range[1][l]);
+            // `Ray::is_well_formed`, lane by lane; an ill-formed ray is loaded as padding (a
+            // miss): origin 0, direction (1, 1, 1), tmin = ∞, tmax = −∞.
+            let ok = ox.is_finite()
+                & oy.is_finite()
+                & oz.is_finite()
+                & dx.is_finite()
+                & dy.is_finite()
+                & dz.is_finite()
+                & ((dx != 0.0) | (dy != 0.0) | (dz != 0.0))
+                & tmin.is_finite()
+                & (tmin >= 0.0)
+                & (tmin < tmax);
+            well_formed += ok as u32;
+            let x = if ok { dx } else { 1.0 };
+            let y = if ok { dy } else { 1.0 };
+            let z = if ok { dz } else { 1.0 };
+            self.origin[0][l] = if ok { ox } else { 0.0 };
+            self.origin[1][l] = if ok { oy } else { 0.0 };
+            self.origin[2][l] = if ok { oz } else { 0.0 };
+            self.tmin[l] = if ok { tmin } else { f32::INFINITY };
+            self.tmax[l] = if ok { tmax } else { f32::NEG_INFINITY };
+            let (ix, iy, iz) = (1.0 / x, 1.0 / y, 1.0 / z);
+            self.inv_dir[0][l] = ix;
+            self.inv_dir[1][l] = iy;
+            self.inv_dir[2][l] = iz;
+            self.negative[0][l] = x.is_sign_negative() as u32;
+            self.negative[1][l] = y.is_sign_negative() as u32;
+            self.negative[2][l] = z.is_sign_negative() as u32;
+            // The watertight frame `WatertightRay::new` picks, by the same comparisons, as
+            // selects: kz the axis of largest |d| (first of equals), then kx, ky the next two
+            // in cyclic order, swapped when d[kz] < 0 to keep the triangles' winding.
             let (ax, ay, az) = (x.abs(), y.abs(), z.abs());
             let x_major = (ax >= ay) & (ax >= az);
             let y_major = !x_major & (ay >= az);
-            let kz: u32 = if x_major {
-                0
-            } else if y_major {
-                1
-            } else {
-                2
-            };
-            let dz = if x_major {
-                x
-            } else if y_major {
-                y
-            } else {
-                z
-            };
-            let n1 = if kz == 2 { 0 } else { kz + 1 };
-            let n2 = if n1 == 2 { 0 } else { n1 + 1 };
-            // Swapped when dz < 0, to keep the triangles' winding.
-            let (kx, ky) = if dz < 0.0 { (n2, n1) } else { (n1, n2) };
-            let component = |k: u32| {
-                if k == 0 {
-                    x
-                } else if k == 1 {
-                    y
+            let select = |on_x: f32, on_y: f32, on_z: f32| {
+                if x_major {
+                    on_x
+                } else if y_major {
+                    on_y
                 } else {
-                    z
+                    on_z
                 }
             };
-            self.axes[0][l] = kx;
-            self.axes[1][l] = ky;
-            self.axes[2][l] = kz;
-            self.shear[0][l] = component(kx) / dz;
-            self.shear[1][l] = component(ky) / dz;
-            self.shear[2][l] = 1.0 / dz;
+            let axis = |on_x: u32, on_y: u32, on_z: u32| {
+                if x_major {
+                    on_x
+                } else if y_major {
+                    on_y
+                } else {
+                    on_z
+                }
+            };
+            let d_kz = select(x, y, z);
+            let swap = d_kz < 0.0;
+            // The next axis after kz in cyclic order and the one after it, and their components.
+            let (n1, n2) = (axis(1, 2, 0), axis(2, 0, 1));
+            let (c1, c2) = (select(y, z, x), select(z, x, y));
+            let k = [
+                if swap { n2 } else { n1 },
+                if swap { n1 } else { n2 },
+                axis(0, 1, 2),
+            ];
+            for a in 0..3 {
+                self.axes[a][l] = k[a];
+                any[a] |= if l < used { k[a] } else { 0 };
+                all[a] &= if l < used { k[a] } else { u32::MAX };
+            }
+            self.shear[0][l] = if swap { c2 } else { c1 } / d_kz;
+            self.shear[1][l] = if swap { c1 } else { c2 } / d_kz;
+            // 1 / d[kz], already computed: the same division, so the same bits.
+            self.shear[2][l] = select(ix, iy, iz);
         }
-        self.common_axes = common_axes(&self.axes, used);
+        self.prim = [Hit::NO_PRIM; L];
+        self.common_axes = (any == all).then(|| all.map(|k| k as usize));
         well_formed
     }
 
@@ -386,11 +425,24 @@ impl<const L: usize> SimdRay<L> {
     /// The largest `tmax` over the lanes (−∞ when none is live).
     #[inline(always)]
     pub fn max_tmax(&self) -> f32 {
-        let mut m = f32::NEG_INFINITY;
-        for l in 0..L {
-            m = if self.tmax[l] > m { self.tmax[l] } else { m };
+        highest(self.tmax)
+    }
+
+    /// The first `out.len()` lanes' results (`hit`), written to `out`. A zipped loop of
+    /// run-time length on purpose: LLVM vectorizes it into interleaving stores, where a loop of
+    /// constant length `L` is unrolled into 4·L scalar stores.
+    #[inline(always)]
+    pub fn store_hits(&self, out: &mut [Hit]) {
+        let lanes = self.tmax.iter().zip(&self.prim).zip(&self.u).zip(&self.v);
+        for (slot, (((&t, &prim), &u), &v)) in out.iter_mut().zip(lanes) {
+            let miss = prim == Hit::NO_PRIM;
+            *slot = Hit {
+                t: if miss { Hit::MISS.t } else { t },
+                prim,
+                u: if miss { Hit::MISS.u } else { u },
+                v: if miss { Hit::MISS.v } else { v },
+            };
         }
-        m
     }
 
     /// Lane `l`'s result.
@@ -406,6 +458,12 @@ impl<const L: usize> SimdRay<L> {
             }
         }
     }
+}
+
+/// Lanes `first .. first + L` of a batch's array.
+#[inline(always)]
+fn lanes_at<const L: usize>(src: &[f32], first: usize) -> &[f32; L] {
+    <&[f32; L]>::try_from(&src[first..first + L]).expect("L lanes")
 }
 
 #[cfg(test)]

@@ -20,7 +20,7 @@
 use crate::geometry::aabb::FAR_SCALE;
 #[cfg(test)]
 use crate::geometry::Rays;
-use crate::lanes::SimdRay;
+use crate::lanes::{highest, lowest, SimdRay};
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct IntervalPacket {
@@ -69,45 +69,54 @@ impl IntervalPacket {
         p
     }
 
-    /// `new` from the packet's rays already in SIMD lanes (every lane in use well formed): the
-    /// same bounds, bit for bit (the lanes hold the same origins and the same `1/d`), taken
-    /// lane-wise so they vectorize — built ray by ray they cost as much as the traversal.
+    /// `new` from the packet's rays already in SIMD lanes (`SimdRay::load`, every lane in use
+    /// well formed): the same bounds (the lanes hold the same origins and the same `1/d`), taken
+    /// lane-wise so they vectorize — built ray by ray they cost as much as the traversal. The
+    /// padding lanes `load` makes (tmin = ∞, origin 0, direction (1, 1, 1)) change neither
+    /// `tmin`, nor the finiteness, nor the count of negative directions, so only the origin and
+    /// reciprocal bounds need to skip them.
     pub fn from_lanes<const L: usize>(groups: &[SimdRay<L>]) -> Self {
         let mut p = IntervalPacket::EMPTY;
         let Some(first) = groups.first() else {
             return p;
         };
+        let rays: u32 = groups.iter().map(|g| g.used).sum();
         for a in 0..3 {
             let (mut o_lo, mut o_hi) = ([f32::INFINITY; L], [f32::NEG_INFINITY; L]);
             let (mut i_lo, mut i_hi) = ([f32::INFINITY; L], [f32::NEG_INFINITY; L]);
-            let (mut negatives, mut finite) = ([0u32; L], [true; L]);
+            let (mut negatives, mut infinite) = ([0u32; L], [0u32; L]);
             for g in groups {
                 for l in 0..L {
                     let used = (l as u32) < g.used;
                     let (o, inv) = (g.origin[a][l], g.inv_dir[a][l]);
-                    o_lo[l] = if used && o < o_lo[l] { o } else { o_lo[l] };
-                    o_hi[l] = if used && o > o_hi[l] { o } else { o_hi[l] };
-                    i_lo[l] = if used && inv < i_lo[l] { inv } else { i_lo[l] };
-                    i_hi[l] = if used && inv > i_hi[l] { inv } else { i_hi[l] };
-                    negatives[l] += if used { g.negative[a][l] } else { 0 };
-                    finite[l] &= !used || (inv.is_finite() && o.is_finite());
+                    o_lo[l] = if used & (o < o_lo[l]) { o } else { o_lo[l] };
+                    o_hi[l] = if used & (o > o_hi[l]) { o } else { o_hi[l] };
+                    i_lo[l] = if used & (inv < i_lo[l]) { inv } else { i_lo[l] };
+                    i_hi[l] = if used & (inv > i_hi[l]) { inv } else { i_hi[l] };
+                    negatives[l] += g.negative[a][l];
+                    infinite[l] |= !(inv.is_finite() & o.is_finite()) as u32;
                 }
             }
-            let rays: u32 = groups.iter().map(|g| g.used).sum();
             let negative_rays: u32 = negatives.iter().sum();
-            p.origin_lo[a] = o_lo.into_iter().fold(f32::INFINITY, f32::min);
-            p.origin_hi[a] = o_hi.into_iter().fold(f32::NEG_INFINITY, f32::max);
-            p.inv_lo[a] = i_lo.into_iter().fold(f32::INFINITY, f32::min);
-            p.inv_hi[a] = i_hi.into_iter().fold(f32::NEG_INFINITY, f32::max);
+            p.origin_lo[a] = lowest(o_lo);
+            p.origin_hi[a] = highest(o_hi);
+            p.inv_lo[a] = lowest(i_lo);
+            p.inv_hi[a] = highest(i_hi);
             p.negative[a] = first.negative[a][0] != 0;
             p.usable[a] =
-                finite.iter().all(|&f| f) && (negative_rays == 0 || negative_rays == rays);
+                infinite.iter().all(|&i| i == 0) && (negative_rays == 0 || negative_rays == rays);
         }
+        let mut tmin = [f32::INFINITY; L];
         for g in groups {
-            for l in 0..g.used as usize {
-                p.tmin = p.tmin.min(g.tmin[l]);
+            for l in 0..L {
+                tmin[l] = if g.tmin[l] < tmin[l] {
+                    g.tmin[l]
+                } else {
+                    tmin[l]
+                };
             }
         }
+        p.tmin = lowest(tmin);
         p
     }
 

@@ -11,7 +11,7 @@ use crate::stats::{Event, Stats};
 use super::frustum::Frustum;
 use super::interval::IntervalPacket;
 use super::order::ChildOrder;
-use crate::lanes::SimdRay;
+use crate::lanes::{highest, SimdRay};
 
 /// What every traversal reads: the tree and its child order.
 pub struct Tree<'a> {
@@ -48,6 +48,8 @@ pub type Stack = [Pending; BvhConfig::DEPTH_LIMIT + 2];
 
 pub struct Packet<const L: usize> {
     pub groups: Vec<SimdRay<L>>,
+    /// Rays in the packet (the lanes in use over all SIMD rays).
+    pub rays: usize,
     /// `0, 1, …, groups − 1`: Ranged and IA hand leaves a sub-slice of it.
     pub identity: Vec<u32>,
     /// Partition's index list `I` (§3.3).
@@ -70,6 +72,7 @@ impl<const L: usize> Packet<L> {
         let groups = rays.div_ceil(L);
         Packet {
             groups: vec![SimdRay::default(); groups],
+            rays: 0,
             identity: (0..groups as u32).collect(),
             index: Vec::with_capacity(groups),
             alive: Vec::with_capacity(groups),
@@ -89,6 +92,7 @@ impl<const L: usize> Packet<L> {
             self.identity = (0..count as u32).collect();
         }
         self.groups.truncate(count);
+        self.rays = rays.len();
         let mut well_formed = 0;
         for (g, group) in self.groups.iter_mut().enumerate() {
             let first = g * L;
@@ -104,10 +108,10 @@ impl<const L: usize> Packet<L> {
         let cull = well_formed as usize == rays.len();
         self.live = well_formed;
         // Read only with culling bounds, so only when every ray is well formed (no NaN).
-        self.max_t = self
-            .groups
-            .iter()
-            .fold(f32::NEG_INFINITY, |m, g| m.max(g.max_tmax()));
+        self.max_t = match cull && (frustum || interval) {
+            true => self.farthest_hit(),
+            false => f32::INFINITY,
+        };
         let scene = &tree.bvh.nodes[Bvh::ROOT].bounds;
         self.frustum = if frustum && cull {
             Frustum::build::<L>(rays, scene)
@@ -117,11 +121,34 @@ impl<const L: usize> Packet<L> {
         self.interval = (interval && cull).then(|| IntervalPacket::from_lanes(&self.groups));
     }
 
-    /// The packet's results, lane by lane.
-    pub fn hits(&self) -> impl Iterator<Item = Hit> + '_ {
-        self.groups
-            .iter()
-            .flat_map(|g| (0..g.used as usize).map(move |l| g.hit(l)))
+    /// The largest `tmax` over the packet's lanes (−∞ when none is live), folded lane-wise over
+    /// the SIMD rays: one vector max per SIMD ray, not a chain of `L` scalar ones.
+    #[inline(always)]
+    pub fn farthest_hit(&self) -> f32 {
+        let mut far = [f32::NEG_INFINITY; L];
+        for g in &self.groups {
+            for (f, &t) in far.iter_mut().zip(&g.tmax) {
+                *f = if t > *f { t } else { *f };
+            }
+        }
+        highest(far)
+    }
+
+    /// Writes the packet's closest hits to `out` (one per ray of the packet, in order); a ray
+    /// without a hit gets `Hit::MISS`.
+    pub fn store_hits(&self, out: &mut [Hit]) {
+        for (g, slots) in self.groups.iter().zip(out[..self.rays].chunks_mut(L)) {
+            g.store_hits(slots);
+        }
+    }
+
+    /// Writes whether each ray of the packet is occluded to `out`, in order.
+    pub fn store_occluded(&self, out: &mut [bool]) {
+        for (g, slots) in self.groups.iter().zip(out[..self.rays].chunks_mut(L)) {
+            for (slot, &prim) in slots.iter_mut().zip(&g.prim) {
+                *slot = prim != Hit::NO_PRIM;
+            }
+        }
     }
 
     /// Whether SIMD ray `g` meets the box of `node`, counting one box test per lane in use.
@@ -228,10 +255,7 @@ impl<const L: usize> Packet<L> {
             }
         }
         if !ANY && (self.interval.is_some() || self.frustum.is_some()) {
-            self.max_t = self
-                .groups
-                .iter()
-                .fold(f32::NEG_INFINITY, |m, g| m.max(g.max_tmax()));
+            self.max_t = self.farthest_hit();
             if let Some(f) = &mut self.frustum {
                 f.clip_far(self.max_t);
             }
