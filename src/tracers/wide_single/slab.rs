@@ -1,44 +1,55 @@
 //! One ray against all `W` child boxes of a wide node (`accel::WideNode`'s structure-of-arrays
 //! lanes) in one SIMD slab test: the conservative slab test of `RayBoxTest::hit` (Ize 2013) with
-//! the boxes in the lanes instead of the rays. Per axis the near and far planes are picked once
-//! for the ray (its direction's sign bit, so −0.0 counts as negative) and every lane runs the
-//! scalar test's operations in its order — `(plane − origin) · inverse direction`, far distances
-//! scaled by `FAR_SCALE`, running max/min that ignore a NaN (`0·∞` for an origin on a slab plane)
-//! — so each child's verdict is `RayBoxTest`'s. The lane loops over `[f32; W]` are what LLVM
-//! turns into W-wide vector operations (one ymm operation per step at W = 8 on AVX2/AVX-512).
+//! the boxes in the lanes instead of the rays. Per axis the near and far planes are picked by the
+//! ray's direction sign bit (so −0.0 counts as negative) and every lane runs the scalar test's
+//! operations in its order — `(plane − origin) · inverse direction`, far distances scaled by
+//! `FAR_SCALE`, running max/min that ignore a NaN (`0·∞` for an origin on a slab plane) — so each
+//! child's verdict is `RayBoxTest`'s.
+//!
+//! Written with SSE intrinsics on groups of 4 children (baseline x86-64, as `child_pairs`), not
+//! as lane loops over `[f32; W]`: LLVM's SLP vectorizer split those loops' far-plane half into
+//! scalar loads and shuffles (checked in the assembly), while these compile to straight vector
+//! code, one sub/mul/max-or-min per group and plane and one movemask per group.
 
-// Lane loops index several lane arrays in lock step: the indexed form is what LLVM vectorizes.
-#![allow(clippy::needless_range_loop)]
+use std::arch::x86_64::*;
 
 use glam::Vec3;
 
 use crate::accel::WideNode;
 use crate::geometry::aabb::FAR_SCALE;
 
-/// A ray prepared for wide-node tests.
-#[derive(Clone, Copy, Debug)]
+/// A ray prepared for wide-node tests: origin and reciprocal direction broadcast per axis.
+#[derive(Clone, Copy)]
 pub struct WideRayTest {
-    origin: [f32; 3],
-    inv_dir: [f32; 3],
+    origin: [__m128; 3],
+    inv_dir: [__m128; 3],
     negative: [bool; 3],
 }
 
 impl WideRayTest {
     #[inline(always)]
     pub fn new(origin: Vec3, dir: Vec3) -> Self {
-        WideRayTest {
-            origin: origin.to_array(),
-            inv_dir: (Vec3::ONE / dir).to_array(),
-            negative: [
-                dir.x.is_sign_negative(),
-                dir.y.is_sign_negative(),
-                dir.z.is_sign_negative(),
-            ],
+        let inv = Vec3::ONE / dir;
+        // SAFETY: SSE is part of the x86_64 baseline.
+        unsafe {
+            WideRayTest {
+                origin: [
+                    _mm_set1_ps(origin.x),
+                    _mm_set1_ps(origin.y),
+                    _mm_set1_ps(origin.z),
+                ],
+                inv_dir: [_mm_set1_ps(inv.x), _mm_set1_ps(inv.y), _mm_set1_ps(inv.z)],
+                negative: [
+                    dir.x.is_sign_negative(),
+                    dir.y.is_sign_negative(),
+                    dir.z.is_sign_negative(),
+                ],
+            }
         }
     }
 
     /// Each child's entry distance (clipped to `tmin`) and which children the ray meets within
-    /// `[tmin, tmax]` (bit `c`: child `c`; empty slots never).
+    /// `[tmin, tmax]` (bit `c`: child `c`; empty slots never). `W` is a multiple of 4.
     #[inline(always)]
     pub fn test<const W: usize>(
         &self,
@@ -46,25 +57,34 @@ impl WideRayTest {
         tmin: f32,
         tmax: f32,
     ) -> ([f32; W], u32) {
-        let mut enter = [tmin; W];
-        let mut exit = [tmax; W];
-        for a in 0..3 {
-            let (near, far) = if self.negative[a] {
-                (&node.hi[a], &node.lo[a])
-            } else {
-                (&node.lo[a], &node.hi[a])
-            };
-            let (o, inv) = (self.origin[a], self.inv_dir[a]);
-            for c in 0..W {
-                let t_near = (near[c] - o) * inv;
-                let t_far = (far[c] - o) * inv * FAR_SCALE;
-                enter[c] = if t_near > enter[c] { t_near } else { enter[c] };
-                exit[c] = if t_far < exit[c] { t_far } else { exit[c] };
-            }
-        }
+        const { assert!(W % 4 == 0, "children are tested in groups of 4") };
+        let mut enter = [0.0f32; W];
         let mut hit = 0u32;
-        for c in 0..W {
-            hit |= ((enter[c] <= exit[c]) as u32) << c;
+        // SAFETY: SSE is part of the x86_64 baseline; every load and store is of 4 lanes at
+        // `group < W`, `W` a multiple of 4, inside arrays of `W` lanes.
+        unsafe {
+            let far_scale = _mm_set1_ps(FAR_SCALE);
+            for group in (0..W).step_by(4) {
+                let mut near_max = _mm_set1_ps(tmin);
+                let mut far_min = _mm_set1_ps(tmax);
+                for a in 0..3 {
+                    let (near, far) = if self.negative[a] {
+                        (&node.hi[a], &node.lo[a])
+                    } else {
+                        (&node.lo[a], &node.hi[a])
+                    };
+                    let (o, inv) = (self.origin[a], self.inv_dir[a]);
+                    let t_near =
+                        _mm_mul_ps(_mm_sub_ps(_mm_loadu_ps(near[group..].as_ptr()), o), inv);
+                    let t_far = _mm_mul_ps(_mm_sub_ps(_mm_loadu_ps(far[group..].as_ptr()), o), inv);
+                    // `_mm_max_ps(a, b)` / `_mm_min_ps(a, b)` return `b` when either is NaN: the
+                    // new plane first, so a NaN leaves the interval as it was.
+                    near_max = _mm_max_ps(t_near, near_max);
+                    far_min = _mm_min_ps(_mm_mul_ps(t_far, far_scale), far_min);
+                }
+                _mm_storeu_ps(enter[group..].as_mut_ptr(), near_max);
+                hit |= (_mm_movemask_ps(_mm_cmple_ps(near_max, far_min)) as u32) << group;
+            }
         }
         (enter, hit)
     }
