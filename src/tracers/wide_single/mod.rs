@@ -21,10 +21,11 @@
 
 mod slab;
 
+use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
 use std::mem::MaybeUninit;
 use std::sync::Arc;
 
-use crate::accel::{Bvh, BvhConfig, WideBvh, WideEntry};
+use crate::accel::{Bvh, BvhConfig, WideBvh, WideEntry, WideNode};
 use crate::error::{Error, Result};
 use crate::geometry::{Hit, Ray, WatertightRay};
 use crate::stats::Stats;
@@ -83,6 +84,17 @@ struct Pending {
     count: u32,
     enter: f32,
     depth: u32,
+}
+
+/// Asks for all of `node`'s cache lines (a wide node spans several).
+#[inline(always)]
+fn prefetch_node<const W: usize>(node: &WideNode<W>) {
+    let base = node as *const WideNode<W> as *const i8;
+    for line in (0..std::mem::size_of::<WideNode<W>>()).step_by(64) {
+        // SAFETY: SSE is part of the x86_64 baseline; a prefetch never faults, and the address
+        // lies inside `node`.
+        unsafe { _mm_prefetch::<_MM_HINT_T0>(base.add(line)) };
+    }
 }
 
 /// The widest node this traversal takes.
@@ -144,6 +156,10 @@ pub fn trace_wide<const W: usize, S: Stats, const ANY: bool>(
                 enter: enter[c],
                 depth: depth + 1,
             };
+            if child.count == 0 {
+                // Its node is read soon (the nearest child next): start the load now.
+                prefetch_node(&wide.nodes[child.first as usize]);
+            }
             let mut at = top;
             // SAFETY: entries base..top were written by this loop.
             while at > base && unsafe { stack[at - 1].assume_init_ref() }.enter < child.enter {
