@@ -57,7 +57,7 @@ impl WideRayTest {
         tmin: f32,
         tmax: f32,
     ) -> ([f32; W], u32) {
-        const { assert!(W % 4 == 0, "children are tested in groups of 4") };
+        const { assert!(W.is_multiple_of(4), "children are tested in groups of 4") };
         let mut enter = [0.0f32; W];
         let mut hit = 0u32;
         // SAFETY: SSE is part of the x86_64 baseline; every load and store is of 4 lanes at
