@@ -5,11 +5,12 @@
 //! is the stream tracer's hand-off kernel (`stream`'s `single_tree`) and shows on its own, beside
 //! `embree3-1`, what one ray at a time costs on a wide tree.
 //!
-//! - **Node**: one slab test of the ray against all `W` children (`slab`, W lanes: one AVX
-//!   operation per step at W = 8), within `[tmin, tmax]` with `tmax` the current closest hit.
+//! - **Node**: one slab test of the ray against all `W` children (`slab`: SSE groups of 4
+//!   children), within `[tmin, tmax]` with `tmax` the current closest hit.
 //! - **Order**: the children met go on the stack far to near by entry distance, so the nearest is
 //!   popped first; a popped child whose entry lies beyond the closest hit found meanwhile is
-//!   skipped untested.
+//!   skipped untested. An interior child's node is prefetched as it is pushed (a wide node spans
+//!   four cache lines and the walk is bound by their loads).
 //! - **Leaves**: the reference tracer's leaf stage (`reference::intersect_leaf`: the watertight
 //!   test, in the leaf's order, moving triangles at the ray's time), and the slab verdicts are the
 //!   reference's, so every ray gets the reference's closest hit (up to the order in which
@@ -116,18 +117,18 @@ pub fn trace_wide<const W: usize, S: Stats, const ANY: bool>(
     ray: &Ray,
     stats: &mut S,
 ) -> Hit {
-    let mut best = Hit::MISS;
-    let (tmin, mut tmax) = (ray.tmin, ray.tmax);
-    let boxes = WideRayTest::new(ray.origin, ray.dir);
-    let tris = WatertightRay::new(ray.origin, ray.dir);
-    // Uninitialised: zeroing kilobytes of stack per ray would cost more than a short traversal;
-    // only entries below `top`, all written first, are read.
     const {
         assert!(
             W <= MAX_WIDTH,
             "wide single rays take at most 8 children per node"
         )
     };
+    let mut best = Hit::MISS;
+    let (tmin, mut tmax) = (ray.tmin, ray.tmax);
+    let boxes = WideRayTest::new(ray.origin, ray.dir);
+    let tris = WatertightRay::new(ray.origin, ray.dir);
+    // Uninitialised: zeroing kilobytes of stack per ray would cost more than a short traversal;
+    // only entries below `top`, all written first, are read.
     let mut stack = [const { MaybeUninit::<Pending>::uninit() }; STACK];
     let mut top = 0;
     let (mut node, mut slots) = (start.node, start.slots);
