@@ -13,6 +13,7 @@ use raylab::scene::library::load_scene;
 use raylab::scene::Mesh;
 use raylab::stats::{Counters, Event};
 use raylab::tracers::batch::{trace_hits, trace_occlusion};
+use raylab::tracers::packet::TreeWidth;
 use raylab::tracers::reference::ReferenceTracer;
 use raylab::tracers::stream::{StreamConfig, StreamSize, StreamTracer};
 use raylab::tracers::{build_tracer, Params, Tracer, TracerInfo};
@@ -121,6 +122,7 @@ fn hybrid_tracer(stream: usize, width: usize, single: usize) -> StreamTracer {
         stream: StreamSize::Rays(stream),
         width,
         single,
+        ..StreamConfig::default()
     };
     StreamTracer::new(Arc::new(two_leaf_tree()), config)
 }
@@ -176,26 +178,37 @@ fn one_stream_partitions_and_counts_as_worked_out() {
 /// from the root: root node, both children's boxes tested at once (2 box tests), the one leaf it
 /// meets, its triangle — 2 nodes, 2 box tests, 1 triangle test per ray. 1 + 12 = 13 nodes,
 /// 8 + 12 = 20 box tests, 6 triangle tests, no leaf stream; the same hits and occlusion as
-/// stream filtering to the leaves.
+/// stream filtering to the leaves. The same counts over a wide tree (`single_tree` = 4, 8): its
+/// root node holds the two leaves, and the binary root enters it with both slots.
 #[test]
 fn short_sub_streams_finish_one_ray_at_a_time() {
     let batch = eight_rays();
-    for n in StreamConfig::WIDTHS {
+    for (n, tree) in StreamConfig::WIDTHS
+        .into_iter()
+        .zip([2, 4, 8].iter().cycle())
+    {
+        let hybrid = || {
+            let config = StreamConfig {
+                single_tree: TreeWidth::of(*tree).unwrap(),
+                ..hybrid_tracer(8, n, 8).config()
+            };
+            StreamTracer::new(Arc::new(two_leaf_tree()), config)
+        };
         let mut hits = vec![Hit::MISS; 8];
         let mut c = Counters::default();
-        hybrid_tracer(8, n, 8).intersect_counted(batch.view(), &mut hits, &mut c);
+        hybrid().intersect_counted(batch.view(), &mut hits, &mut c);
         let traversal = issued(8, n as u64);
         assert_eq!(
             counts(&c),
             [13, 20, 1, 8, traversal, 6, 0, 0, 0, 0],
-            "width {n}"
+            "width {n}, tree {tree}"
         );
         assert_eq!(hits, trace_hits(&tracer(8, n), &batch), "width {n}");
         let mut flags = vec![false; 8];
         let mut c = Counters::default();
-        hybrid_tracer(8, n, 8).occluded_counted(batch.view(), &mut flags, &mut c);
+        hybrid().occluded_counted(batch.view(), &mut flags, &mut c);
         assert_eq!(flags, [true, false, true, false, false, true, false, true]);
-        assert_eq!(counts(&c)[..3], [13, 20, 1], "width {n}");
+        assert_eq!(counts(&c)[..3], [13, 20, 1], "width {n}, tree {tree}");
     }
     // A threshold below the sub-stream's length changes nothing: stream filtering to the leaves.
     let mut c = Counters::default();
@@ -302,6 +315,7 @@ fn children_are_visited_front_to_back_by_the_streams_majority_direction() {
             stream: StreamSize::Rays(4),
             width: 4,
             single: 0,
+            ..StreamConfig::default()
         };
         let mut hits = vec![Hit::MISS; 4];
         let mut c = Counters::default();
@@ -403,18 +417,22 @@ fn agrees_with_reference(name: &str, size: Option<u32>) {
     for width in StreamConfig::WIDTHS {
         // single = 0: stream filtering to the leaves (the paper); 8: sub-streams of ≤ 8 rays
         // finish one ray at a time (the hybrid).
-        for (stream, single) in [
-            ("16", 0),
-            ("256", 0),
-            ("4096", 0),
-            ("frame", 0),
-            ("16", 8),
-            ("4096", 8),
+        // single_tree = 4, 8: those rays walk a wide tree (`wide_single`).
+        for (stream, single, tree) in [
+            ("16", 0, 2),
+            ("256", 0, 2),
+            ("4096", 0, 2),
+            ("frame", 0, 2),
+            ("16", 8, 2),
+            ("4096", 8, 2),
+            ("16", 8, 4),
+            ("4096", 256, 8),
         ] {
             let params = Params::new()
                 .with("width", width)
                 .with("stream", stream)
-                .with("single", single);
+                .with("single", single)
+                .with("single_tree", tree);
             let tracer = build_tracer(info, &params, &accel).unwrap();
             for (batch, expected) in [&primary, &diffuse].iter().zip(&expected_hits) {
                 let got = trace_hits(tracer.as_ref(), batch);
@@ -465,6 +483,9 @@ fn bad_parameters_are_rejected() {
         ("stream", "all"),
         ("single", "-1"),
         ("single", "few"),
+        ("single_tree", "3"),
+        ("single_tree", "16"),
+        ("single_tree", "wide"),
     ] {
         let p = Params::new().with(k, v);
         assert!(StreamConfig::from_params(&p).is_err(), "{k} = {v}");
@@ -476,6 +497,7 @@ fn bad_parameters_are_rejected() {
             stream: StreamSize::Frame,
             width: 12,
             single: 0,
+            single_tree: TreeWidth::Binary,
         }
     );
     assert_eq!(

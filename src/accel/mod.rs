@@ -21,7 +21,7 @@ use embree::{BuildQuality, Device, EmbreeConfig, EmbreeScene};
 pub use self::obvhs::{ObvhsBvh, ObvhsQuality};
 pub use bvh::{Bvh, BvhConfig, BvhNode};
 pub use grid::{Grid, GridConfig};
-pub use wide_bvh::{WideBvh, WideChild, WideNode};
+pub use wide_bvh::{WideBvh, WideChild, WideEntry, WideNode};
 
 /// Which structure a tracer traverses.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]

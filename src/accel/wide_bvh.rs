@@ -12,6 +12,10 @@
 //! slab test of one ray interval against all children is a handful of W-wide vector operations.
 //! W = 4 is 128 bytes (two cache lines), W = 8 is 256. Unused child slots hold an empty box
 //! (`lo = +∞`, `hi = −∞`), which no slab test and no interval test can hit.
+//!
+//! Entry points (`entry`): where each binary node sits in the wide tree — the wide node whose
+//! collapse took it in and the child slots below it — so a traversal that reached a binary node
+//! (the stream tracer's single-ray hand-off) can go on in the wide tree from there.
 
 use super::bvh::Bvh;
 
@@ -73,6 +77,14 @@ impl<const W: usize> WideNode<W> {
     }
 }
 
+/// Where a binary node's subtree is in the wide tree: child slots `slots` (bit `c`: slot `c`) of
+/// wide node `node`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct WideEntry {
+    pub node: u32,
+    pub slots: u32,
+}
+
 /// The wide tree over a binary `Bvh`'s leaves. Node 0 is the root; an empty binary tree gives an
 /// empty wide tree (no nodes).
 #[derive(Clone, Debug)]
@@ -80,6 +92,10 @@ pub struct WideBvh<const W: usize> {
     pub nodes: Vec<WideNode<W>>,
     /// Depth of each wide node (root 0), for the per-depth counters.
     pub depth: Vec<u8>,
+    /// Indexed like the binary tree's nodes: where each one's subtree is (`WideEntry`). A binary
+    /// node a wide node was made from (the root among them) is all of that node's slots, so its
+    /// box is not tested again; any other is the slots it was opened into, or its own slot.
+    pub entry: Vec<WideEntry>,
 }
 
 impl<const W: usize> WideBvh<W> {
@@ -90,15 +106,18 @@ impl<const W: usize> WideBvh<W> {
         let mut wide = WideBvh {
             nodes: Vec::new(),
             depth: Vec::new(),
+            entry: vec![WideEntry::default(); bvh.nodes.len()],
         };
         if bvh.is_empty() {
             return wide;
         }
         wide.nodes.push(WideNode::EMPTY);
         wide.depth.push(0);
-        // (wide node to fill, binary nodes that become its children)
-        let mut pending = vec![(0usize, wide_children::<W>(bvh, Bvh::ROOT))];
-        while let Some((index, children)) = pending.pop() {
+        // (wide node to fill, the binary node it is made from)
+        let mut pending = vec![(0usize, Bvh::ROOT)];
+        while let Some((index, root)) = pending.pop() {
+            let children = wide_children::<W>(bvh, root);
+            enter_subtree(bvh, root, &children, index as u32, &mut wide.entry);
             let mut node = WideNode::EMPTY;
             for (c, &b) in children.iter().enumerate() {
                 let binary = &bvh.nodes[b];
@@ -114,7 +133,7 @@ impl<const W: usize> WideBvh<W> {
                     wide.nodes.push(WideNode::EMPTY);
                     wide.depth.push(wide.depth[index] + 1);
                     node.first[c] = child as u32;
-                    pending.push((child, wide_children::<W>(bvh, b)));
+                    pending.push((child, b));
                 }
             }
             wide.nodes[index] = node;
@@ -125,6 +144,27 @@ impl<const W: usize> WideBvh<W> {
     pub fn is_empty(&self) -> bool {
         self.nodes.is_empty()
     }
+}
+
+/// Records the entry of binary node `b` and of every binary node between it and the wide node
+/// `node`'s `children` (the binary nodes in its slots) into `entry`; returns `b`'s slots.
+fn enter_subtree(
+    bvh: &Bvh,
+    b: usize,
+    children: &[usize],
+    node: u32,
+    entry: &mut [WideEntry],
+) -> u32 {
+    let slots = match children.iter().position(|&c| c == b) {
+        Some(c) => 1 << c,
+        None => {
+            let first = bvh.nodes[b].first as usize;
+            enter_subtree(bvh, first, children, node, entry)
+                | enter_subtree(bvh, first + 1, children, node, entry)
+        }
+    };
+    entry[b] = WideEntry { node, slots };
+    slots
 }
 
 /// The binary nodes that become the children of the wide node made from binary node `root`: its
@@ -220,6 +260,16 @@ mod tests {
         }
     }
 
+    fn binary_leaves(bvh: &Bvh, b: usize, ranges: &mut Vec<(u32, u32)>) {
+        let node = &bvh.nodes[b];
+        if node.is_leaf() {
+            ranges.push((node.first, node.count));
+        } else {
+            binary_leaves(bvh, node.first as usize, ranges);
+            binary_leaves(bvh, node.first as usize + 1, ranges);
+        }
+    }
+
     fn check<const W: usize>(bvh: &Bvh) {
         let wide = WideBvh::<W>::collapse(bvh);
         let mut ranges = Vec::new();
@@ -234,6 +284,21 @@ mod tests {
         ranges.sort_unstable();
         binary.sort_unstable();
         assert_eq!(ranges, binary, "W = {W}");
+        // Every binary node's entry reaches exactly the leaves below it.
+        for b in 0..bvh.nodes.len() {
+            let WideEntry { node, slots } = wide.entry[b];
+            let mut reached = Vec::new();
+            for c in (0..W).filter(|&c| slots & (1 << c) != 0) {
+                subtree(&wide, bvh, wide.nodes[node as usize].child(c), &mut reached);
+            }
+            let mut below = Vec::new();
+            binary_leaves(bvh, b, &mut below);
+            reached.sort_unstable();
+            below.sort_unstable();
+            assert_eq!(reached, below, "W = {W}, binary node {b}");
+        }
+        let root = wide.entry[Bvh::ROOT];
+        assert_eq!((root.node, root.slots), (0, wide.nodes[0].used));
         let refs: u32 = ranges.iter().map(|r| r.1).sum();
         assert_eq!(refs as usize, bvh.triangles.len());
         // A node is full unless every child is a leaf (nothing left to open).
@@ -292,6 +357,12 @@ mod tests {
         assert_eq!(bvh.nodes.len(), 15);
         let eight = WideBvh::<8>::collapse(&bvh);
         assert_eq!(eight.nodes.len(), 1);
+        // Every binary node enters the one wide node: the root all 8 slots, each half 4.
+        assert!(eight.entry.iter().all(|e| e.node == 0));
+        let halves = [bvh.nodes[0].first as usize, bvh.nodes[0].first as usize + 1];
+        let slots = halves.map(|h| eight.entry[h].slots);
+        assert_eq!(slots.map(u32::count_ones), [4, 4]);
+        assert_eq!(slots[0] | slots[1], 0xff);
         assert_eq!(eight.nodes[0].used.count_ones(), 8);
         let four = WideBvh::<4>::collapse(&bvh);
         assert_eq!(four.nodes.len(), 5);

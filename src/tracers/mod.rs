@@ -12,6 +12,7 @@ pub mod reference;
 pub mod registry;
 pub mod stream;
 pub mod visibility;
+pub mod wide_single;
 
 use crate::geometry::{Hit, Ray, Rays};
 use crate::stats::{Counters, NoStats, Stats};

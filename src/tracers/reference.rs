@@ -54,6 +54,57 @@ impl SingleRayKernel for ReferenceTracer {
     }
 }
 
+/// A leaf's triangles, `first .. first + count` of the tree's `triangles`, at `depth` (counters).
+#[derive(Clone, Copy)]
+pub struct LeafRange {
+    pub first: u32,
+    pub count: u32,
+    pub depth: usize,
+}
+
+/// The reference tracer's leaf stage, shared with the wide single-ray traversal so both find
+/// bit-identical hits: each triangle's watertight test within `[ray.tmin, tmax]`, a hit becoming
+/// `best` and shortening `tmax`. Returns whether to stop (`ANY` and something was hit).
+#[inline(always)]
+pub fn intersect_leaf<S: Stats, const ANY: bool>(
+    bvh: &Bvh,
+    tris: &WatertightRay,
+    ray: &Ray,
+    leaf: LeafRange,
+    tmax: &mut f32,
+    best: &mut Hit,
+    stats: &mut S,
+) -> bool {
+    for i in leaf.first as usize..(leaf.first + leaf.count) as usize {
+        if S::ENABLED {
+            stats.triangle_test(leaf.depth);
+        }
+        // A moving triangle is tested where it is at the ray's time: the watertight test
+        // precomputes per ray, not per triangle (Boulos et al. 2007 §4).
+        let moved;
+        let tri = match &bvh.motion_end {
+            None => &bvh.triangles[i],
+            Some(end) => {
+                moved = bvh.triangles[i].lerp(&end[i], ray.time);
+                &moved
+            }
+        };
+        if let Some((t, u, v)) = tris.intersect(tri, ray.tmin, *tmax) {
+            *best = Hit {
+                t,
+                prim: bvh.prim_ids[i],
+                u,
+                v,
+            };
+            if ANY {
+                return true;
+            }
+            *tmax = t;
+        }
+    }
+    false
+}
+
 /// The reference traversal of the subtree under `node`, whose box `ray` is known to meet: the
 /// closest hit (`ANY`: the first found) within `[ray.tmin, ray.tmax]`, or a miss. The stream
 /// tracer hands the rays of a short sub-stream to it (`stream`'s `single` parameter).
@@ -91,32 +142,13 @@ pub fn trace_subtree<S: Stats, const ANY: bool>(
             stats.node(depth(node.index));
         }
         if node.count > 0 {
-            for i in node.first as usize..(node.first + node.count) as usize {
-                if S::ENABLED {
-                    stats.triangle_test(depth(node.index));
-                }
-                // A moving triangle is tested where it is at the ray's time: the watertight
-                // test precomputes per ray, not per triangle (Boulos et al. 2007 §4).
-                let moved;
-                let tri = match &bvh.motion_end {
-                    None => &bvh.triangles[i],
-                    Some(end) => {
-                        moved = bvh.triangles[i].lerp(&end[i], ray.time);
-                        &moved
-                    }
-                };
-                if let Some((t, u, v)) = tris.intersect(tri, tmin, tmax) {
-                    best = Hit {
-                        t,
-                        prim: bvh.prim_ids[i],
-                        u,
-                        v,
-                    };
-                    if ANY {
-                        return best;
-                    }
-                    tmax = t;
-                }
+            let leaf = LeafRange {
+                first: node.first,
+                count: node.count,
+                depth: depth(node.index),
+            };
+            if intersect_leaf::<S, ANY>(bvh, &tris, ray, leaf, &mut tmax, &mut best, stats) {
+                return best;
             }
         } else {
             let pair = &bvh.pairs[node.index as usize];

@@ -19,8 +19,8 @@ use crate::tracers::mft::{MftConfig, MftTracer};
 use crate::tracers::packet::{PacketConfig, PacketTracer};
 use crate::tracers::stream::{StreamConfig, StreamTracer};
 use crate::tracers::{
-    dda::GridDdaTracer, obvhs::ObvhsTracer, reference::ReferenceTracer, Params, Tracer,
-    VisibilityQuery,
+    dda::GridDdaTracer, obvhs::ObvhsTracer, reference::ReferenceTracer, wide_single, Params,
+    Tracer, VisibilityQuery,
 };
 
 /// Makes a tracer from its parameters and a structure of its `AccelKind`.
@@ -111,6 +111,15 @@ pub const TRACERS: &[TracerInfo] = &[
         about:
             "single rays, binary SAH BVH, nearer child first; watertight triangles, robust slabs",
         make: |_, accel| Ok(Box::new(ReferenceTracer::new(accel.bvh()?.clone()))),
+        motion_blur: true,
+        chunk_rays: CHUNK_RAYS,
+    },
+    TracerInfo {
+        name: "wide-single",
+        accel: AccelKind::Bvh,
+        params: wide_single::PARAMS,
+        about: "single rays, the SAH BVH collapsed to 4 or 8 children per node (width, default 8): one SIMD slab test of all children, nearest first; the reference's watertight triangles and hits",
+        make: |params, accel| wide_single::from_params(accel.bvh()?.clone(), params),
         motion_blur: true,
         chunk_rays: CHUNK_RAYS,
     },

@@ -18,7 +18,10 @@
 //!   axis; the split axis as the packet tracer's `ChildOrder` finds it).
 //! - **Single-ray hand-off** (`single` = T, 0 by default): a sub-stream of at most T rays at an
 //!   inner node leaves stream filtering, and each of its rays finishes the subtree depth first on
-//!   its own (`reference::trace_subtree`). Not in the paper: deep in the tree the sub-streams are
+//!   its own: by the reference tracer's traversal of the binary tree (`single_tree` = 2, the
+//!   default) or by single rays through the tree collapsed to 4 or 8 children per node
+//!   (`single_tree` = 4 | 8: `wide_single`, one SIMD slab test of all children; the wide tree is
+//!   built with the tracer, as the packet tracer's are; `handoff`). Not in the paper: deep in the tree the sub-streams are
 //!   a few rays long (Table 4), and a box filter over them costs more than the rays' own
 //!   traversal. T = 0 is the paper's stream filtering to the leaves; the lane counters count the
 //!   filters only, so with T > 0 they describe the stream part of the traversal.
@@ -38,6 +41,7 @@
 //! length).
 
 mod filter;
+mod handoff;
 mod intersect;
 mod rays;
 mod traverse;
@@ -51,9 +55,10 @@ use crate::error::{Error, Result};
 use crate::geometry::{Hit, Rays};
 use crate::lanes::SimdRay;
 use crate::stats::Stats;
-use crate::tracers::packet::ChildOrder;
+use crate::tracers::packet::{ChildOrder, PacketConfig, TreeWidth};
 use crate::tracers::{Kernel, Params};
 
+use handoff::Handoff;
 use rays::StreamRays;
 use traverse::{Answer, Walk};
 use width::Width;
@@ -88,6 +93,9 @@ pub struct StreamConfig {
     /// Sub-streams of at most this many rays finish their subtree one ray at a time, depth
     /// first (0: never — the paper's stream filtering all the way to the leaves).
     pub single: usize,
+    /// Children per node of the tree the hand-off's single rays walk (2: the binary tree, by the
+    /// reference's traversal; 4 or 8: a wide tree collapsed from it, by `wide_single`).
+    pub single_tree: TreeWidth,
 }
 
 impl Default for StreamConfig {
@@ -96,12 +104,13 @@ impl Default for StreamConfig {
             stream: StreamSize::Rays(4096),
             width: 16,
             single: 0,
+            single_tree: TreeWidth::Binary,
         }
     }
 }
 
 impl StreamConfig {
-    pub const PARAMS: &'static [&'static str] = &["stream", "width", "single"];
+    pub const PARAMS: &'static [&'static str] = &["stream", "width", "single", "single_tree"];
     pub const WIDTHS: [usize; 6] = [4, 8, 12, 16, 32, 64];
 
     pub fn from_params(p: &Params) -> Result<Self> {
@@ -110,6 +119,12 @@ impl StreamConfig {
             stream: p.get_or("stream", d.stream)?,
             width: p.get_or("width", d.width)?,
             single: p.get_or("single", d.single)?,
+            single_tree: TreeWidth::of(p.get_or("single_tree", 2usize)?).map_err(|_| {
+                Error::usage(format!(
+                    "stream tracer: single_tree must be one of {:?} (children per node of the hand-off's tree)",
+                    PacketConfig::WIDTHS
+                ))
+            })?,
         };
         if !Self::WIDTHS.contains(&c.width) {
             return Err(Error::usage(format!(
@@ -125,13 +140,20 @@ impl StreamConfig {
 pub struct StreamTracer {
     bvh: Arc<Bvh>,
     order: ChildOrder,
+    handoff: Handoff,
     config: StreamConfig,
 }
 
 impl StreamTracer {
     pub fn new(bvh: Arc<Bvh>, config: StreamConfig) -> Self {
         let order = ChildOrder::new(&bvh);
-        StreamTracer { bvh, order, config }
+        let handoff = Handoff::new(&bvh, config.single_tree, config.single);
+        StreamTracer {
+            bvh,
+            order,
+            handoff,
+            config,
+        }
     }
 
     /// The tracer over a static `bvh` (it has no motion blur).
@@ -175,6 +197,7 @@ impl StreamTracer {
                 order: &self.order,
                 input: rays,
                 single: self.config.single,
+                handoff: &self.handoff,
                 rays: &mut stream,
                 groups: &mut groups,
                 answers,

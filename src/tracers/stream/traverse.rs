@@ -15,9 +15,9 @@ use crate::lanes::LaneMask;
 use crate::lanes::SimdRay;
 use crate::stats::Stats;
 use crate::tracers::packet::ChildOrder;
-use crate::tracers::reference::trace_subtree;
 
 use super::filter::filter;
+use super::handoff::Handoff;
 use super::rays::StreamRays;
 use super::width::Width;
 
@@ -27,8 +27,14 @@ pub trait Answer {
     const ANY: bool;
     /// The triangle test of every lane of `simd` for this query (`SimdRay::intersect::<ANY>`).
     fn intersect<const L: usize>(simd: &mut SimdRay<L>, tri: &Triangle, prim: u32);
-    /// One ray's traversal of the subtree under `node` for this query (`trace_subtree::<ANY>`).
-    fn trace_single<S: Stats>(bvh: &Bvh, node: u32, ray: &Ray, stats: &mut S) -> Hit;
+    /// One ray's traversal of the subtree under `node` for this query (`Handoff::trace::<ANY>`).
+    fn trace_single<S: Stats>(
+        handoff: &Handoff,
+        bvh: &Bvh,
+        node: u32,
+        ray: &Ray,
+        stats: &mut S,
+    ) -> Hit;
     fn record(&mut self, hit: Hit);
 }
 
@@ -39,8 +45,14 @@ impl Answer for Hit {
         simd.intersect::<false>(tri, prim);
     }
     #[inline(always)]
-    fn trace_single<S: Stats>(bvh: &Bvh, node: u32, ray: &Ray, stats: &mut S) -> Hit {
-        trace_subtree::<S, false>(bvh, node, ray, stats)
+    fn trace_single<S: Stats>(
+        handoff: &Handoff,
+        bvh: &Bvh,
+        node: u32,
+        ray: &Ray,
+        stats: &mut S,
+    ) -> Hit {
+        handoff.trace::<S, false>(bvh, node, ray, stats)
     }
     #[inline(always)]
     fn record(&mut self, hit: Hit) {
@@ -55,8 +67,14 @@ impl Answer for bool {
         simd.intersect::<true>(tri, prim);
     }
     #[inline(always)]
-    fn trace_single<S: Stats>(bvh: &Bvh, node: u32, ray: &Ray, stats: &mut S) -> Hit {
-        trace_subtree::<S, true>(bvh, node, ray, stats)
+    fn trace_single<S: Stats>(
+        handoff: &Handoff,
+        bvh: &Bvh,
+        node: u32,
+        ray: &Ray,
+        stats: &mut S,
+    ) -> Hit {
+        handoff.trace::<S, true>(bvh, node, ray, stats)
     }
     #[inline(always)]
     fn record(&mut self, _: Hit) {
@@ -73,6 +91,8 @@ pub struct Walk<'a, const L: usize, const N: usize, A: Answer> {
     /// Sub-streams of at most this many rays leave stream filtering at an inner node: each of
     /// their rays finishes the subtree on its own (`single`; 0: never, the paper's traversal).
     pub single: usize,
+    /// The kernel those rays finish with.
+    pub handoff: &'a Handoff,
     pub rays: &'a mut StreamRays<L>,
     /// One `SimdRay` per `L`-lane part of an `N`-wide group (`Width::GROUPS`).
     pub groups: &'a mut [SimdRay<L>],
@@ -115,14 +135,14 @@ impl<const L: usize, const N: usize, A: Answer> Walk<'_, L, N, A> {
 
 impl<const L: usize, const N: usize, A: Answer> Walk<'_, L, N, A> {
     /// The rays `0..len`, which meet `node`'s box, each traverse its subtree alone, depth first
-    /// (the reference tracer's traversal, so the hits are the same). Returns how many are still
+    /// (`handoff`: the reference tracer's traversal or the wide tree's, with the same hits). Returns how many are still
     /// live, moved to the front.
     fn single_rays<S: Stats>(&mut self, node: u32, len: usize, stats: &mut S) -> usize {
         for at in 0..len {
             let id = self.rays.id(at);
             let mut ray = self.input.ray(id);
             ray.tmax = self.rays.tmax(at);
-            let hit = A::trace_single(self.bvh, node, &ray, stats);
+            let hit = A::trace_single(self.handoff, self.bvh, node, &ray, stats);
             if hit.is_hit() {
                 self.answers[id].record(hit);
                 self.rays

@@ -1,0 +1,201 @@
+//! Single rays through the wide BVH (`accel::WideBvh`, 4 or 8 children per node, collapsed from
+//! the binary SAH tree): the single-ray traversal of production ray tracers (Wald, Benthin and
+//! Boulos 2008 "Getting rid of packets"; Embree's `bvh_intersector1`, Ernst and Greiner 2008),
+//! SIMD across a node's children instead of across rays. Our addition, not one of the papers': it
+//! is the stream tracer's hand-off kernel (`stream`'s `single_tree`) and shows on its own, beside
+//! `embree3-1`, what one ray at a time costs on a wide tree.
+//!
+//! - **Node**: one slab test of the ray against all `W` children (`slab`: SSE groups of 4
+//!   children), within `[tmin, tmax]` with `tmax` the current closest hit.
+//! - **Order**: the children met go on the stack far to near by entry distance, so the nearest is
+//!   popped first; a popped child whose entry lies beyond the closest hit found meanwhile is
+//!   skipped untested. An interior child's node is prefetched as it is pushed (a wide node spans
+//!   four cache lines and the walk is bound by their loads).
+//! - **Leaves**: the reference tracer's leaf stage (`reference::intersect_leaf`: the watertight
+//!   test, in the leaf's order, moving triangles at the ray's time), and the slab verdicts are the
+//!   reference's, so every ray gets the reference's closest hit (up to the order in which
+//!   triangles at exactly equal distance are met). Occlusion stops at the first hit.
+//!
+//! Counters: `ray` per ray; `node(depth)` per wide node whose children are tested and per leaf
+//! whose triangles are; `aabb_test(depth)` per child slot tested (the children's depth);
+//! `triangle_test(depth)` per triangle tested.
+
+mod slab;
+
+use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+use std::mem::MaybeUninit;
+use std::sync::Arc;
+
+use crate::accel::{Bvh, BvhConfig, WideBvh, WideEntry, WideNode};
+use crate::error::{Error, Result};
+use crate::geometry::{Hit, Ray, WatertightRay};
+use crate::stats::Stats;
+use crate::tracers::reference::{intersect_leaf, LeafRange};
+use crate::tracers::{Params, SingleRayKernel, Tracer};
+
+pub use slab::WideRayTest;
+
+pub struct WideSingleTracer<const W: usize> {
+    bvh: Arc<Bvh>,
+    wide: WideBvh<W>,
+}
+
+impl<const W: usize> WideSingleTracer<W> {
+    /// Collapses `bvh` into a `W`-wide tree (as the packet tracer's `width` does).
+    pub fn new(bvh: Arc<Bvh>) -> Self {
+        let wide = WideBvh::collapse(&bvh);
+        WideSingleTracer { bvh, wide }
+    }
+}
+
+/// Children per node (`width`) of the tracer's tree.
+pub const WIDTHS: [usize; 2] = [4, 8];
+pub const PARAMS: &[&str] = &["width"];
+
+/// The tracer with `params` (`width` = 4 or 8, default 8) over `bvh`.
+pub fn from_params(bvh: Arc<Bvh>, params: &Params) -> Result<Box<dyn Tracer>> {
+    match params.get_or("width", 8usize)? {
+        4 => Ok(Box::new(WideSingleTracer::<4>::new(bvh))),
+        8 => Ok(Box::new(WideSingleTracer::<8>::new(bvh))),
+        width => Err(Error::usage(format!(
+            "wide-single tracer: width must be one of {WIDTHS:?} (children per BVH node; got {width})"
+        ))),
+    }
+}
+
+impl<const W: usize> SingleRayKernel for WideSingleTracer<W> {
+    #[inline(always)]
+    fn trace<S: Stats, const ANY: bool>(&self, ray: &Ray, stats: &mut S) -> Hit {
+        if S::ENABLED {
+            stats.ray();
+        }
+        if self.wide.is_empty() {
+            return Hit::MISS;
+        }
+        let root = self.wide.entry[Bvh::ROOT];
+        trace_wide::<W, S, ANY>(&self.bvh, &self.wide, root, ray, stats)
+    }
+}
+
+/// A child waiting on the stack: an interior wide node (`count = 0`: node `first`) or a leaf's
+/// triangles, the distance at which the ray enters its box, and its depth (counters).
+#[derive(Clone, Copy)]
+struct Pending {
+    first: u32,
+    count: u32,
+    enter: f32,
+    depth: u32,
+}
+
+/// Asks for all of `node`'s cache lines (a wide node spans several).
+#[inline(always)]
+fn prefetch_node<const W: usize>(node: &WideNode<W>) {
+    let base = node as *const WideNode<W> as *const i8;
+    for line in (0..std::mem::size_of::<WideNode<W>>()).step_by(64) {
+        // SAFETY: SSE is part of the x86_64 baseline; a prefetch never faults, and the address
+        // lies inside `node`.
+        unsafe { _mm_prefetch::<_MM_HINT_T0>(base.add(line)) };
+    }
+}
+
+/// The widest node this traversal takes.
+const MAX_WIDTH: usize = 8;
+
+/// Deep enough for any tree of at most `MAX_WIDTH` children: a wide node is no deeper than the
+/// binary node it came from, and each level leaves at most `W − 1` siblings behind (plus the
+/// slots of the entry node).
+const STACK: usize = MAX_WIDTH * (BvhConfig::DEPTH_LIMIT + 2);
+
+/// One ray's traversal (module doc) of the subtree at `start` (its slots of its wide node, whose
+/// boxes are tested here): the closest hit (`ANY`: the first found) within `[ray.tmin,
+/// ray.tmax]`, or a miss. `wide` was collapsed from `bvh`, whose triangles the leaves index.
+#[inline(always)]
+pub fn trace_wide<const W: usize, S: Stats, const ANY: bool>(
+    bvh: &Bvh,
+    wide: &WideBvh<W>,
+    start: WideEntry,
+    ray: &Ray,
+    stats: &mut S,
+) -> Hit {
+    const {
+        assert!(
+            W <= MAX_WIDTH,
+            "wide single rays take at most 8 children per node"
+        )
+    };
+    let mut best = Hit::MISS;
+    let (tmin, mut tmax) = (ray.tmin, ray.tmax);
+    let boxes = WideRayTest::new(ray.origin, ray.dir);
+    let tris = WatertightRay::new(ray.origin, ray.dir);
+    // Uninitialised: zeroing kilobytes of stack per ray would cost more than a short traversal;
+    // only entries below `top`, all written first, are read.
+    let mut stack = [const { MaybeUninit::<Pending>::uninit() }; STACK];
+    let mut top = 0;
+    let (mut node, mut slots) = (start.node, start.slots);
+    loop {
+        let cell = &wide.nodes[node as usize];
+        let depth = if S::ENABLED {
+            wide.depth[node as usize] as u32
+        } else {
+            0
+        };
+        if S::ENABLED {
+            stats.node(depth as usize);
+            let tested = (slots & cell.used).count_ones();
+            (0..tested).for_each(|_| stats.aabb_test(depth as usize + 1));
+        }
+        let (enter, hit) = boxes.test(cell, tmin, tmax);
+        // Push the children met, keeping this node's run of the stack sorted far to near.
+        let base = top;
+        let mut hit = hit & slots;
+        while hit != 0 {
+            let c = hit.trailing_zeros() as usize;
+            hit &= hit - 1;
+            let child = Pending {
+                first: cell.first[c],
+                count: cell.count[c],
+                enter: enter[c],
+                depth: depth + 1,
+            };
+            if child.count == 0 {
+                // Its node is read soon (the nearest child next): start the load now.
+                prefetch_node(&wide.nodes[child.first as usize]);
+            }
+            let mut at = top;
+            // SAFETY: entries base..top were written by this loop.
+            while at > base && unsafe { stack[at - 1].assume_init_ref() }.enter < child.enter {
+                stack[at] = stack[at - 1];
+                at -= 1;
+            }
+            stack[at].write(child);
+            top += 1;
+        }
+        // Pop the nearest, skipping children now beyond the closest hit, until an interior node.
+        loop {
+            if top == 0 {
+                return best;
+            }
+            top -= 1;
+            // SAFETY: every entry below the old `top` was written by a push.
+            let next = unsafe { stack[top].assume_init() };
+            if next.enter > tmax {
+                continue;
+            }
+            if next.count == 0 {
+                (node, slots) = (next.first, u32::MAX);
+                break;
+            }
+            if S::ENABLED {
+                stats.node(next.depth as usize);
+            }
+            let leaf = LeafRange {
+                first: next.first,
+                count: next.count,
+                depth: next.depth as usize,
+            };
+            if intersect_leaf::<S, ANY>(bvh, &tris, ray, leaf, &mut tmax, &mut best, stats) {
+                return best;
+            }
+        }
+    }
+}
