@@ -23,7 +23,8 @@ use glam::Vec3;
 
 use super::slab::SlabRays;
 use super::watertight::{
-    accept, common_axes, edge_functions, in_lane_frames, needs_f64, redo_edges_in_f64, Permuted,
+    accept, any_may_hit, common_axes, edge_functions, in_lane_frames, needs_f64, redo_edges_in_f64,
+    sheared, Permuted,
 };
 use super::LaneMask;
 use crate::geometry::{Hit, Ray, Rays, Triangle, WatertightRay};
@@ -333,8 +334,10 @@ impl<const L: usize> SimdRay<L> {
         self.intersect_permuted::<ANY>(&a, &b, &c, prim)
     }
 
-    /// The watertight test on a triangle already in every lane's frame (`watertight_lanes`),
-    /// zero or ill-conditioned edge functions redone in f64 as the scalar test does.
+    /// The watertight test on a triangle already in every lane's frame (`lanes::watertight`),
+    /// zero or ill-conditioned edge functions redone in f64 as the scalar test does. A SIMD ray
+    /// whose lanes all pass strictly outside an edge stops after the edge functions
+    /// (`any_may_hit`).
     #[inline(always)]
     fn intersect_permuted<const ANY: bool>(
         &mut self,
@@ -343,10 +346,14 @@ impl<const L: usize> SimdRay<L> {
         c: &Permuted<L>,
         prim: u32,
     ) -> u32 {
-        let (mut e, scale) = edge_functions(&self.shear, a, b, c);
-        let redo = needs_f64(&e, &scale);
+        let s = sheared(&self.shear, a, b, c);
+        let mut e = edge_functions(&s);
+        if !any_may_hit(&e) {
+            return 0;
+        }
+        let redo = needs_f64(&e, &s);
         if redo.any() {
-            redo_edges_in_f64(&self.shear, a, b, c, &mut e, redo);
+            redo_edges_in_f64(&s, &mut e, redo);
         }
         let (hit, t_scaled, abs_det) = accept(
             &e,
@@ -386,11 +393,21 @@ impl<const L: usize> SimdRay<L> {
     /// The largest `tmax` over the lanes (−∞ when none is live).
     #[inline(always)]
     pub fn max_tmax(&self) -> f32 {
-        let mut m = f32::NEG_INFINITY;
-        for l in 0..L {
-            m = if self.tmax[l] > m { self.tmax[l] } else { m };
+        // A halving tree of lane-wise maxima (log2 L vector steps) rather than a chain of L
+        // scalar ones: after every leaf with a hit the packet tracer takes the maximum over all
+        // its SIMD rays. The order does not matter: `tmax` is never NaN (ill-formed rays are
+        // loaded as padding, hits are finite).
+        let (mut m, mut n) = (self.tmax, L);
+        while n > 1 {
+            // Lanes `n − half .. n` folded into `0 .. half` (for odd `n` the middle one stays).
+            let half = n / 2;
+            for l in 0..half {
+                let other = m[l + n - half];
+                m[l] = if other > m[l] { other } else { m[l] };
+            }
+            n -= half;
         }
-        m
+        m[0]
     }
 
     /// Lane `l`'s result.
@@ -493,6 +510,25 @@ mod tests {
         lanes_agree_with_the_scalar_tests::<4>();
         lanes_agree_with_the_scalar_tests::<8>();
         lanes_agree_with_the_scalar_tests::<16>();
+    }
+
+    #[test]
+    fn max_tmax_is_the_largest_lane_wherever_it_is() {
+        fn check<const L: usize>() {
+            for at in 0..L {
+                let mut simd = SimdRay::<L>::default();
+                simd.tmax = std::array::from_fn(|l| l as f32 - 100.0);
+                simd.tmax[at] = 7.5;
+                assert_eq!(simd.max_tmax(), 7.5, "L = {L}, largest in lane {at}");
+            }
+            assert_eq!(SimdRay::<L>::default().max_tmax(), f32::NEG_INFINITY);
+        }
+        check::<1>();
+        check::<3>();
+        check::<4>();
+        check::<8>();
+        check::<12>();
+        check::<16>();
     }
 
     #[test]

@@ -61,35 +61,73 @@ pub fn in_lane_frames<const L: usize>(
     }
 }
 
-/// The edge functions `[U, V, W][lane]` of the triangle `a, b, c` sheared into each lane's ray
-/// space (`shear` = `[sx, sy, sz][lane]`), and the magnitude of the products they are
-/// differences of (`edge_product_scale`).
+/// A triangle sheared into each lane's ray space: `[a, b, c][x, y][lane]`, where vertex `a`
+/// (`Permuted`) becomes `ax = a.x − sx·a.z`, `ay = a.y − sy·a.z`.
+pub type Sheared<const L: usize> = [[[f32; L]; 2]; 3];
+
+/// The triangle `a, b, c` sheared into each lane's ray space (`shear` = `[sx, sy, sz][lane]`).
 #[inline(always)]
-pub fn edge_functions<const L: usize>(
+pub fn sheared<const L: usize>(
     shear: &[[f32; L]; 3],
     a: &Permuted<L>,
     b: &Permuted<L>,
     c: &Permuted<L>,
-) -> ([[f32; L]; 3], [f32; L]) {
+) -> Sheared<L> {
     let [sx, sy, _] = shear;
-    let mut e = [[0.0f32; L]; 3];
-    let mut scale = [0.0f32; L];
+    // One lane loop over all three vertices, written out: a loop over the vertices around it
+    // stayed scalar and went through memcpy.
+    let mut s = [[[0.0f32; L]; 2]; 3];
     for l in 0..L {
-        let (ax, ay) = (a[0][l] - sx[l] * a[2][l], a[1][l] - sy[l] * a[2][l]);
-        let (bx, by) = (b[0][l] - sx[l] * b[2][l], b[1][l] - sy[l] * b[2][l]);
-        let (cx, cy) = (c[0][l] - sx[l] * c[2][l], c[1][l] - sy[l] * c[2][l]);
-        e[0][l] = cx * by - cy * bx;
-        e[1][l] = ax * cy - ay * cx;
-        e[2][l] = bx * ay - by * ax;
-        scale[l] = edge_product_scale([ax, ay], [bx, by], [cx, cy]);
+        s[0][0][l] = a[0][l] - sx[l] * a[2][l];
+        s[0][1][l] = a[1][l] - sy[l] * a[2][l];
+        s[1][0][l] = b[0][l] - sx[l] * b[2][l];
+        s[1][1][l] = b[1][l] - sy[l] * b[2][l];
+        s[2][0][l] = c[0][l] - sx[l] * c[2][l];
+        s[2][1][l] = c[1][l] - sy[l] * c[2][l];
     }
-    (e, scale)
+    s
 }
 
-/// The lanes whose edge functions the scalar test redoes in f64 (`geometry::needs_f64`).
+/// The edge functions `[U, V, W][lane]` of the sheared triangle `s`.
 #[inline(always)]
-pub fn needs_f64<const L: usize>(e: &[[f32; L]; 3], scale: &[f32; L]) -> LaneMask<L> {
-    LaneMask::from_fn(|l| triangle::needs_f64(e[0][l], e[1][l], e[2][l], scale[l]))
+pub fn edge_functions<const L: usize>(s: &Sheared<L>) -> [[f32; L]; 3] {
+    let [[ax, ay], [bx, by], [cx, cy]] = s;
+    let mut e = [[0.0f32; L]; 3];
+    for l in 0..L {
+        e[0][l] = cx[l] * by[l] - cy[l] * bx[l];
+        e[1][l] = ax[l] * cy[l] - ay[l] * cx[l];
+        e[2][l] = bx[l] * ay[l] - by[l] * ax[l];
+    }
+    e
+}
+
+/// Whether any lane may hit: not every lane passes strictly outside an edge. A lane whose edge
+/// functions have both signs and none is zero is a miss in the scalar test before any f64 redo
+/// (it is not inside, so `geometry::needs_f64` is false there, and `accept` rejects it), so a
+/// SIMD ray whose lanes all do is done here — most SIMD rays at most triangles of a leaf —
+/// without the f64 check, the acceptance test and the hit update.
+// `u != 0.0` rather than `!(u == 0.0)`: NaN counts as non-zero, as in the scalar test.
+#[inline(always)]
+pub fn any_may_hit<const L: usize>(e: &[[f32; L]; 3]) -> bool {
+    let mut any = 0u32;
+    for l in 0..L {
+        let (u, v, w) = (e[0][l], e[1][l], e[2][l]);
+        let outside = ((u < 0.0) | (v < 0.0) | (w < 0.0)) & ((u > 0.0) | (v > 0.0) | (w > 0.0));
+        let nonzero = (u != 0.0) & (v != 0.0) & (w != 0.0);
+        any |= !(outside & nonzero) as u32;
+    }
+    any != 0
+}
+
+/// The lanes whose edge functions `e` of the sheared triangle `s` the scalar test redoes in f64
+/// (`geometry::needs_f64`, with the scale `edge_product_scale`).
+#[inline(always)]
+pub fn needs_f64<const L: usize>(e: &[[f32; L]; 3], s: &Sheared<L>) -> LaneMask<L> {
+    let [[ax, ay], [bx, by], [cx, cy]] = s;
+    LaneMask::from_fn(|l| {
+        let scale = edge_product_scale([ax[l], ay[l]], [bx[l], by[l]], [cx[l], cy[l]]);
+        triangle::needs_f64(e[0][l], e[1][l], e[2][l], scale)
+    })
 }
 
 /// Which lanes hit, from their edge functions: inside (all of one sign), a non-zero determinant
@@ -121,24 +159,60 @@ pub fn accept<const L: usize>(
 }
 
 /// The edge functions of the lanes in `redo`, recomputed in f64 from the same sheared
-/// coordinates, exactly as `WatertightRay::intersect` does.
+/// coordinates `s`, exactly as `WatertightRay::intersect` does.
 #[cold]
-pub fn redo_edges_in_f64<const L: usize>(
-    shear: &[[f32; L]; 3],
-    a: &Permuted<L>,
-    b: &Permuted<L>,
-    c: &Permuted<L>,
-    e: &mut [[f32; L]; 3],
-    redo: LaneMask<L>,
-) {
-    let [sx, sy, _] = shear;
+pub fn redo_edges_in_f64<const L: usize>(s: &Sheared<L>, e: &mut [[f32; L]; 3], redo: LaneMask<L>) {
     let f = |x: f32| x as f64;
     for l in redo.iter() {
-        let (ax, ay) = (a[0][l] - sx[l] * a[2][l], a[1][l] - sy[l] * a[2][l]);
-        let (bx, by) = (b[0][l] - sx[l] * b[2][l], b[1][l] - sy[l] * b[2][l]);
-        let (cx, cy) = (c[0][l] - sx[l] * c[2][l], c[1][l] - sy[l] * c[2][l]);
-        e[0][l] = (f(cx) * f(by) - f(cy) * f(bx)) as f32;
-        e[1][l] = (f(ax) * f(cy) - f(ay) * f(cx)) as f32;
-        e[2][l] = (f(bx) * f(ay) - f(by) * f(ax)) as f32;
+        let [[ax, ay], [bx, by], [cx, cy]] = s.map(|p| p.map(|x| f(x[l])));
+        e[0][l] = (cx * by - cy * bx) as f32;
+        e[1][l] = (ax * cy - ay * cx) as f32;
+        e[2][l] = (bx * ay - by * ax) as f32;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Edge functions `[U, V, W]` of four lanes, one lane per case.
+    fn lanes(cases: [[f32; 3]; 4]) -> [[f32; 4]; 3] {
+        [0, 1, 2].map(|k| cases.map(|c| c[k]))
+    }
+
+    #[test]
+    fn only_lanes_strictly_outside_an_edge_are_certain_misses() {
+        let outside = [1.0, -2.0, 3.0];
+        // Each case alone in lane 0, the other lanes strictly outside.
+        let with = |case: [f32; 3]| any_may_hit(&lanes([case, outside, outside, outside]));
+        assert!(!with(outside), "every lane strictly outside");
+        assert!(with([1.0, 2.0, 3.0]), "inside, front face");
+        assert!(with([-1.0, -2.0, -3.0]), "inside, back face");
+        // A zero edge function with both signs elsewhere: the f64 redo decides.
+        assert!(with([0.0, -2.0, 3.0]));
+        assert!(with([-0.0, -2.0, 3.0]));
+        // NaN is non-zero and neither sign, as in the scalar test: with both signs in the other
+        // two, a certain miss; with one sign only, not.
+        assert!(!with([f32::NAN, -2.0, 3.0]));
+        assert!(with([f32::NAN, 2.0, 3.0]));
+    }
+
+    /// `any_may_hit` is false only where the scalar test misses: every lane of a certain-miss
+    /// group is a miss of `WatertightRay::intersect` without f64 (`needs_f64` false) and
+    /// rejected by `accept`.
+    #[test]
+    fn a_certain_miss_needs_no_f64_and_is_rejected() {
+        let e = lanes([
+            [1.0, -2.0, 3.0],
+            [-1e-30, 5.0, 1.0],
+            [f32::NAN, -1.0, 1.0],
+            [f32::INFINITY, -1.0, 1.0],
+        ]);
+        assert!(!any_may_hit(&e));
+        let s: Sheared<4> = [[[1.0; 4]; 2]; 3];
+        assert_eq!(needs_f64(&e, &s), LaneMask::NONE);
+        let one = [1.0f32; 4];
+        let (hit, _, _) = accept(&e, &one, [&one, &one, &one], &[0.0; 4], &[f32::MAX; 4]);
+        assert_eq!(hit, [false; 4]);
     }
 }

@@ -196,6 +196,9 @@ impl<const L: usize> Packet<L> {
             stats.event(Event::LeafActiveRays, lanes as u64);
         }
         let bvh = tree.bvh;
+        // Lanes that found a closer hit here: without any, no `tmax` changed and the packet's
+        // largest one (`max_t`) still holds, so its recount over every SIMD ray is skipped.
+        let mut found = 0;
         for i in triangles {
             let tri = &bvh.triangles[i];
             // A moving triangle is not where `tri` says at the rays' times: no triangle culling
@@ -219,6 +222,7 @@ impl<const L: usize> Packet<L> {
                     None => group.intersect::<ANY>(tri, prim),
                     Some(close) => group.intersect_moving::<ANY>(tri, close, prim),
                 };
+                found += hits;
                 if ANY {
                     self.live -= hits;
                     if self.live == 0 {
@@ -227,14 +231,15 @@ impl<const L: usize> Packet<L> {
                 }
             }
         }
-        if !ANY && (self.interval.is_some() || self.frustum.is_some()) {
+        if !ANY && found > 0 && (self.interval.is_some() || self.frustum.is_some()) {
             self.max_t = self
                 .groups
                 .iter()
                 .fold(f32::NEG_INFINITY, |m, g| m.max(g.max_tmax()));
-            if let Some(f) = &mut self.frustum {
-                f.clip_far(self.max_t);
-            }
+        }
+        if let Some(f) = self.frustum.as_mut().filter(|_| !ANY) {
+            // Also after a leaf without hits: the first leaf moves the far plane in from ∞.
+            f.clip_far(self.max_t);
         }
         false
     }
