@@ -307,6 +307,17 @@ impl<const L: usize> SimdRay<L> {
         self.intersect_permuted::<ANY>(&a, &b, &c, prim)
     }
 
+    /// As `intersect`, with the triangle's vertices already relative to the origin along the
+    /// axes that every lane shares (`SharedFrame::relative`): the same numbers `intersect`
+    /// computes in each lane, so the same verdicts, without the per-lane subtractions.
+    #[inline(always)]
+    pub fn intersect_relative<const ANY: bool>(&mut self, rel: &[[f32; 3]; 3], prim: u32) -> u32 {
+        // Broadcast by hand: `array::map` here was left as an out-of-line call.
+        let lanes = |v: [f32; 3]| -> Permuted<L> { [[v[0]; L], [v[1]; L], [v[2]; L]] };
+        let (a, b, c) = (lanes(rel[0]), lanes(rel[1]), lanes(rel[2]));
+        self.intersect_permuted::<ANY>(&a, &b, &c, prim)
+    }
+
     /// As `intersect` for a triangle moving linearly from `open` to `close` over the shutter
     /// interval (motion blur): each lane meets the triangle where it is at that lane's time,
     /// interpolated exactly as the reference tracer does (`Triangle::lerp`), so hits agree bit
@@ -516,9 +527,12 @@ mod tests {
     fn max_tmax_is_the_largest_lane_wherever_it_is() {
         fn check<const L: usize>() {
             for at in 0..L {
-                let mut simd = SimdRay::<L>::default();
-                simd.tmax = std::array::from_fn(|l| l as f32 - 100.0);
-                simd.tmax[at] = 7.5;
+                let mut tmax: [f32; L] = std::array::from_fn(|l| l as f32 - 100.0);
+                tmax[at] = 7.5;
+                let simd = SimdRay::<L> {
+                    tmax,
+                    ..Default::default()
+                };
                 assert_eq!(simd.max_tmax(), 7.5, "L = {L}, largest in lane {at}");
             }
             assert_eq!(SimdRay::<L>::default().max_tmax(), f32::NEG_INFINITY);
