@@ -237,10 +237,7 @@ impl<const L: usize> Packet<L> {
             }
         }
         if !ANY && found > 0 && (self.interval.is_some() || self.frustum.is_some()) {
-            self.max_t = self
-                .groups
-                .iter()
-                .fold(f32::NEG_INFINITY, |m, g| m.max(g.max_tmax()));
+            self.max_t = SimdRay::max_tmax_of(&self.groups);
         }
         if let Some(f) = self.frustum.as_mut().filter(|_| !ANY) {
             // Also after a leaf without hits: the first leaf moves the far plane in from ∞.
