@@ -24,7 +24,7 @@ use glam::Vec3;
 use super::slab::SlabRays;
 use super::watertight::{
     accept, any_may_hit, common_axes, edge_functions, in_lane_frames, needs_f64, redo_edges_in_f64,
-    sheared, Permuted,
+    Permuted,
 };
 use super::LaneMask;
 use crate::geometry::{Hit, Ray, Rays, Triangle, WatertightRay};
@@ -357,14 +357,13 @@ impl<const L: usize> SimdRay<L> {
         c: &Permuted<L>,
         prim: u32,
     ) -> u32 {
-        let s = sheared(&self.shear, a, b, c);
-        let mut e = edge_functions(&s);
+        let (mut e, scale) = edge_functions(&self.shear, a, b, c);
         if !any_may_hit(&e) {
             return 0;
         }
-        let redo = needs_f64(&e, &s);
+        let redo = needs_f64(&e, &scale);
         if redo.any() {
-            redo_edges_in_f64(&s, &mut e, redo);
+            redo_edges_in_f64(&self.shear, a, b, c, &mut e, redo);
         }
         let (hit, t_scaled, abs_det) = accept(
             &e,

@@ -61,44 +61,29 @@ pub fn in_lane_frames<const L: usize>(
     }
 }
 
-/// A triangle sheared into each lane's ray space: `[a, b, c][x, y][lane]`, where vertex `a`
-/// (`Permuted`) becomes `ax = a.x − sx·a.z`, `ay = a.y − sy·a.z`.
-pub type Sheared<const L: usize> = [[[f32; L]; 2]; 3];
-
-/// The triangle `a, b, c` sheared into each lane's ray space (`shear` = `[sx, sy, sz][lane]`).
+/// The edge functions `[U, V, W][lane]` of the triangle `a, b, c` sheared into each lane's ray
+/// space (`shear` = `[sx, sy, sz][lane]`), and the magnitude of the products they are
+/// differences of (`edge_product_scale`).
 #[inline(always)]
-pub fn sheared<const L: usize>(
+pub fn edge_functions<const L: usize>(
     shear: &[[f32; L]; 3],
     a: &Permuted<L>,
     b: &Permuted<L>,
     c: &Permuted<L>,
-) -> Sheared<L> {
+) -> ([[f32; L]; 3], [f32; L]) {
     let [sx, sy, _] = shear;
-    // One lane loop over all three vertices, written out: a loop over the vertices around it
-    // stayed scalar and went through memcpy.
-    let mut s = [[[0.0f32; L]; 2]; 3];
-    for l in 0..L {
-        s[0][0][l] = a[0][l] - sx[l] * a[2][l];
-        s[0][1][l] = a[1][l] - sy[l] * a[2][l];
-        s[1][0][l] = b[0][l] - sx[l] * b[2][l];
-        s[1][1][l] = b[1][l] - sy[l] * b[2][l];
-        s[2][0][l] = c[0][l] - sx[l] * c[2][l];
-        s[2][1][l] = c[1][l] - sy[l] * c[2][l];
-    }
-    s
-}
-
-/// The edge functions `[U, V, W][lane]` of the sheared triangle `s`.
-#[inline(always)]
-pub fn edge_functions<const L: usize>(s: &Sheared<L>) -> [[f32; L]; 3] {
-    let [[ax, ay], [bx, by], [cx, cy]] = s;
     let mut e = [[0.0f32; L]; 3];
+    let mut scale = [0.0f32; L];
     for l in 0..L {
-        e[0][l] = cx[l] * by[l] - cy[l] * bx[l];
-        e[1][l] = ax[l] * cy[l] - ay[l] * cx[l];
-        e[2][l] = bx[l] * ay[l] - by[l] * ax[l];
+        let (ax, ay) = (a[0][l] - sx[l] * a[2][l], a[1][l] - sy[l] * a[2][l]);
+        let (bx, by) = (b[0][l] - sx[l] * b[2][l], b[1][l] - sy[l] * b[2][l]);
+        let (cx, cy) = (c[0][l] - sx[l] * c[2][l], c[1][l] - sy[l] * c[2][l]);
+        e[0][l] = cx * by - cy * bx;
+        e[1][l] = ax * cy - ay * cx;
+        e[2][l] = bx * ay - by * ax;
+        scale[l] = edge_product_scale([ax, ay], [bx, by], [cx, cy]);
     }
-    e
+    (e, scale)
 }
 
 /// Whether any lane may hit: not every lane passes strictly outside an edge. A lane whose edge
@@ -119,15 +104,10 @@ pub fn any_may_hit<const L: usize>(e: &[[f32; L]; 3]) -> bool {
     any != 0
 }
 
-/// The lanes whose edge functions `e` of the sheared triangle `s` the scalar test redoes in f64
-/// (`geometry::needs_f64`, with the scale `edge_product_scale`).
+/// The lanes whose edge functions the scalar test redoes in f64 (`geometry::needs_f64`).
 #[inline(always)]
-pub fn needs_f64<const L: usize>(e: &[[f32; L]; 3], s: &Sheared<L>) -> LaneMask<L> {
-    let [[ax, ay], [bx, by], [cx, cy]] = s;
-    LaneMask::from_fn(|l| {
-        let scale = edge_product_scale([ax[l], ay[l]], [bx[l], by[l]], [cx[l], cy[l]]);
-        triangle::needs_f64(e[0][l], e[1][l], e[2][l], scale)
-    })
+pub fn needs_f64<const L: usize>(e: &[[f32; L]; 3], scale: &[f32; L]) -> LaneMask<L> {
+    LaneMask::from_fn(|l| triangle::needs_f64(e[0][l], e[1][l], e[2][l], scale[l]))
 }
 
 /// Which lanes hit, from their edge functions: inside (all of one sign), a non-zero determinant
@@ -159,15 +139,25 @@ pub fn accept<const L: usize>(
 }
 
 /// The edge functions of the lanes in `redo`, recomputed in f64 from the same sheared
-/// coordinates `s`, exactly as `WatertightRay::intersect` does.
+/// coordinates, exactly as `WatertightRay::intersect` does.
 #[cold]
-pub fn redo_edges_in_f64<const L: usize>(s: &Sheared<L>, e: &mut [[f32; L]; 3], redo: LaneMask<L>) {
+pub fn redo_edges_in_f64<const L: usize>(
+    shear: &[[f32; L]; 3],
+    a: &Permuted<L>,
+    b: &Permuted<L>,
+    c: &Permuted<L>,
+    e: &mut [[f32; L]; 3],
+    redo: LaneMask<L>,
+) {
+    let [sx, sy, _] = shear;
     let f = |x: f32| x as f64;
     for l in redo.iter() {
-        let [[ax, ay], [bx, by], [cx, cy]] = s.map(|p| p.map(|x| f(x[l])));
-        e[0][l] = (cx * by - cy * bx) as f32;
-        e[1][l] = (ax * cy - ay * cx) as f32;
-        e[2][l] = (bx * ay - by * ax) as f32;
+        let (ax, ay) = (a[0][l] - sx[l] * a[2][l], a[1][l] - sy[l] * a[2][l]);
+        let (bx, by) = (b[0][l] - sx[l] * b[2][l], b[1][l] - sy[l] * b[2][l]);
+        let (cx, cy) = (c[0][l] - sx[l] * c[2][l], c[1][l] - sy[l] * c[2][l]);
+        e[0][l] = (f(cx) * f(by) - f(cy) * f(bx)) as f32;
+        e[1][l] = (f(ax) * f(cy) - f(ay) * f(cx)) as f32;
+        e[2][l] = (f(bx) * f(ay) - f(by) * f(ax)) as f32;
     }
 }
 
@@ -209,8 +199,7 @@ mod tests {
             [f32::INFINITY, -1.0, 1.0],
         ]);
         assert!(!any_may_hit(&e));
-        let s: Sheared<4> = [[[1.0; 4]; 2]; 3];
-        assert_eq!(needs_f64(&e, &s), LaneMask::NONE);
+        assert_eq!(needs_f64(&e, &[1.0; 4]), LaneMask::NONE);
         let one = [1.0f32; 4];
         let (hit, _, _) = accept(&e, &one, [&one, &one, &one], &[0.0; 4], &[f32::MAX; 4]);
         assert_eq!(hit, [false; 4]);

@@ -19,7 +19,7 @@ use glam::Vec3;
 use crate::geometry::triangle::axis_component;
 use crate::geometry::{Triangle, WatertightRay};
 use crate::lanes::stream::{compact, SoaRays};
-use crate::lanes::watertight::{accept, edge_functions, needs_f64, sheared, Permuted};
+use crate::lanes::watertight::{accept, edge_functions, needs_f64, Permuted};
 use crate::lanes::LaneMask;
 
 /// A packet's active rays, one lane slot each; the vectors' length is a multiple of `L`, and the
@@ -161,11 +161,10 @@ impl<const L: usize> LaneRays<L> {
             out
         };
         let (a, b, c) = (permute(&v[0]), permute(&v[1]), permute(&v[2]));
-        let s = sheared(&shear, &a, &b, &c);
-        let e = edge_functions(&s);
+        let (e, scale) = edge_functions(&shear, &a, &b, &c);
         let (tmin, tmax) = (lanes(&self.tmin), lanes(&self.tmax));
         let (hit, _, _) = accept(&e, &shear[2], [&a[2], &b[2], &c[2]], &tmin, &tmax);
-        LaneMask::from_bools(&hit) | needs_f64(&e, &s)
+        LaneMask::from_bools(&hit) | needs_f64(&e, &scale)
     }
 
     fn resize(&mut self, n: usize) {
