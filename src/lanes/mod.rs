@@ -4,6 +4,8 @@
 //! the machine's width (`target-cpu=native`).
 //!
 //! - `LaneMask<L>`: which lanes a test passed (one bit per lane).
+//! - `SharedFrame`: the origin and watertight axes all lanes of some SIMD rays share, so a
+//!   triangle is made relative to it once for all of them.
 //! - `SimdRay<L>`: `L` rays traced in lock step with their closest hits (the packet tracer's
 //!   SIMD ray, Overbeck et al. 2008 §2.1), running `slab` and `watertight` per lane.
 //! - `slab`: the conservative ray–box test (Ize 2013) per lane, bit for bit `RayBoxTest::hit`.
@@ -20,6 +22,7 @@
 
 mod mask;
 mod min_max;
+mod shared_frame;
 mod simd_ray;
 pub mod slab;
 pub mod stream;
@@ -27,6 +30,7 @@ pub mod watertight;
 
 pub use mask::LaneMask;
 pub use min_max::{highest, lowest, min_max};
+pub use shared_frame::SharedFrame;
 pub use simd_ray::SimdRay;
 
 /// The lane widths a tracer may be built with (`lanes` parameter).

@@ -23,7 +23,8 @@ use glam::Vec3;
 
 use super::slab::SlabRays;
 use super::watertight::{
-    accept, common_axes, edge_functions, in_lane_frames, needs_f64, redo_edges_in_f64, Permuted,
+    accept, any_may_hit, common_axes, edge_functions, in_lane_frames, needs_f64, redo_edges_in_f64,
+    Permuted,
 };
 use super::{highest, LaneMask};
 use crate::geometry::{Hit, Ray, Rays, Triangle, WatertightRay};
@@ -345,6 +346,17 @@ impl<const L: usize> SimdRay<L> {
         self.intersect_permuted::<ANY>(&a, &b, &c, prim)
     }
 
+    /// As `intersect`, with the triangle's vertices already relative to the origin along the
+    /// axes that every lane shares (`SharedFrame::relative`): the same numbers `intersect`
+    /// computes in each lane, so the same verdicts, without the per-lane subtractions.
+    #[inline(always)]
+    pub fn intersect_relative<const ANY: bool>(&mut self, rel: &[[f32; 3]; 3], prim: u32) -> u32 {
+        // Broadcast by hand: `array::map` here was left as an out-of-line call.
+        let lanes = |v: [f32; 3]| -> Permuted<L> { [[v[0]; L], [v[1]; L], [v[2]; L]] };
+        let (a, b, c) = (lanes(rel[0]), lanes(rel[1]), lanes(rel[2]));
+        self.intersect_permuted::<ANY>(&a, &b, &c, prim)
+    }
+
     /// As `intersect` for a triangle moving linearly from `open` to `close` over the shutter
     /// interval (motion blur): each lane meets the triangle where it is at that lane's time,
     /// interpolated exactly as the reference tracer does (`Triangle::lerp`), so hits agree bit
@@ -372,8 +384,10 @@ impl<const L: usize> SimdRay<L> {
         self.intersect_permuted::<ANY>(&a, &b, &c, prim)
     }
 
-    /// The watertight test on a triangle already in every lane's frame (`watertight_lanes`),
-    /// zero or ill-conditioned edge functions redone in f64 as the scalar test does.
+    /// The watertight test on a triangle already in every lane's frame (`lanes::watertight`),
+    /// zero or ill-conditioned edge functions redone in f64 as the scalar test does. A SIMD ray
+    /// whose lanes all pass strictly outside an edge stops after the edge functions
+    /// (`any_may_hit`).
     #[inline(always)]
     fn intersect_permuted<const ANY: bool>(
         &mut self,
@@ -383,6 +397,9 @@ impl<const L: usize> SimdRay<L> {
         prim: u32,
     ) -> u32 {
         let (mut e, scale) = edge_functions(&self.shear, a, b, c);
+        if !any_may_hit(&e) {
+            return 0;
+        }
         let redo = needs_f64(&e, &scale);
         if redo.any() {
             redo_edges_in_f64(&self.shear, a, b, c, &mut e, redo);
@@ -551,6 +568,28 @@ mod tests {
         lanes_agree_with_the_scalar_tests::<4>();
         lanes_agree_with_the_scalar_tests::<8>();
         lanes_agree_with_the_scalar_tests::<16>();
+    }
+
+    #[test]
+    fn max_tmax_is_the_largest_lane_wherever_it_is() {
+        fn check<const L: usize>() {
+            for at in 0..L {
+                let mut tmax: [f32; L] = std::array::from_fn(|l| l as f32 - 100.0);
+                tmax[at] = 7.5;
+                let simd = SimdRay::<L> {
+                    tmax,
+                    ..Default::default()
+                };
+                assert_eq!(simd.max_tmax(), 7.5, "L = {L}, largest in lane {at}");
+            }
+            assert_eq!(SimdRay::<L>::default().max_tmax(), f32::NEG_INFINITY);
+        }
+        check::<1>();
+        check::<3>();
+        check::<4>();
+        check::<8>();
+        check::<12>();
+        check::<16>();
     }
 
     #[test]

@@ -86,6 +86,24 @@ pub fn edge_functions<const L: usize>(
     (e, scale)
 }
 
+/// Whether any lane may hit: not every lane passes strictly outside an edge. A lane whose edge
+/// functions have both signs and none is zero is a miss in the scalar test before any f64 redo
+/// (it is not inside, so `geometry::needs_f64` is false there, and `accept` rejects it), so a
+/// SIMD ray whose lanes all do is done here — most SIMD rays at most triangles of a leaf —
+/// without the f64 check, the acceptance test and the hit update.
+// `u != 0.0` rather than `!(u == 0.0)`: NaN counts as non-zero, as in the scalar test.
+#[inline(always)]
+pub fn any_may_hit<const L: usize>(e: &[[f32; L]; 3]) -> bool {
+    let mut any = 0u32;
+    for l in 0..L {
+        let (u, v, w) = (e[0][l], e[1][l], e[2][l]);
+        let outside = ((u < 0.0) | (v < 0.0) | (w < 0.0)) & ((u > 0.0) | (v > 0.0) | (w > 0.0));
+        let nonzero = (u != 0.0) & (v != 0.0) & (w != 0.0);
+        any |= !(outside & nonzero) as u32;
+    }
+    any != 0
+}
+
 /// The lanes whose edge functions the scalar test redoes in f64 (`geometry::needs_f64`).
 #[inline(always)]
 pub fn needs_f64<const L: usize>(e: &[[f32; L]; 3], scale: &[f32; L]) -> LaneMask<L> {
@@ -140,5 +158,50 @@ pub fn redo_edges_in_f64<const L: usize>(
         e[0][l] = (f(cx) * f(by) - f(cy) * f(bx)) as f32;
         e[1][l] = (f(ax) * f(cy) - f(ay) * f(cx)) as f32;
         e[2][l] = (f(bx) * f(ay) - f(by) * f(ax)) as f32;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Edge functions `[U, V, W]` of four lanes, one lane per case.
+    fn lanes(cases: [[f32; 3]; 4]) -> [[f32; 4]; 3] {
+        [0, 1, 2].map(|k| cases.map(|c| c[k]))
+    }
+
+    #[test]
+    fn only_lanes_strictly_outside_an_edge_are_certain_misses() {
+        let outside = [1.0, -2.0, 3.0];
+        // Each case alone in lane 0, the other lanes strictly outside.
+        let with = |case: [f32; 3]| any_may_hit(&lanes([case, outside, outside, outside]));
+        assert!(!with(outside), "every lane strictly outside");
+        assert!(with([1.0, 2.0, 3.0]), "inside, front face");
+        assert!(with([-1.0, -2.0, -3.0]), "inside, back face");
+        // A zero edge function with both signs elsewhere: the f64 redo decides.
+        assert!(with([0.0, -2.0, 3.0]));
+        assert!(with([-0.0, -2.0, 3.0]));
+        // NaN is non-zero and neither sign, as in the scalar test: with both signs in the other
+        // two, a certain miss; with one sign only, not.
+        assert!(!with([f32::NAN, -2.0, 3.0]));
+        assert!(with([f32::NAN, 2.0, 3.0]));
+    }
+
+    /// `any_may_hit` is false only where the scalar test misses: every lane of a certain-miss
+    /// group is a miss of `WatertightRay::intersect` without f64 (`needs_f64` false) and
+    /// rejected by `accept`.
+    #[test]
+    fn a_certain_miss_needs_no_f64_and_is_rejected() {
+        let e = lanes([
+            [1.0, -2.0, 3.0],
+            [-1e-30, 5.0, 1.0],
+            [f32::NAN, -1.0, 1.0],
+            [f32::INFINITY, -1.0, 1.0],
+        ]);
+        assert!(!any_may_hit(&e));
+        assert_eq!(needs_f64(&e, &[1.0; 4]), LaneMask::NONE);
+        let one = [1.0f32; 4];
+        let (hit, _, _) = accept(&e, &one, [&one, &one, &one], &[0.0; 4], &[f32::MAX; 4]);
+        assert_eq!(hit, [false; 4]);
     }
 }

@@ -11,7 +11,7 @@ use crate::stats::{Event, Stats};
 use super::frustum::Frustum;
 use super::interval::IntervalPacket;
 use super::order::ChildOrder;
-use crate::lanes::{highest, SimdRay};
+use crate::lanes::{highest, SharedFrame, SimdRay};
 
 /// What every traversal reads: the tree and its child order.
 pub struct Tree<'a> {
@@ -223,6 +223,12 @@ impl<const L: usize> Packet<L> {
             stats.event(Event::LeafActiveRays, lanes as u64);
         }
         let bvh = tree.bvh;
+        // Camera rays share one origin and frame across the packet: each triangle is then made
+        // relative to it once, not once per SIMD ray (`SharedFrame`).
+        let shared = SharedFrame::of(ids.iter().map(|&g| &self.groups[g as usize]));
+        // Lanes that found a closer hit here: without any, no `tmax` changed and the packet's
+        // largest one (`max_t`) still holds, so its recount over every SIMD ray is skipped.
+        let mut found = 0;
         for i in triangles {
             let tri = &bvh.triangles[i];
             // A moving triangle is not where `tri` says at the rays' times: no triangle culling
@@ -237,15 +243,18 @@ impl<const L: usize> Packet<L> {
                 }
             }
             let prim = bvh.prim_ids[i];
+            let relative = shared.map(|frame| frame.relative(tri));
             for &g in ids {
                 let group = &mut self.groups[g as usize];
                 if S::ENABLED {
                     (0..group.used).for_each(|_| stats.triangle_test(depth));
                 }
-                let hits = match moving_end {
-                    None => group.intersect::<ANY>(tri, prim),
-                    Some(close) => group.intersect_moving::<ANY>(tri, close, prim),
+                let hits = match (moving_end, &relative) {
+                    (None, Some(rel)) => group.intersect_relative::<ANY>(rel, prim),
+                    (None, None) => group.intersect::<ANY>(tri, prim),
+                    (Some(close), _) => group.intersect_moving::<ANY>(tri, close, prim),
                 };
+                found += hits;
                 if ANY {
                     self.live -= hits;
                     if self.live == 0 {
@@ -254,11 +263,12 @@ impl<const L: usize> Packet<L> {
                 }
             }
         }
-        if !ANY && (self.interval.is_some() || self.frustum.is_some()) {
+        if !ANY && found > 0 && (self.interval.is_some() || self.frustum.is_some()) {
             self.max_t = self.farthest_hit();
-            if let Some(f) = &mut self.frustum {
-                f.clip_far(self.max_t);
-            }
+        }
+        if let Some(f) = self.frustum.as_mut().filter(|_| !ANY) {
+            // Also after a leaf without hits: the first leaf moves the far plane in from ∞.
+            f.clip_far(self.max_t);
         }
         false
     }
