@@ -261,6 +261,15 @@ impl Summary {
             "**{}** run {} ({}{wall}), commit {}, {}\n",
             self.experiment, self.run_id, self.date, self.commit, self.cpu
         );
+        if self.rows.is_empty() {
+            // Every row is a render's (path bounces, Whitted generations): no plain batches.
+            let _ = writeln!(
+                s,
+                "The run traced no plain ray batches, only the rays of renders: its results are \
+                 in its tables (tables.md) and runs.csv."
+            );
+            return s;
+        }
         let _ = writeln!(
             s,
             "At {} thread{}{}, over {} frame{}: Mrays/s = rays / fastest pass, both summed over frames. \
@@ -685,6 +694,15 @@ mod tests {
         assert!(e
             .to_string()
             .contains("no ray batch measured at 3 threads (batches measured at: 1, 2)"));
+    }
+
+    #[test]
+    fn a_run_of_renders_only_says_so_instead_of_an_empty_table() {
+        let summary = Summary::read(&results("renders-only", &[])).unwrap();
+        assert!(summary.rows.is_empty());
+        let text = summary.markdown();
+        assert!(text.contains("The run traced no plain ray batches"));
+        assert!(!text.contains("| scene |") && !text.contains("At 0 threads"));
     }
 
     #[test]
