@@ -1,7 +1,7 @@
 //! Fixtures shared by the unit tests and the integration tests in `tests/`: seeded triangle
-//! soups. Not part of the testbed's interface (hidden from the docs).
+//! soups, and the exact-tie check hit comparisons allow. Not part of the testbed's interface (hidden from the docs).
 
-use crate::geometry::Triangle;
+use crate::geometry::{Hit, Ray, Triangle, WatertightRay};
 use crate::random::SplitMix64;
 
 /// A seeded triangle soup: triangles with centres uniform in the cube `[lo, hi]³`, each corner
@@ -46,6 +46,19 @@ impl Soup {
             })
             .collect()
     }
+}
+
+/// Whether `got` is `want`, or an exact tie: the same distance, and the ray's watertight test
+/// really hits `got`'s triangle at that distance (two triangles meeting at an edge).
+pub fn same_or_tie(triangles: &[Triangle], ray: &Ray, got: &Hit, want: &Hit) -> bool {
+    got == want
+        || got.is_hit()
+            && want.is_hit()
+            && got.t == want.t
+            && WatertightRay::new(ray.origin, ray.dir)
+                .intersect(&triangles[got.prim as usize], ray.tmin, ray.tmax)
+                .map(|h| h.0)
+                == Some(got.t)
 }
 
 #[cfg(test)]

@@ -7,11 +7,11 @@ use std::sync::Arc;
 use glam::Vec3;
 use raylab::accel::child_pairs::child_pairs;
 use raylab::accel::{AccelKind, Bvh, BvhConfig, BvhNode};
-use raylab::geometry::{Aabb, Hit, Ray, RayBatch, RayKind, Triangle, WatertightRay};
+use raylab::geometry::{Aabb, Hit, Ray, RayBatch, RayKind, Triangle};
 use raylab::render::rays::{diffuse_rays, primary_rays, shadow_rays};
 use raylab::scene::library::load_scene;
-use raylab::scene::Mesh;
 use raylab::stats::{Counters, Event};
+use raylab::test_util::same_or_tie;
 use raylab::tracers::batch::{trace_hits, trace_occlusion};
 use raylab::tracers::packet::{PacketConfig, PacketTracer, Traversal, TreeWidth};
 use raylab::tracers::reference::ReferenceTracer;
@@ -254,21 +254,6 @@ fn occlusion_stops_when_every_ray_is_occluded() {
     }
 }
 
-/// Whether `got` is `want`, or an exact tie: the same distance, and the ray's watertight test
-/// really hits `got`'s triangle at that distance (two triangles meeting at an edge).
-fn same_or_tie(mesh: &Mesh, ray: &Ray, got: &Hit, want: &Hit) -> bool {
-    if got == want {
-        return true;
-    }
-    got.is_hit()
-        && want.is_hit()
-        && got.t == want.t
-        && WatertightRay::new(ray.origin, ray.dir)
-            .intersect(&mesh.triangles[got.prim as usize], ray.tmin, ray.tmax)
-            .map(|h| h.0)
-            == Some(got.t)
-}
-
 fn agrees_with_reference(name: &str, size: Option<u32>) {
     let scene = load_scene(name, size).unwrap();
     let frame = scene.frame(0, 1);
@@ -312,7 +297,7 @@ fn agrees_with_reference(name: &str, size: Option<u32>) {
                             if got[i] != expected[i] {
                                 let ray = batch.ray(i);
                                 assert!(
-                                    same_or_tie(mesh, &ray, &got[i], &expected[i]),
+                                    same_or_tie(&mesh.triangles, &ray, &got[i], &expected[i]),
                                     "{name} {:?} {config:?} width {width} ray {i}: {:?} vs reference {:?}",
                                     batch.kind(),
                                     got[i],

@@ -7,11 +7,12 @@ use std::sync::Arc;
 
 use glam::Vec3;
 use raylab::accel::{Accel, AccelKind, Bvh, BvhConfig, WideBvh};
-use raylab::geometry::{Aabb, Hit, Ray, RayBatch, RayKind, Triangle, WatertightRay};
+use raylab::geometry::{Aabb, Hit, Ray, RayBatch, RayKind, Triangle};
 use raylab::render::rays::{diffuse_rays, primary_rays, shadow_rays};
 use raylab::scene::library::load_scene;
 use raylab::scene::Mesh;
 use raylab::stats::Counters;
+use raylab::test_util::same_or_tie;
 use raylab::tracers::batch::{trace_hits, trace_occlusion};
 use raylab::tracers::reference::ReferenceTracer;
 use raylab::tracers::wide_single::WideSingleTracer;
@@ -112,21 +113,6 @@ fn batch_of(ray: Ray) -> RayBatch {
     batch
 }
 
-/// Whether `got` is `want`, or an exact tie: the same distance, and the ray's watertight test
-/// really hits `got`'s triangle at that distance (two triangles meeting at an edge).
-fn same_or_tie(mesh: &Mesh, ray: &Ray, got: &Hit, want: &Hit) -> bool {
-    if got == want {
-        return true;
-    }
-    got.is_hit()
-        && want.is_hit()
-        && got.t == want.t
-        && WatertightRay::new(ray.origin, ray.dir)
-            .intersect(&mesh.triangles[got.prim as usize], ray.tmin, ray.tmax)
-            .map(|h| h.0)
-            == Some(got.t)
-}
-
 fn agrees_with_reference(name: &str, size: Option<u32>) {
     let scene = load_scene(name, size).unwrap();
     let frame = scene.frame(0, 1);
@@ -153,7 +139,7 @@ fn agrees_with_reference(name: &str, size: Option<u32>) {
             for i in 0..batch.len() {
                 if got[i] != want[i] {
                     assert!(
-                        same_or_tie(mesh, &batch.ray(i), &got[i], &want[i]),
+                        same_or_tie(&mesh.triangles, &batch.ray(i), &got[i], &want[i]),
                         "{name} {:?} width {width} ray {i}: {:?} vs reference {:?}",
                         batch.kind(),
                         got[i],

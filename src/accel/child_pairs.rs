@@ -10,6 +10,7 @@ use glam::Vec3;
 
 use super::bvh::BvhNode;
 use crate::geometry::aabb::FAR_SCALE;
+use crate::lanes::BroadcastRay;
 
 #[derive(Clone, Copy, Debug, Default)]
 #[repr(C, align(64))]
@@ -49,32 +50,17 @@ pub fn child_pairs(nodes: &[BvhNode]) -> Vec<ChildPair> {
 /// (negated) exit distance.
 #[derive(Clone, Copy)]
 pub struct PairRayTest {
-    origin: [__m128; 3],
-    inv_dir: [__m128; 3],
-    negative: [bool; 3],
+    ray: BroadcastRay,
     far_sign: __m128,
 }
 
 impl PairRayTest {
     #[inline(always)]
     pub fn new(origin: Vec3, dir: Vec3) -> Self {
-        let inv = Vec3::ONE / dir;
-        // SAFETY: SSE is part of the x86_64 baseline.
-        unsafe {
-            PairRayTest {
-                origin: [
-                    _mm_set1_ps(origin.x),
-                    _mm_set1_ps(origin.y),
-                    _mm_set1_ps(origin.z),
-                ],
-                inv_dir: [_mm_set1_ps(inv.x), _mm_set1_ps(inv.y), _mm_set1_ps(inv.z)],
-                negative: [
-                    dir.x.is_sign_negative(),
-                    dir.y.is_sign_negative(),
-                    dir.z.is_sign_negative(),
-                ],
-                far_sign: _mm_setr_ps(1.0, 1.0, -FAR_SCALE, -FAR_SCALE),
-            }
+        PairRayTest {
+            ray: BroadcastRay::new(origin, dir),
+            // SAFETY: SSE is part of the x86_64 baseline.
+            far_sign: unsafe { _mm_setr_ps(1.0, 1.0, -FAR_SCALE, -FAR_SCALE) },
         }
     }
 
@@ -91,10 +77,10 @@ impl PairRayTest {
             let mut acc = _mm_setr_ps(tmin, tmin, -tmax, -tmax);
             for (axis, planes) in [&pair.x, &pair.y, &pair.z].into_iter().enumerate() {
                 let t = _mm_mul_ps(
-                    _mm_sub_ps(_mm_load_ps(planes.as_ptr()), self.origin[axis]),
-                    self.inv_dir[axis],
+                    _mm_sub_ps(_mm_load_ps(planes.as_ptr()), self.ray.origin[axis]),
+                    self.ray.inv_dir[axis],
                 );
-                let t = if self.negative[axis] {
+                let t = if self.ray.negative[axis] {
                     _mm_shuffle_ps::<0b01_00_11_10>(t, t)
                 } else {
                     t

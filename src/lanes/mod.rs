@@ -4,6 +4,7 @@
 //! the machine's width (`target-cpu=native`).
 //!
 //! - `LaneMask<L>`: which lanes a test passed (one bit per lane).
+//! - `BroadcastRay`: one ray in every SSE lane, for tests with boxes in the lanes.
 //! - `SharedFrame`: the origin and watertight axes all lanes of some SIMD rays share, so a
 //!   triangle is made relative to it once for all of them.
 //! - `SimdRay<L>`: `L` rays traced in lock step with their closest hits (the packet tracer's
@@ -20,6 +21,7 @@
 //! A tracer picks `L` once (its `lanes` parameter) and every lane type and test of its kernel
 //! takes that `L`.
 
+mod broadcast_ray;
 mod mask;
 mod min_max;
 mod shared_frame;
@@ -28,6 +30,7 @@ pub mod slab;
 pub mod stream;
 pub mod watertight;
 
+pub use broadcast_ray::BroadcastRay;
 pub use mask::LaneMask;
 pub use min_max::{highest, lowest, min_max};
 pub use shared_frame::SharedFrame;

@@ -176,24 +176,8 @@ impl<const L: usize> SimdRay<L> {
             let (ax, ay, az) = (x.abs(), y.abs(), z.abs());
             let x_major = (ax >= ay) & (ax >= az);
             let y_major = !x_major & (ay >= az);
-            let select = |on_x: f32, on_y: f32, on_z: f32| {
-                if x_major {
-                    on_x
-                } else if y_major {
-                    on_y
-                } else {
-                    on_z
-                }
-            };
-            let axis = |on_x: u32, on_y: u32, on_z: u32| {
-                if x_major {
-                    on_x
-                } else if y_major {
-                    on_y
-                } else {
-                    on_z
-                }
-            };
+            let select = |on_x, on_y, on_z| by_major(x_major, y_major, [on_x, on_y, on_z]);
+            let axis = |on_x, on_y, on_z| by_major(x_major, y_major, [on_x, on_y, on_z]);
             let d_kz = select(x, y, z);
             let swap = d_kz < 0.0;
             // The next axis after kz in cyclic order and the one after it, and their components.
@@ -474,6 +458,18 @@ impl<const L: usize> SimdRay<L> {
                 v: self.v[l],
             }
         }
+    }
+}
+
+/// The value for the major axis (x, else y, else z) of a direction: a select per lane.
+#[inline(always)]
+fn by_major<T>(x_major: bool, y_major: bool, [on_x, on_y, on_z]: [T; 3]) -> T {
+    if x_major {
+        on_x
+    } else if y_major {
+        on_y
+    } else {
+        on_z
     }
 }
 

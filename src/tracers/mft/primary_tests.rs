@@ -9,12 +9,12 @@ use glam::Vec3;
 use super::primary::{generate, FRUSTUM_RAYS};
 use super::*;
 use crate::accel::BvhConfig;
-use crate::geometry::{Ray, RayBatch, RayKind, Triangle, WatertightRay};
+use crate::geometry::{Ray, RayBatch, RayKind, Triangle};
 use crate::lanes::SimdRay;
 use crate::scene::library::load_scene;
 use crate::scene::Camera;
 use crate::stats::{Counters, Event, NoStats};
-use crate::test_util::Soup;
+use crate::test_util::{same_or_tie, Soup};
 use crate::tracers::reference::ReferenceTracer;
 
 /// Width and height with partial 4×4 blocks at the right and bottom.
@@ -65,19 +65,6 @@ fn hits_of<K: Kernel>(kernel: &K, batch: &RayBatch, counters: &mut Counters) -> 
         );
     }
     hits
-}
-
-/// `got` is `want`, or an exact tie: the same distance, and the ray's watertight test really hits
-/// `got`'s triangle there (two triangles meeting at an edge, met in another order).
-fn same_or_tie(triangles: &[Triangle], ray: &Ray, got: &Hit, want: &Hit) -> bool {
-    got == want
-        || got.is_hit()
-            && want.is_hit()
-            && got.t == want.t
-            && WatertightRay::new(ray.origin, ray.dir)
-                .intersect(&triangles[got.prim as usize], ray.tmin, ray.tmax)
-                .map(|h| h.0)
-                == Some(got.t)
 }
 
 /// P-Frusta over `batch` (a camera batch) at several block sizes against the reference tracer;

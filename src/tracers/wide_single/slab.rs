@@ -17,35 +17,16 @@ use glam::Vec3;
 
 use crate::accel::WideNode;
 use crate::geometry::aabb::FAR_SCALE;
+use crate::lanes::BroadcastRay;
 
 /// A ray prepared for wide-node tests: origin and reciprocal direction broadcast per axis.
 #[derive(Clone, Copy)]
-pub struct WideRayTest {
-    origin: [__m128; 3],
-    inv_dir: [__m128; 3],
-    negative: [bool; 3],
-}
+pub struct WideRayTest(BroadcastRay);
 
 impl WideRayTest {
     #[inline(always)]
     pub fn new(origin: Vec3, dir: Vec3) -> Self {
-        let inv = Vec3::ONE / dir;
-        // SAFETY: SSE is part of the x86_64 baseline.
-        unsafe {
-            WideRayTest {
-                origin: [
-                    _mm_set1_ps(origin.x),
-                    _mm_set1_ps(origin.y),
-                    _mm_set1_ps(origin.z),
-                ],
-                inv_dir: [_mm_set1_ps(inv.x), _mm_set1_ps(inv.y), _mm_set1_ps(inv.z)],
-                negative: [
-                    dir.x.is_sign_negative(),
-                    dir.y.is_sign_negative(),
-                    dir.z.is_sign_negative(),
-                ],
-            }
-        }
+        WideRayTest(BroadcastRay::new(origin, dir))
     }
 
     /// Each child's entry distance (clipped to `tmin`) and which children the ray meets within
@@ -68,12 +49,12 @@ impl WideRayTest {
                 let mut near_max = _mm_set1_ps(tmin);
                 let mut far_min = _mm_set1_ps(tmax);
                 for a in 0..3 {
-                    let (near, far) = if self.negative[a] {
+                    let (near, far) = if self.0.negative[a] {
                         (&node.hi[a], &node.lo[a])
                     } else {
                         (&node.lo[a], &node.hi[a])
                     };
-                    let (o, inv) = (self.origin[a], self.inv_dir[a]);
+                    let (o, inv) = (self.0.origin[a], self.0.inv_dir[a]);
                     let t_near =
                         _mm_mul_ps(_mm_sub_ps(_mm_loadu_ps(near[group..].as_ptr()), o), inv);
                     let t_far = _mm_mul_ps(_mm_sub_ps(_mm_loadu_ps(far[group..].as_ptr()), o), inv);
