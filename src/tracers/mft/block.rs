@@ -17,7 +17,7 @@ use crate::geometry::Ray;
 use crate::lanes::SimdRay;
 use crate::stats::{Event, Stats};
 use crate::tracers::mft::cull::keep_mask;
-use crate::tracers::mft::descend::{depth, start_at_root, visit_children};
+use crate::tracers::mft::descend::{depth, next_leaf, start_at_root};
 use crate::tracers::mft::frusta::{bits, Frusta, Margins};
 use crate::tracers::mft::MftConfig;
 use crate::tracers::visibility::{shadow_ray, VisibilityQuery};
@@ -137,29 +137,8 @@ pub fn trace_block<S: Stats>(
     // Frusta whose rays exist: made at the first leaf that needs them, kept for the block.
     let mut generated = 0u64;
     start_at_root(bvh, live, frusta, margins, stack, stats);
-    'walk: while let Some((mut index, mask)) = stack.pop() {
-        let mut mask = mask & live;
-        if mask == 0 {
-            continue;
-        }
-        // Inner nodes: straight down to the nearer child entered, the other on the stack.
-        let mut node = &bvh.nodes[index as usize];
-        loop {
-            if S::ENABLED {
-                stats.node(depth(index));
-            }
-            if node.is_leaf() {
-                break;
-            }
-            match visit_children(bvh, node, mask, frusta, margins, towards, stack, stats) {
-                Some((child, child_mask)) => {
-                    (index, mask) = (child, child_mask);
-                    node = &bvh.nodes[index as usize];
-                }
-                None => continue 'walk,
-            }
-        }
-
+    while let Some((index, mask)) = next_leaf(bvh, live, frusta, margins, towards, stack, stats) {
+        let node = &bvh.nodes[index as usize];
         // A leaf: per triangle, cull for all frusta, then the remaining frusta's rays.
         if S::ENABLED {
             stats.event(Event::LeavesVisited, 1);

@@ -1,4 +1,4 @@
-//! The interior-node step both multi-frusta traversals share, shadow blocks (`block`) and
+//! The interior-node steps both multi-frusta traversals share, shadow blocks (`block`) and
 //! primary frusta (`primary`): Benthin & Wald 2009 §4, all frusta of the block tested against a
 //! child's box at once.
 
@@ -82,6 +82,43 @@ pub fn start_at_root<S: Stats>(
         Bvh::ROOT as u32,
         frusta.box_masks([&root.bounds], mask, margins)[0],
     ));
+}
+
+/// Walks on to the next leaf some frustum of `live` may reach: pops the stack and goes straight
+/// down from each popped node to the nearer child entered (`visit_children`, the farther one
+/// pushed), counting every node visited. Returns the leaf and the frusta that reach it; `None`
+/// when the walk is over.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+pub fn next_leaf<S: Stats>(
+    bvh: &Bvh,
+    live: u64,
+    frusta: &Frusta,
+    margins: &Margins,
+    towards: Vec3,
+    stack: &mut Vec<(u32, u64)>,
+    stats: &mut S,
+) -> Option<(u32, u64)> {
+    'walk: while let Some((mut index, mask)) = stack.pop() {
+        let mut mask = mask & live;
+        if mask == 0 {
+            continue;
+        }
+        loop {
+            if S::ENABLED {
+                stats.node(depth::<S>(bvh, index));
+            }
+            let node = &bvh.nodes[index as usize];
+            if node.is_leaf() {
+                return Some((index, mask));
+            }
+            match visit_children(bvh, node, mask, frusta, margins, towards, stack, stats) {
+                Some(child) => (index, mask) = child,
+                None => continue 'walk,
+            }
+        }
+    }
+    None
 }
 
 /// Node `i`'s depth for the per-depth counters (0 when nothing is counted).
