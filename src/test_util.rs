@@ -1,5 +1,7 @@
 //! Fixtures shared by the unit tests and the integration tests in `tests/`: seeded triangle
-//! soups, and the exact-tie check hit comparisons allow. Not part of the testbed's interface (hidden from the docs).
+//! soups, awkward rays for slab tests, and the exact-tie check hit comparisons allow. Not part of the testbed's interface (hidden from the docs).
+
+use glam::Vec3;
 
 use crate::geometry::{Hit, Ray, Triangle, WatertightRay};
 use crate::random::SplitMix64;
@@ -59,6 +61,28 @@ pub fn same_or_tie(triangles: &[Triangle], ray: &Ray, got: &Hit, want: &Hit) -> 
                 .intersect(&triangles[got.prim as usize], ray.tmin, ray.tmax)
                 .map(|h| h.0)
                 == Some(got.t)
+}
+
+/// Origins and directions for box tests that must equal `RayBoxTest` bit for bit on boxes near
+/// the unit cube: zero and −0.0 direction components, origins on slab planes, inside and behind.
+pub fn awkward_slab_rays() -> ([Vec3; 5], [Vec3; 7]) {
+    let origins = [
+        Vec3::new(0.5, 0.5, -1.0),
+        Vec3::new(0.0, 0.5, -1.0),
+        Vec3::new(1.0, 0.0, 0.5),
+        Vec3::splat(0.3),
+        Vec3::new(4.0, 0.5, 0.5),
+    ];
+    let dirs = [
+        Vec3::Z,
+        Vec3::new(0.0, -0.0, 1.0),
+        Vec3::new(-0.0, 0.0, -1.0),
+        Vec3::new(1.0, 0.0, 0.0),
+        Vec3::new(-1.0, -0.0, 0.0),
+        Vec3::new(0.3, -0.2, 0.9),
+        Vec3::new(-0.7, 0.1, 0.0),
+    ];
+    (origins, dirs)
 }
 
 #[cfg(test)]

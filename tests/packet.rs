@@ -2,6 +2,8 @@
 //! tree, and agreement with the reference tracer — every traversal × packet size × SIMD width ×
 //! frustum on/off, on primary, shadow and diffuse rays of the built-in room and balls scenes.
 
+mod common;
+
 use std::sync::Arc;
 
 use glam::Vec3;
@@ -16,6 +18,8 @@ use raylab::tracers::batch::{trace_hits, trace_occlusion};
 use raylab::tracers::packet::{PacketConfig, PacketTracer, Traversal, TreeWidth};
 use raylab::tracers::reference::ReferenceTracer;
 use raylab::tracers::{Params, Tracer};
+
+use common::{moving_room, same_or_tie_moving, MovingRoom};
 
 /// Four leaves in a row along x, one triangle each (leaf `a` holds the triangle (a,0,0), (a+1,0,0),
 /// (a,1,0)), under two interior nodes:
@@ -410,25 +414,8 @@ fn explicit_packets_are_respected() {
 /// binary tree (which the wide trees are collapsed from, swept boxes and all).
 #[test]
 fn wide_trees_trace_moving_geometry_like_the_reference() {
-    let scene = load_scene("room", None).unwrap();
-    let frame = scene.frame(0, 1);
-    let open = &frame.mesh.triangles;
-    let shift = Vec3::new(0.05, 0.02, -0.03) * scene_size(open);
-    let close: Vec<Triangle> = open
-        .iter()
-        .map(|t| Triangle::new(t.v[0] + shift, t.v[1] + shift, t.v[2] + shift))
-        .collect();
-    let bvh = Arc::new(Bvh::build_moving(open, &close, BvhConfig::default()));
-    let reference = ReferenceTracer::new(bvh.clone());
-    let camera = primary_rays(&frame.camera, 64, 64);
-    let mut timed = RayBatch::new(RayKind::Primary);
-    for i in 0..camera.len() {
-        let time = (i * 7919 % 1000) as f32 / 1000.0;
-        timed.push(camera.ray(i).at_time(time), i as u32);
-    }
-    let want = trace_hits(&reference, &timed);
-    assert!(want.iter().filter(|h| h.is_hit()).count() > timed.len() / 2);
-    let want_occluded = trace_occlusion(&reference, &timed);
+    let MovingRoom { bvh, timed, want } = moving_room();
+    let want_occluded = trace_occlusion(&ReferenceTracer::new(bvh.clone()), &timed);
     for width in [4, 8] {
         for frustum in [false, true] {
             let config = PacketConfig {
@@ -455,17 +442,6 @@ fn wide_trees_trace_moving_geometry_like_the_reference() {
             );
         }
     }
-}
-
-/// The largest extent of the triangles' box.
-fn scene_size(tris: &[Triangle]) -> f32 {
-    let b = tris.iter().fold(Aabb::EMPTY, |b, t| b.union(t.bounds()));
-    b.extent().max_element()
-}
-
-/// Equal hits, or a tie at exactly the same distance (two moving triangles meeting at an edge).
-fn same_or_tie_moving(got: &Hit, want: &Hit) -> bool {
-    got == want || (got.is_hit() && want.is_hit() && got.t == want.t)
 }
 
 /// Every ray's result is written by its packet, straight into the caller's buffer (nothing is

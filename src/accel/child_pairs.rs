@@ -100,6 +100,7 @@ impl PairRayTest {
 mod tests {
     use super::*;
     use crate::geometry::{Aabb, RayBoxTest};
+    use crate::test_util::awkward_slab_rays;
 
     fn pair(l: Aabb, r: Aabb) -> ChildPair {
         ChildPair {
@@ -120,22 +121,7 @@ mod tests {
             Aabb::new(Vec3::new(-1.0, -1.0, 5.0), Vec3::new(1.0, 1.0, 6.0)),
             Aabb::new(Vec3::splat(0.25), Vec3::splat(0.5)),
         ];
-        let origins = [
-            Vec3::new(0.5, 0.5, -1.0),
-            Vec3::new(0.0, 0.5, -1.0),
-            Vec3::new(1.0, 0.0, 0.5),
-            Vec3::splat(0.3),
-            Vec3::new(4.0, 0.5, 0.5),
-        ];
-        let dirs = [
-            Vec3::Z,
-            Vec3::new(0.0, -0.0, 1.0),
-            Vec3::new(-0.0, 0.0, -1.0),
-            Vec3::new(1.0, 0.0, 0.0),
-            Vec3::new(-1.0, -0.0, 0.0),
-            Vec3::new(0.3, -0.2, 0.9),
-            Vec3::new(-0.7, 0.1, 0.0),
-        ];
+        let (origins, dirs) = awkward_slab_rays();
         for l in &boxes {
             for r in &boxes {
                 let p = pair(*l, *r);

@@ -195,6 +195,28 @@ fn wide_children<const W: usize>(bvh: &Bvh, root: usize) -> Vec<usize> {
     children
 }
 
+/// `n` evenly spaced one-triangle leaves along x (no presplitting); for `n = 8` SAH splits them
+/// 4|4, 2|2, 1|1, a balanced binary tree that collapses into one 8-wide node. For tests of wide
+/// nodes.
+#[cfg(test)]
+pub(crate) fn spaced_leaves(n: usize) -> Bvh {
+    use crate::accel::BvhConfig;
+    use crate::geometry::Triangle;
+    use glam::Vec3;
+    let tris: Vec<Triangle> = (0..n)
+        .map(|i| {
+            let p = Vec3::new(i as f32 * 10.0, 0.0, 0.0);
+            Triangle::new(p, p + Vec3::X, p + Vec3::Y)
+        })
+        .collect();
+    let config = BvhConfig {
+        max_leaf_size: 1,
+        presplit: 0.0,
+        ..BvhConfig::default()
+    };
+    Bvh::build(&tris, config)
+}
+
 #[cfg(test)]
 mod tests {
     use glam::Vec3;
@@ -341,18 +363,7 @@ mod tests {
         // Eight evenly spaced single-triangle leaves: SAH splits them 4|4, 2|2, 1|1, a balanced
         // binary tree of 7 interior nodes. 8-wide: one node of all 8 leaves. 4-wide: the root
         // opens both halves into their four quarters, each a node of 2 leaves: 5 nodes.
-        let tris: Vec<Triangle> = (0..8)
-            .map(|i| {
-                let p = Vec3::new(i as f32 * 10.0, 0.0, 0.0);
-                Triangle::new(p, p + Vec3::X, p + Vec3::Y)
-            })
-            .collect();
-        let config = BvhConfig {
-            max_leaf_size: 1,
-            presplit: 0.0,
-            ..BvhConfig::default()
-        };
-        let bvh = Bvh::build(&tris, config);
+        let bvh = spaced_leaves(8);
         assert_eq!(bvh.leaf_count(), 8);
         assert_eq!(bvh.nodes.len(), 15);
         let eight = WideBvh::<8>::collapse(&bvh);
@@ -371,13 +382,13 @@ mod tests {
         let two = WideBvh::<2>::collapse(&bvh);
         assert_eq!(two.nodes.len(), 7, "a 2-wide collapse is the binary tree");
         // A single triangle: one leaf under the root.
-        let one = Bvh::build(&tris[..1], config);
+        let one = spaced_leaves(1);
         let wide = WideBvh::<4>::collapse(&one);
         assert_eq!(wide.nodes.len(), 1);
         assert_eq!(
             wide.nodes[0].child(0),
             WideChild::Leaf { first: 0, count: 1 }
         );
-        assert!(WideBvh::<4>::collapse(&Bvh::build(&[], config)).is_empty());
+        assert!(WideBvh::<4>::collapse(&spaced_leaves(0)).is_empty());
     }
 }

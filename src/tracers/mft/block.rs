@@ -16,8 +16,7 @@ use crate::accel::Bvh;
 use crate::geometry::Ray;
 use crate::lanes::SimdRay;
 use crate::stats::{Event, Stats};
-use crate::tracers::mft::cull::keep_mask;
-use crate::tracers::mft::descend::{depth, next_leaf, start_at_root};
+use crate::tracers::mft::descend::{depth, keep_counted, next_leaf, start_at_root};
 use crate::tracers::mft::frusta::{bits, Frusta, Margins};
 use crate::tracers::mft::MftConfig;
 use crate::tracers::visibility::{shadow_ray, VisibilityQuery};
@@ -158,16 +157,7 @@ pub fn trace_block<S: Stats>(
             if candidates == 0 {
                 break;
             }
-            let keep = keep_mask(frusta, tri, candidates, config.backface);
-            if S::ENABLED {
-                stats.event(Event::TrianglesAccessed, 1);
-                stats.event(Event::TrianglesKept, (keep != 0) as u64);
-                stats.event(Event::FrustumTriangleTests, keep.count_ones() as u64);
-                stats.event(
-                    Event::TrianglesCulled,
-                    (candidates & !keep).count_ones() as u64,
-                );
-            }
+            let keep = keep_counted(frusta, tri, candidates, config.backface, stats);
             for f in bits(keep) {
                 let point_alive = &mut alive[f * words..(f + 1) * words];
                 let simd = &mut rays[f * groups..(f + 1) * groups];

@@ -1,11 +1,13 @@
-//! The interior-node steps both multi-frusta traversals share, shadow blocks (`block`) and
+//! The walk and leaf-culling steps both multi-frusta traversals share, shadow blocks (`block`) and
 //! primary frusta (`primary`): Benthin & Wald 2009 §4, all frusta of the block tested against a
 //! child's box at once.
 
 use glam::Vec3;
 
 use crate::accel::{Bvh, BvhNode};
+use crate::geometry::Triangle;
 use crate::stats::{Event, Stats};
+use crate::tracers::mft::cull::keep_mask;
 use crate::tracers::mft::frusta::{Frusta, Margins};
 
 /// Tests both children of the interior `node` against the frusta of `mask` (one SIMD box test
@@ -119,6 +121,29 @@ pub fn next_leaf<S: Stats>(
         }
     }
     None
+}
+
+/// The frusta of `candidates` that must test a leaf triangle's rays: those it cannot be culled
+/// for (`cull::keep_mask`), counted as the paper's #tris, kept share and #isec (Fig. 6, Table 1).
+#[inline(always)]
+pub fn keep_counted<S: Stats>(
+    frusta: &Frusta,
+    tri: &Triangle,
+    candidates: u64,
+    backface: bool,
+    stats: &mut S,
+) -> u64 {
+    let keep = keep_mask(frusta, tri, candidates, backface);
+    if S::ENABLED {
+        stats.event(Event::TrianglesAccessed, 1);
+        stats.event(Event::TrianglesKept, (keep != 0) as u64);
+        stats.event(Event::FrustumTriangleTests, keep.count_ones() as u64);
+        stats.event(
+            Event::TrianglesCulled,
+            (candidates & !keep).count_ones() as u64,
+        );
+    }
+    keep
 }
 
 /// Node `i`'s depth for the per-depth counters (0 when nothing is counted).

@@ -37,8 +37,7 @@ use crate::accel::Bvh;
 use crate::geometry::{CameraGrid, Hit, Rays};
 use crate::lanes::SimdRay;
 use crate::stats::{Event, Stats};
-use crate::tracers::mft::cull::keep_mask;
-use crate::tracers::mft::descend::{depth, next_leaf, start_at_root};
+use crate::tracers::mft::descend::{depth, keep_counted, next_leaf, start_at_root};
 use crate::tracers::mft::frusta::{bits, Frusta, Margins, MAX_FRUSTA};
 use crate::tracers::mft::MftConfig;
 
@@ -238,16 +237,7 @@ fn trace_block<S: Stats>(
                 break;
             }
             let tri = &bvh.triangles[t];
-            let keep = keep_mask(frusta, tri, candidates, false);
-            if S::ENABLED {
-                stats.event(Event::TrianglesAccessed, 1);
-                stats.event(Event::TrianglesKept, (keep != 0) as u64);
-                stats.event(Event::FrustumTriangleTests, keep.count_ones() as u64);
-                stats.event(
-                    Event::TrianglesCulled,
-                    (candidates & !keep).count_ones() as u64,
-                );
-            }
+            let keep = keep_counted(frusta, tri, candidates, false, stats);
             let prim = bvh.prim_ids[t];
             for f in bits(keep) {
                 let pixels = &rays.pixel[group[f].clone()];

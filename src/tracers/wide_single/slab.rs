@@ -74,24 +74,15 @@ impl WideRayTest {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::accel::wide_bvh::spaced_leaves;
     use crate::accel::{Bvh, BvhConfig, WideBvh};
     use crate::geometry::{Aabb, RayBoxTest, Triangle};
+    use crate::test_util::awkward_slab_rays;
 
     /// One wide node whose 8 children are the given boxes (a tree of 8 one-triangle leaves, the
     /// boxes then overwritten), the unused slots of a 4-wide one kept empty.
     fn node_of(boxes: &[Aabb; 8]) -> WideNode<8> {
-        let tris: Vec<Triangle> = (0..8)
-            .map(|i| {
-                let p = Vec3::new(i as f32 * 10.0, 0.0, 0.0);
-                Triangle::new(p, p + Vec3::X, p + Vec3::Y)
-            })
-            .collect();
-        let config = BvhConfig {
-            max_leaf_size: 1,
-            presplit: 0.0,
-            ..BvhConfig::default()
-        };
-        let mut node = WideBvh::<8>::collapse(&Bvh::build(&tris, config)).nodes[0];
+        let mut node = WideBvh::<8>::collapse(&spaced_leaves(8)).nodes[0];
         for (c, b) in boxes.iter().enumerate() {
             for a in 0..3 {
                 node.lo[a][c] = b.min[a];
@@ -117,22 +108,7 @@ mod tests {
             Aabb::EMPTY,
         ];
         let node = node_of(&boxes);
-        let origins = [
-            Vec3::new(0.5, 0.5, -1.0),
-            Vec3::new(0.0, 0.5, -1.0),
-            Vec3::new(1.0, 0.0, 0.5),
-            Vec3::splat(0.3),
-            Vec3::new(4.0, 0.5, 0.5),
-        ];
-        let dirs = [
-            Vec3::Z,
-            Vec3::new(0.0, -0.0, 1.0),
-            Vec3::new(-0.0, 0.0, -1.0),
-            Vec3::new(1.0, 0.0, 0.0),
-            Vec3::new(-1.0, -0.0, 0.0),
-            Vec3::new(0.3, -0.2, 0.9),
-            Vec3::new(-0.7, 0.1, 0.0),
-        ];
+        let (origins, dirs) = awkward_slab_rays();
         let mut hits = 0;
         for o in origins {
             for d in dirs {
