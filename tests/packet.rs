@@ -8,10 +8,8 @@ use std::sync::Arc;
 
 use glam::Vec3;
 use raylab::accel::child_pairs::child_pairs;
-use raylab::accel::{AccelKind, Bvh, BvhConfig, BvhNode};
+use raylab::accel::{Bvh, BvhConfig, BvhNode};
 use raylab::geometry::{Aabb, Hit, Ray, RayBatch, RayKind, Triangle};
-use raylab::render::rays::{diffuse_rays, primary_rays, shadow_rays};
-use raylab::scene::library::load_scene;
 use raylab::stats::{Counters, Event};
 use raylab::test_util::same_or_tie;
 use raylab::tracers::batch::{trace_hits, trace_occlusion};
@@ -19,7 +17,7 @@ use raylab::tracers::packet::{PacketConfig, PacketTracer, Traversal, TreeWidth};
 use raylab::tracers::reference::ReferenceTracer;
 use raylab::tracers::{Params, Tracer};
 
-use common::{moving_room, same_or_tie_moving, MovingRoom};
+use common::{moving_room, reference_rays, same_or_tie_moving, MovingRoom, ReferenceRays};
 
 /// Four leaves in a row along x, one triangle each (leaf `a` holds the triangle (a,0,0), (a+1,0,0),
 /// (a,1,0)), under two interior nodes:
@@ -259,21 +257,16 @@ fn occlusion_stops_when_every_ray_is_occluded() {
 }
 
 fn agrees_with_reference(name: &str, size: Option<u32>) {
-    let scene = load_scene(name, size).unwrap();
-    let frame = scene.frame(0, 1);
-    let mesh = &frame.mesh;
-    let accel = AccelKind::Bvh.build(mesh, &Params::new()).unwrap();
-    let raylab::accel::Accel::Bvh(bvh) = &accel else {
-        unreachable!()
-    };
-    let reference = ReferenceTracer::new(bvh.clone());
-    let primary = primary_rays(&frame.camera, 128, 128);
-    let hits = trace_hits(&reference, &primary);
-    let shadow = shadow_rays(&scene, mesh, &primary, &hits, 3);
-    let diffuse = diffuse_rays(mesh, &primary, &hits, 3);
-    assert!(shadow.len() > 1000 && diffuse.len() > 1000);
-    let expected_hits = [&primary, &diffuse].map(|b| trace_hits(&reference, b));
-    let expected_shadow = trace_occlusion(&reference, &shadow);
+    let ReferenceRays {
+        mesh,
+        bvh,
+        primary,
+        shadow,
+        diffuse,
+        expected_hits,
+        expected_shadow,
+        ..
+    } = reference_rays(name, size);
     let mut ties = 0;
     // The wide trees run only ranged traversal.
     let runs = Traversal::ALL

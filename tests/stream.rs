@@ -2,13 +2,15 @@
 //! with the reference tracer — every SIMD width × several stream sizes, with and without the
 //! single-ray hand-off of short sub-streams, closest hit and occlusion, on primary, shadow and diffuse rays of the built-in room, rings and balls scenes.
 
+mod common;
+
 use std::sync::Arc;
 
 use glam::Vec3;
 use raylab::accel::child_pairs::child_pairs;
-use raylab::accel::{Accel, AccelKind, Bvh, BvhConfig, BvhNode};
+use raylab::accel::{AccelKind, Bvh, BvhConfig, BvhNode};
 use raylab::geometry::{Aabb, Hit, Ray, RayBatch, RayKind, Triangle};
-use raylab::render::rays::{diffuse_rays, primary_rays, shadow_rays};
+use raylab::render::rays::primary_rays;
 use raylab::scene::library::load_scene;
 use raylab::stats::{Counters, Event};
 use raylab::test_util::same_or_tie;
@@ -17,6 +19,8 @@ use raylab::tracers::packet::TreeWidth;
 use raylab::tracers::reference::ReferenceTracer;
 use raylab::tracers::stream::{StreamConfig, StreamSize, StreamTracer};
 use raylab::tracers::{build_tracer, Params, Tracer, TracerInfo};
+
+use common::{reference_rays, ReferenceRays};
 
 /// Two leaves side by side along x under the root, one triangle each, flat at z = 0:
 ///
@@ -382,21 +386,16 @@ fn invalid_rays_miss_without_panicking() {
 }
 
 fn agrees_with_reference(name: &str, size: Option<u32>) {
-    let scene = load_scene(name, size).unwrap();
-    let frame = scene.frame(0, 1);
-    let mesh = &frame.mesh;
-    let accel = AccelKind::Bvh.build(mesh, &Params::new()).unwrap();
-    let Accel::Bvh(bvh) = &accel else {
-        unreachable!()
-    };
-    let reference = ReferenceTracer::new(bvh.clone());
-    let primary = primary_rays(&frame.camera, 128, 128);
-    let hits = trace_hits(&reference, &primary);
-    let shadow = shadow_rays(&scene, mesh, &primary, &hits, 3);
-    let diffuse = diffuse_rays(mesh, &primary, &hits, 3);
-    assert!(shadow.len() > 1000 && diffuse.len() > 1000);
-    let expected_hits = [&primary, &diffuse].map(|b| trace_hits(&reference, b));
-    let expected_shadow = trace_occlusion(&reference, &shadow);
+    let ReferenceRays {
+        mesh,
+        accel,
+        primary,
+        shadow,
+        diffuse,
+        expected_hits,
+        expected_shadow,
+        ..
+    } = reference_rays(name, size);
     let info = TracerInfo::find("stream").unwrap();
     let mut ties = 0;
     for width in StreamConfig::WIDTHS {

@@ -8,10 +8,8 @@ mod common;
 use std::sync::Arc;
 
 use glam::Vec3;
-use raylab::accel::{Accel, AccelKind, Bvh, BvhConfig, WideBvh};
+use raylab::accel::{Bvh, BvhConfig, WideBvh};
 use raylab::geometry::{Hit, Ray, RayBatch, RayKind, Triangle};
-use raylab::render::rays::{diffuse_rays, primary_rays, shadow_rays};
-use raylab::scene::library::load_scene;
 use raylab::scene::Mesh;
 use raylab::stats::Counters;
 use raylab::test_util::same_or_tie;
@@ -20,7 +18,7 @@ use raylab::tracers::reference::ReferenceTracer;
 use raylab::tracers::wide_single::WideSingleTracer;
 use raylab::tracers::{build_tracer, tracer_for_mesh, Params, Tracer, TracerInfo};
 
-use common::{moving_room, same_or_tie_moving, MovingRoom};
+use common::{moving_room, reference_rays, same_or_tie_moving, MovingRoom, ReferenceRays};
 
 /// Eight walls across x at x = 0, 10, …, 70, one triangle each: even walls the lower-left half
 /// of the unit square in y, z (`(0,0) (1,0) (0,1)`), odd walls the upper-right half
@@ -118,19 +116,16 @@ fn batch_of(ray: Ray) -> RayBatch {
 }
 
 fn agrees_with_reference(name: &str, size: Option<u32>) {
-    let scene = load_scene(name, size).unwrap();
-    let frame = scene.frame(0, 1);
-    let mesh = &frame.mesh;
-    let accel = AccelKind::Bvh.build(mesh, &Params::new()).unwrap();
-    let Accel::Bvh(bvh) = &accel else {
-        unreachable!()
-    };
-    let reference = ReferenceTracer::new(bvh.clone());
-    let primary = primary_rays(&frame.camera, 128, 128);
-    let hits = trace_hits(&reference, &primary);
-    let shadow = shadow_rays(&scene, mesh, &primary, &hits, 3);
-    let diffuse = diffuse_rays(mesh, &primary, &hits, 3);
-    assert!(shadow.len() > 1000 && diffuse.len() > 1000);
+    let ReferenceRays {
+        mesh,
+        accel,
+        bvh,
+        primary,
+        shadow,
+        diffuse,
+        ..
+    } = reference_rays(name, size);
+    let reference = ReferenceTracer::new(bvh);
     let info = TracerInfo::find("wide-single").unwrap();
     let mut ties = 0;
     for width in [4, 8] {

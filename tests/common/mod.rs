@@ -1,15 +1,64 @@
-//! Fixtures shared by the integration tests of the tracers that take motion blur over wide trees
-//! (`packet.rs`, `wide_single.rs`).
+//! Fixtures shared by the tracers' integration tests (`packet.rs`, `stream.rs`, `wide_single.rs`):
+//! a scene's ray batches with the reference tracer's answers, and the moving room.
+
+// Each test crate uses the part of these fixtures it needs.
+#![allow(dead_code)]
 
 use std::sync::Arc;
 
 use glam::Vec3;
-use raylab::accel::{Bvh, BvhConfig};
+use raylab::accel::{Accel, AccelKind, Bvh, BvhConfig};
 use raylab::geometry::{Aabb, Hit, RayBatch, RayKind, Triangle};
-use raylab::render::rays::primary_rays;
+use raylab::render::rays::{diffuse_rays, primary_rays, shadow_rays};
 use raylab::scene::library::load_scene;
-use raylab::tracers::batch::trace_hits;
+use raylab::scene::Mesh;
+use raylab::tracers::batch::{trace_hits, trace_occlusion};
 use raylab::tracers::reference::ReferenceTracer;
+use raylab::tracers::Params;
+
+/// A scene's SAH BVH and three batches traced by the reference tracer over it: 128² camera rays,
+/// point-light shadow rays and diffuse rays from their hits (over 1000 each), with the
+/// reference's closest hits (camera, diffuse) and occlusion (shadow).
+pub struct ReferenceRays {
+    pub mesh: Mesh,
+    pub accel: Accel,
+    pub bvh: Arc<Bvh>,
+    pub primary: RayBatch,
+    pub shadow: RayBatch,
+    pub diffuse: RayBatch,
+    /// The reference's closest hits on `primary` and `diffuse`.
+    pub expected_hits: [Vec<Hit>; 2],
+    pub expected_shadow: Vec<bool>,
+}
+
+pub fn reference_rays(name: &str, size: Option<u32>) -> ReferenceRays {
+    let scene = load_scene(name, size).unwrap();
+    let frame = scene.frame(0, 1);
+    let mesh = frame.mesh.clone().into_owned();
+    let accel = AccelKind::Bvh.build(&mesh, &Params::new()).unwrap();
+    let Accel::Bvh(bvh) = &accel else {
+        unreachable!("AccelKind::Bvh builds a BVH")
+    };
+    let bvh = bvh.clone();
+    let reference = ReferenceTracer::new(bvh.clone());
+    let primary = primary_rays(&frame.camera, 128, 128);
+    let hits = trace_hits(&reference, &primary);
+    let shadow = shadow_rays(&scene, &mesh, &primary, &hits, 3);
+    let diffuse = diffuse_rays(&mesh, &primary, &hits, 3);
+    assert!(shadow.len() > 1000 && diffuse.len() > 1000);
+    let expected_hits = [&primary, &diffuse].map(|b| trace_hits(&reference, b));
+    let expected_shadow = trace_occlusion(&reference, &shadow);
+    ReferenceRays {
+        mesh,
+        accel,
+        bvh,
+        primary,
+        shadow,
+        diffuse,
+        expected_hits,
+        expected_shadow,
+    }
+}
 
 /// The room moving by a translation over the shutter: the moving binary tree over its triangles
 /// at shutter open and close (swept boxes), 64² camera rays at spread times, and the reference
