@@ -122,10 +122,11 @@ pub fn trace_block<S: Stats>(
         // A point without a finite origin casts only ill-formed rays, which meet nothing (as in
         // the reference tracer): its samples stay live and end visible, without a frustum.
         if rect[0] <= rect[1] && p.origin.is_finite() {
-            frusta.set(f, p.origin, &query.light, rect, margins);
+            frusta.set(f, p.origin, &query.light, rect);
             live |= 1 << f;
         }
     }
+    frusta.derive(live, Some(margins));
     if live == 0 || bvh.is_empty() {
         return finish(occluded, alive, words, len);
     }
@@ -211,13 +212,16 @@ pub fn trace_block<S: Stats>(
         // A frustum whose live rectangle did not change (samples lost inside it) keeps its
         // corners and bounds: re-aiming would recompute the same values.
         if config.cr || config.fs {
+            let mut aimed = 0u64;
             for f in bits(newly_occluded & live) {
                 let rect = live_rect(query, first + f, &alive[f * words..(f + 1) * words]);
                 if rect != frusta.rect[f] {
                     frusta.rect[f] = rect;
-                    frusta.aim(f, &query.light, config.fs.then_some(margins));
+                    frusta.aim(f, &query.light);
+                    aimed |= 1 << f;
                 }
             }
+            frusta.derive(aimed, config.fs.then_some(margins));
         }
         if live == 0 {
             break;

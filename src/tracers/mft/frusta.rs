@@ -50,11 +50,9 @@ pub struct Frusta {
     /// The longest corner ray in the 1-norm (a bound of every ray's length, for rounding margins).
     pub reach: Lanes,
     /// Per axis, the interval `[1/D_max, 1/D_min]` of reciprocal directions (ordered either
-    /// way); `free` when the directions straddle 0 and the axis bounds nothing.
+    /// way); 0 on a free axis, where the directions straddle 0 and the axis bounds nothing.
     pub rcp: [[Lanes; 2]; 3],
-    pub free: [[bool; MAX_FRUSTA]; 3],
-    /// `free` as the box test reads it: +∞ on a free axis (entry −∞, exit +∞: no bound), else 0.
-    /// A select on `free`'s bytes does not vectorize.
+    /// +∞ on a free axis (the box test's entry −∞, exit +∞: no bound), else 0.
     pub free_inf: [Lanes; 3],
     /// The four side planes through the origin (normals per axis, pointing out of the frustum)
     /// and the slack of each (`|n|` × the distance margin): the interval test alone keeps every
@@ -74,7 +72,6 @@ impl Default for Frusta {
             corner_len_sq: [[0.0; MAX_FRUSTA]; 4],
             reach: [0.0; MAX_FRUSTA],
             rcp: [[[0.0; MAX_FRUSTA]; 2]; 3],
-            free: [[true; MAX_FRUSTA]; 3],
             free_inf: [[f32::INFINITY; MAX_FRUSTA]; 3],
             side: [[[0.0; MAX_FRUSTA]; 3]; 4],
             side_slack: [[0.0; MAX_FRUSTA]; 4],
@@ -96,68 +93,105 @@ pub fn bits(mut mask: u64) -> impl Iterator<Item = usize> {
 }
 
 impl Frusta {
-    /// Frustum `f` from `origin` to the light's (s, t) rectangle `rect`: its corner rays and its
-    /// box-test bounds.
-    pub fn set(&mut self, f: usize, origin: Vec3, light: &QuadLight, rect: [f32; 4], m: &Margins) {
+    /// Frustum `f` from `origin` to the light's (s, t) rectangle `rect`: its corner rays (then
+    /// `derive`).
+    pub fn set(&mut self, f: usize, origin: Vec3, light: &QuadLight, rect: [f32; 4]) {
         for (a, o) in origin.to_array().into_iter().enumerate() {
             self.origin[a][f] = o;
         }
         self.rect[f] = rect;
-        self.aim(f, light, Some(m));
+        self.aim(f, light);
     }
 
-    /// Recomputes frustum `f`'s corner rays from its rectangle and, given `bounds`, its box-test
-    /// bounds (interval reciprocals and side planes).
-    pub fn aim(&mut self, f: usize, light: &QuadLight, bounds: Option<&Margins>) {
+    /// Recomputes frustum `f`'s corner rays from its origin and rectangle (then `derive`).
+    pub fn aim(&mut self, f: usize, light: &QuadLight) {
         let origin = Vec3::new(self.origin[0][f], self.origin[1][f], self.origin[2][f]);
         let [s0, s1, t0, t1] = self.rect[f];
         let corners = [(s0, t0), (s1, t0), (s0, t1), (s1, t1)].map(|(s, t)| {
             let d = light.point(s, t) - origin;
             d.to_array()
         });
-        self.set_corners(f, corners, bounds);
+        self.set_corners(f, corners);
     }
 
     /// Frustum `f`'s corner rays become `corners` (`D_q`, in the order (s0, t0), (s1, t0),
-    /// (s0, t1), (s1, t1) of a parallelogram) and, given `bounds`, its box-test bounds.
-    pub fn set_corners(&mut self, f: usize, corners: [[f32; 3]; 4], bounds: Option<&Margins>) {
-        self.reach[f] = corners
-            .iter()
-            .map(|d| d[0].abs() + d[1].abs() + d[2].abs())
-            .fold(0.0, f32::max);
+    /// (s0, t1), (s1, t1) of a parallelogram; then `derive`).
+    pub fn set_corners(&mut self, f: usize, corners: [[f32; 3]; 4]) {
         for (q, d) in corners.iter().enumerate() {
             for (axis, &x) in self.corner[q].iter_mut().zip(d) {
                 axis[f] = x;
             }
-            self.corner_len_sq[q][f] = d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
         }
-        if let Some(m) = bounds {
+    }
+
+    /// What follows from the corner rays, for the frusta of `changed`: `reach`, `corner_len_sq`
+    /// and, given `bounds`, the box-test bounds (interval reciprocals and side planes). All the
+    /// frusta a block sets up or re-aims at once, one vector of frusta per pass (`vector::Native`):
+    /// the per-block set-up was a scalar loop per frustum.
+    pub fn derive(&mut self, changed: u64, bounds: Option<&Margins>) {
+        self.derive_with::<Native>(changed, bounds)
+    }
+
+    /// `derive` on vectors `V`: each lane computes the scalar formulas' operations in their order
+    /// (glam's `cross`, `dot`, `length`), so the bits are those of one frustum at a time; minima
+    /// and maxima keep the running bound on NaN, as `f32::min`/`max` do.
+    pub fn derive_with<V: Vector>(&mut self, changed: u64, bounds: Option<&Margins>) {
+        let (zero, inf) = (V::splat(0.0), V::splat(f32::INFINITY));
+        let dot = |a: [V; 3], b: [V; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+        let cross = |a: [V; 3], b: [V; 3]| {
+            [
+                a[1] * b[2] - b[1] * a[2],
+                a[2] * b[0] - b[2] * a[0],
+                a[0] * b[1] - b[0] * a[1],
+            ]
+        };
+        for base in (0..MAX_FRUSTA).step_by(V::WIDTH) {
+            let lanes = changed >> base & (u64::MAX >> (64 - V::WIDTH));
+            if lanes == 0 {
+                continue;
+            }
+            // Only the lanes of `changed` are written.
+            let mask = V::from_bits(lanes);
+            let put = |field: &mut Lanes, new: V| {
+                V::select(mask, new, V::load(field, base)).store(&mut field[base..]);
+            };
+            let d: [[V; 3]; 4] =
+                std::array::from_fn(|q| std::array::from_fn(|a| V::load(&self.corner[q][a], base)));
+            let mut reach = zero;
+            for (q, [x, y, z]) in d.into_iter().enumerate() {
+                reach = (x.abs() + y.abs() + z.abs()).max(reach);
+                put(&mut self.corner_len_sq[q], x * x + y * y + z * z);
+            }
+            put(&mut self.reach, reach);
+            let Some(m) = bounds else { continue };
             // Corners in cyclic order around the rectangle: 0, 1, 3, 2.
-            let d = corners.map(Vec3::from_array);
             let ring = [d[0], d[1], d[3], d[2]];
-            let centre = d[0] + d[1] + d[2] + d[3];
+            let centre: [V; 3] = std::array::from_fn(|a| d[0][a] + d[1][a] + d[2][a] + d[3][a]);
             for k in 0..4 {
-                let n = ring[k].cross(ring[(k + 1) % 4]);
-                let n = if n.dot(centre) > 0.0 { -n } else { n };
-                for a in 0..3 {
-                    self.side[k][a][f] = n[a];
+                let n = cross(ring[k], ring[(k + 1) % 4]);
+                // Pointing out of the frustum (`× −1` is the exact negation).
+                let inwards = dot(n, centre).gt(zero);
+                let n = n.map(|x| V::select(inwards, x * V::splat(-1.0), x));
+                for (a, x) in n.into_iter().enumerate() {
+                    put(&mut self.side[k][a], x);
                 }
-                self.side_slack[k][f] = n.length() * m.distance;
+                put(
+                    &mut self.side_slack[k],
+                    dot(n, n).sqrt() * V::splat(m.distance),
+                );
             }
             for a in 0..3 {
-                let lo = corners.iter().map(|d| d[a]).fold(f32::INFINITY, f32::min);
-                let hi = corners
-                    .iter()
-                    .map(|d| d[a])
-                    .fold(f32::NEG_INFINITY, f32::max);
-                // Not (lo > 0 || hi < 0) also catches NaN; an infinite reciprocal (subnormal
-                // direction) would make 0·∞ in the box test: no bound either.
-                let free =
-                    !(lo > 0.0 || hi < 0.0) || !(1.0 / lo).is_finite() || !(1.0 / hi).is_finite();
-                self.free[a][f] = free;
-                self.free_inf[a][f] = if free { f32::INFINITY } else { 0.0 };
-                self.rcp[a][0][f] = if free { 0.0 } else { 1.0 / hi };
-                self.rcp[a][1][f] = if free { 0.0 } else { 1.0 / lo };
+                let lo = d.iter().fold(inf, |lo, d| d[a].min(lo));
+                let hi = d.iter().fold(zero - inf, |hi, d| d[a].max(hi));
+                let (rcp_lo, rcp_hi) = (V::splat(1.0) / lo, V::splat(1.0) / hi);
+                // Bounded when the directions keep one sign (a NaN fails both tests) and both
+                // reciprocals are finite: an infinite one (subnormal direction) would make 0·∞
+                // in the box test.
+                let finite = |x: V| x.abs().lt(inf);
+                let bounded = (lo.gt(zero) | hi.lt(zero)) & finite(rcp_lo) & finite(rcp_hi);
+                put(&mut self.free_inf[a], V::select(bounded, zero, inf));
+                put(&mut self.rcp[a][0], V::select(bounded, rcp_hi, zero));
+                put(&mut self.rcp[a][1], V::select(bounded, rcp_lo, zero));
             }
         }
     }
@@ -260,8 +294,10 @@ mod tests {
             ..Frusta::default()
         };
         let m = Margins::new(10.0);
-        frusta.set(0, Vec3::ZERO, &light, [0.0, 1.0, 0.0, 1.0], &m);
-        assert!(frusta.free[0][0] && !frusta.free[1][0] && frusta.free[2][0]);
+        frusta.set(0, Vec3::ZERO, &light, [0.0, 1.0, 0.0, 1.0]);
+        frusta.derive(1, Some(&m));
+        let free = |a: usize| frusta.free_inf[a][0] == f32::INFINITY;
+        assert!(free(0) && !free(1) && free(2));
         let cube = |c: Vec3| Aabb::new(c - Vec3::splat(0.1), c + Vec3::splat(0.1));
         // At height 5 the frustum spans x, z ∈ [−0.5, 0.5].
         assert_eq!(
@@ -291,6 +327,99 @@ mod tests {
         );
     }
 
+    /// One frustum's derived fields by the scalar formulas (glam), in `derive`'s order:
+    /// `[reach, |D_q|² ×4, side normals ×12, side slacks ×4, free_inf ×3, rcp ×6]`.
+    fn scalar_derived(corners: [[f32; 3]; 4], m: &Margins) -> Vec<f32> {
+        let d = corners.map(Vec3::from_array);
+        let mut out = vec![d.iter().map(|d| d.abs().element_sum()).fold(0.0, f32::max)];
+        out.extend(d.iter().map(|d| d.length_squared()));
+        let ring = [d[0], d[1], d[3], d[2]];
+        let centre = d[0] + d[1] + d[2] + d[3];
+        let mut slack = Vec::new();
+        for k in 0..4 {
+            let n = ring[k].cross(ring[(k + 1) % 4]);
+            let n = if n.dot(centre) > 0.0 { -n } else { n };
+            out.extend(n.to_array());
+            slack.push(n.length() * m.distance);
+        }
+        out.extend(slack);
+        let mut rcp = Vec::new();
+        for a in 0..3 {
+            let lo = d.iter().map(|d| d[a]).fold(f32::INFINITY, f32::min);
+            let hi = d.iter().map(|d| d[a]).fold(f32::NEG_INFINITY, f32::max);
+            let free =
+                !(lo > 0.0 || hi < 0.0) || !(1.0 / lo).is_finite() || !(1.0 / hi).is_finite();
+            out.push(if free { f32::INFINITY } else { 0.0 });
+            rcp.extend(if free { [0.0; 2] } else { [1.0 / hi, 1.0 / lo] });
+        }
+        out.extend(rcp);
+        out
+    }
+
+    /// Frustum `f`'s derived fields in `scalar_derived`'s order.
+    fn derived(frusta: &Frusta, f: usize) -> Vec<f32> {
+        let mut out = vec![frusta.reach[f]];
+        out.extend(frusta.corner_len_sq.iter().map(|x| x[f]));
+        out.extend(frusta.side.iter().flatten().map(|x| x[f]));
+        out.extend(frusta.side_slack.iter().map(|x| x[f]));
+        out.extend(frusta.free_inf.iter().map(|x| x[f]));
+        out.extend(frusta.rcp.iter().flatten().map(|x| x[f]));
+        out
+    }
+
+    #[test]
+    fn derive_gives_the_scalar_formulas_bits_in_the_changed_lanes_only() {
+        use crate::random::SplitMix64;
+        use crate::tracers::mft::vector::Portable;
+        let mut rng = SplitMix64::new(21);
+        let m = Margins::new(3.0);
+        let bits_of = |v: Vec<f32>| v.into_iter().map(f32::to_bits).collect::<Vec<_>>();
+        for round in 0..50 {
+            let mut frusta = Frusta::default();
+            let mut corners = Vec::new();
+            for f in 0..MAX_FRUSTA {
+                // Straddling and one-signed axes, zeros, subnormal and NaN components.
+                let c: [[f32; 3]; 4] = std::array::from_fn(|_| {
+                    std::array::from_fn(|_| match rng.next_u64() % 8 {
+                        0 => 0.0,
+                        1 => -0.0,
+                        2 => 1e-40,
+                        3 if round % 5 == 0 => f32::NAN,
+                        _ => rng.range(-3.0, 3.0) + if f % 2 == 0 { 5.0 } else { 0.0 },
+                    })
+                });
+                frusta.set_corners(f, c);
+                corners.push(c);
+            }
+            let changed = rng.next_u64();
+            let bounds = (round % 3 != 0).then_some(&m);
+            let untouched = Frusta::default();
+            let mut portable = frusta.clone();
+            frusta.derive(changed, bounds);
+            portable.derive_with::<Portable<8>>(changed, bounds);
+            for (f, c) in corners.into_iter().enumerate() {
+                let mut want = scalar_derived(c, &m);
+                if changed >> f & 1 == 0 {
+                    want = derived(&untouched, f);
+                } else if bounds.is_none() {
+                    want.truncate(5);
+                    want.extend_from_slice(&derived(&untouched, f)[5..]);
+                }
+                let want = bits_of(want);
+                assert_eq!(
+                    bits_of(derived(&frusta, f)),
+                    want,
+                    "round {round}, frustum {f}"
+                );
+                assert_eq!(
+                    bits_of(derived(&portable, f)),
+                    want,
+                    "round {round}, frustum {f}"
+                );
+            }
+        }
+    }
+
     #[test]
     fn an_axis_whose_reciprocal_overflows_bounds_nothing() {
         // A light in the plane y = 1e-39 (subnormal) seen from the origin: every corner ray's y
@@ -305,8 +434,8 @@ mod tests {
             ..Frusta::default()
         };
         let m = Margins::new(1.0);
-        frusta.set(0, Vec3::ZERO, &light, [0.0, 1.0, 0.0, 1.0], &m);
-        assert!(frusta.free[1][0]);
+        frusta.set(0, Vec3::ZERO, &light, [0.0, 1.0, 0.0, 1.0]);
+        frusta.derive(1, Some(&m));
         assert_eq!(frusta.free_inf[1][0], f32::INFINITY);
         assert_eq!(
             [frusta.free_inf[0][0], frusta.free_inf[2][0]],

@@ -139,15 +139,15 @@ pub fn intersect<S: Stats>(
 }
 
 /// Frustum `f` from the camera through the pixel rectangle `frusta.rect[f]` (pixel centres
-/// `x0..=x1`, `y0..=y1`), its corner rays reaching `far`.
-fn aim(frusta: &mut Frusta, f: usize, grid: &CameraGrid, far: f32, margins: &Margins) {
+/// `x0..=x1`, `y0..=y1`), its corner rays reaching `far` (then `Frusta::derive`).
+fn aim(frusta: &mut Frusta, f: usize, grid: &CameraGrid, far: f32) {
     let [x0, x1, y0, y1] = frusta.rect[f];
     let corners = [(x0, y0), (x1, y0), (x0, y1), (x1, y1)]
         .map(|(x, y)| (grid.through(x, y) * far).to_array());
     for (a, o) in grid.origin.to_array().into_iter().enumerate() {
         frusta.origin[a][f] = o;
     }
-    frusta.set_corners(f, corners, Some(margins));
+    frusta.set_corners(f, corners);
 }
 
 /// What every block of a batch shares.
@@ -204,13 +204,14 @@ fn trace_block<S: Stats>(
         }
         frusta.rect[f] = rect;
         far[f] = scene_far;
-        aim(frusta, f, grid, scene_far, margins);
+        aim(frusta, f, grid, scene_far);
     }
     let all = if group.len() == 64 {
         u64::MAX
     } else {
         (1u64 << group.len()) - 1
     };
+    frusta.derive(all, Some(margins));
 
     // Children are visited nearer first along the first frustum's middle direction.
     let [x0, x1, y0, y1] = frusta.rect[0];
@@ -265,13 +266,16 @@ fn trace_block<S: Stats>(
             }
         }
         // App. A: pull in the far distance of the frusta all of whose rays now have a hit.
+        let mut aimed = 0u64;
         for f in bits(hit_frusta) {
             let farthest = simd[f].max_tmax() * (1.0 + FAR_SLACK);
             if farthest < far[f] {
                 far[f] = farthest;
-                aim(frusta, f, grid, farthest, margins);
+                aim(frusta, f, grid, farthest);
+                aimed |= 1 << f;
             }
         }
+        frusta.derive(aimed, Some(margins));
     }
 
     for f in bits(generated) {

@@ -250,7 +250,7 @@ fn culling_never_removes_what_a_sample_ray_hits() {
             };
             let (s0, t0) = (rng.range(0.0, 0.9), rng.range(0.0, 0.9));
             let rect = [s0, rng.range(s0, 1.0), t0, rng.range(t0, 1.0)];
-            frusta.set(f, origin, &light, rect, &margins);
+            frusta.set(f, origin, &light, rect);
             let corners = [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)];
             let uv = corners
                 .into_iter()
@@ -267,6 +267,7 @@ fn culling_never_removes_what_a_sample_ray_hits() {
                     .collect::<Vec<_>>(),
             );
         }
+        frusta.derive(u64::MAX, Some(&margins));
         for tri in &triangles {
             let keep = keep_mask(&frusta, tri, u64::MAX, false);
             let bounds = Aabb::from_points(&tri.v);
@@ -379,8 +380,9 @@ fn vector_kernels_give_the_portable_lanes_masks() {
             let origin = rng.vec3(-1.5, 1.5);
             let (s0, t0) = (rng.range(0.0, 0.9), rng.range(0.0, 0.9));
             let rect = [s0, rng.range(s0, 1.0), t0, rng.range(t0, 1.0)];
-            frusta.set(f, origin, &light, rect, &margins);
+            frusta.set(f, origin, &light, rect);
         }
+        frusta.derive(u64::MAX, Some(&margins));
         if round % 2 == 1 {
             // Every field of some lanes overwritten with edge values.
             let mut fields: Vec<&mut [f32; MAX_FRUSTA]> = frusta
@@ -470,13 +472,8 @@ fn backface_culling_drops_a_triangle_seen_from_behind() {
         len: 1,
         ..Frusta::default()
     };
-    frusta.set(
-        0,
-        Vec3::new(0.5, 0.0, 0.5),
-        &light,
-        [0.0, 1.0, 0.0, 1.0],
-        &margins,
-    );
+    frusta.set(0, Vec3::new(0.5, 0.0, 0.5), &light, [0.0, 1.0, 0.0, 1.0]);
+    frusta.derive(1, Some(&margins));
     let (a, b, c) = (
         Vec3::new(0.0, 1.0, 0.0),
         Vec3::new(0.0, 1.0, 2.0),

@@ -16,11 +16,11 @@
 //! operation is the IEEE operation of the portable lane, so all three give the same bits:
 //! `min`/`max` are `x < y ? x : y` / `x > y ? x : y` (what MINPS/MAXPS compute, NaN included).
 
-use std::ops::{Add, BitAnd, BitOr, Mul, Not, Sub};
+use std::ops::{Add, BitAnd, BitOr, Div, Mul, Not, Sub};
 
 /// A vector of `WIDTH` f32 lanes.
 pub trait Vector:
-    Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> + Sized
+    Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> + Div<Output = Self> + Sized
 {
     const WIDTH: usize;
     /// Per-lane booleans.
@@ -32,6 +32,8 @@ pub trait Vector:
     /// Lanes `x[at..at + WIDTH]`.
     fn load(x: &[f32], at: usize) -> Self;
     fn abs(self) -> Self;
+    /// The correctly rounded square root (as `f32::sqrt`).
+    fn sqrt(self) -> Self;
     /// `self < y ? self : y` per lane.
     fn min(self, y: Self) -> Self;
     /// `self > y ? self : y` per lane.
@@ -43,8 +45,9 @@ pub trait Vector:
     fn select(m: Self::Mask, a: Self, b: Self) -> Self;
     /// Lane `l`'s boolean as bit `l`.
     fn bits(m: Self::Mask) -> u64;
-    /// The lanes into `out[..WIDTH]` (tests read vectors back with it).
-    #[cfg(test)]
+    /// The mask whose lane `l` is bit `l` of `bits` (`bits`' inverse).
+    fn from_bits(bits: u64) -> Self::Mask;
+    /// The lanes into `out[..WIDTH]`.
     fn store(self, out: &mut [f32]);
 }
 
@@ -64,7 +67,7 @@ pub type Native = Portable<8>;
 
 /// Implements the arithmetic operators of a vector type from binary functions.
 macro_rules! arithmetic {
-    ($t:ty, $add:expr, $sub:expr, $mul:expr) => {
+    ($t:ty, $add:expr, $sub:expr, $mul:expr, $div:expr) => {
         impl Add for $t {
             type Output = $t;
             #[inline(always)]
@@ -84,6 +87,13 @@ macro_rules! arithmetic {
             #[inline(always)]
             fn mul(self, y: $t) -> $t {
                 $mul(self, y)
+            }
+        }
+        impl Div for $t {
+            type Output = $t;
+            #[inline(always)]
+            fn div(self, y: $t) -> $t {
+                $div(self, y)
             }
         }
     };
@@ -107,7 +117,7 @@ pub use portable::{BitMask, Portable};
     ))
 ))]
 mod portable {
-    use std::ops::{Add, BitAnd, BitOr, Mul, Not, Sub};
+    use std::ops::{Add, BitAnd, BitOr, Div, Mul, Not, Sub};
 
     use super::Vector;
 
@@ -174,6 +184,13 @@ mod portable {
             self.map2(y, |a, b| a * b)
         }
     }
+    impl<const N: usize> Div for Portable<N> {
+        type Output = Self;
+        #[inline(always)]
+        fn div(self, y: Self) -> Self {
+            self.map2(y, |a, b| a / b)
+        }
+    }
 
     impl<const N: usize> Vector for Portable<N> {
         const WIDTH: usize = N;
@@ -189,6 +206,10 @@ mod portable {
         #[inline(always)]
         fn abs(self) -> Self {
             Portable(self.0.map(f32::abs))
+        }
+        #[inline(always)]
+        fn sqrt(self) -> Self {
+            Portable(self.0.map(f32::sqrt))
         }
         #[inline(always)]
         fn min(self, y: Self) -> Self {
@@ -224,7 +245,11 @@ mod portable {
         fn bits(m: BitMask) -> u64 {
             m.0 & (u64::MAX >> (64 - N))
         }
-        #[cfg(test)]
+        #[inline(always)]
+        fn from_bits(bits: u64) -> BitMask {
+            BitMask(bits)
+        }
+        #[inline(always)]
         fn store(self, out: &mut [f32]) {
             out[..N].copy_from_slice(&self.0);
         }
@@ -237,7 +262,7 @@ pub use avx512::Avx512;
 #[cfg(all(target_arch = "x86_64", target_feature = "avx512f"))]
 mod avx512 {
     use std::arch::x86_64::*;
-    use std::ops::{Add, Mul, Sub};
+    use std::ops::{Add, Div, Mul, Sub};
 
     use super::Vector;
 
@@ -249,7 +274,8 @@ mod avx512 {
         Avx512,
         |x: Avx512, y: Avx512| Avx512(unsafe { _mm512_add_ps(x.0, y.0) }),
         |x: Avx512, y: Avx512| Avx512(unsafe { _mm512_sub_ps(x.0, y.0) }),
-        |x: Avx512, y: Avx512| Avx512(unsafe { _mm512_mul_ps(x.0, y.0) })
+        |x: Avx512, y: Avx512| Avx512(unsafe { _mm512_mul_ps(x.0, y.0) }),
+        |x: Avx512, y: Avx512| Avx512(unsafe { _mm512_div_ps(x.0, y.0) })
     );
 
     impl Vector for Avx512 {
@@ -268,6 +294,10 @@ mod avx512 {
         #[inline(always)]
         fn abs(self) -> Self {
             Avx512(unsafe { _mm512_abs_ps(self.0) })
+        }
+        #[inline(always)]
+        fn sqrt(self) -> Self {
+            Avx512(unsafe { _mm512_sqrt_ps(self.0) })
         }
         #[inline(always)]
         fn min(self, y: Self) -> Self {
@@ -297,7 +327,11 @@ mod avx512 {
         fn bits(m: __mmask16) -> u64 {
             m as u64
         }
-        #[cfg(test)]
+        #[inline(always)]
+        fn from_bits(bits: u64) -> __mmask16 {
+            bits as __mmask16
+        }
+        #[inline(always)]
         fn store(self, out: &mut [f32]) {
             let out = &mut out[..16];
             // SAFETY: `out` has room for the 16 floats written.
@@ -321,7 +355,7 @@ pub use avx2::Avx2;
 ))]
 mod avx2 {
     use std::arch::x86_64::*;
-    use std::ops::{Add, BitAnd, BitOr, Mul, Not, Sub};
+    use std::ops::{Add, BitAnd, BitOr, Div, Mul, Not, Sub};
 
     use super::Vector;
 
@@ -360,7 +394,8 @@ mod avx2 {
         Avx2,
         |x: Avx2, y: Avx2| Avx2(unsafe { _mm256_add_ps(x.0, y.0) }),
         |x: Avx2, y: Avx2| Avx2(unsafe { _mm256_sub_ps(x.0, y.0) }),
-        |x: Avx2, y: Avx2| Avx2(unsafe { _mm256_mul_ps(x.0, y.0) })
+        |x: Avx2, y: Avx2| Avx2(unsafe { _mm256_mul_ps(x.0, y.0) }),
+        |x: Avx2, y: Avx2| Avx2(unsafe { _mm256_div_ps(x.0, y.0) })
     );
 
     impl Vector for Avx2 {
@@ -380,6 +415,10 @@ mod avx2 {
         fn abs(self) -> Self {
             let magnitude = unsafe { _mm256_castsi256_ps(_mm256_set1_epi32(i32::MAX)) };
             Avx2(unsafe { _mm256_and_ps(self.0, magnitude) })
+        }
+        #[inline(always)]
+        fn sqrt(self) -> Self {
+            Avx2(unsafe { _mm256_sqrt_ps(self.0) })
         }
         #[inline(always)]
         fn min(self, y: Self) -> Self {
@@ -409,7 +448,14 @@ mod avx2 {
         fn bits(m: LaneMask) -> u64 {
             unsafe { _mm256_movemask_ps(m.0) as u32 as u64 }
         }
-        #[cfg(test)]
+        #[inline(always)]
+        fn from_bits(bits: u64) -> LaneMask {
+            // Lane `l` all ones where bit `l` is set: the broadcast bits against each lane's bit.
+            let lane_bits = unsafe { _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128) };
+            let set = unsafe { _mm256_and_si256(_mm256_set1_epi32(bits as i32), lane_bits) };
+            LaneMask(unsafe { _mm256_castsi256_ps(_mm256_cmpeq_epi32(set, lane_bits)) })
+        }
+        #[inline(always)]
         fn store(self, out: &mut [f32]) {
             let out = &mut out[..8];
             // SAFETY: `out` has room for the 8 floats written.
@@ -474,6 +520,8 @@ mod tests {
             assert_eq!(bits(vx + vy), want(px + py));
             assert_eq!(bits(vx - vy), want(px - py));
             assert_eq!(bits(vx * vy), want(px * py));
+            assert_eq!(bits(vx / vy), want(px / py));
+            assert_eq!(bits(vx.sqrt()), want(px.sqrt()));
             assert_eq!(bits(vx.abs()), want(px.abs()));
             assert_eq!(bits(vx.min(vy)), want(px.min(py)));
             assert_eq!(bits(vx.max(vy)), want(px.max(py)));
@@ -487,6 +535,12 @@ mod tests {
             assert_eq!(mask(vm & vx.gt(vy)), reference(pm & px.gt(py)));
             assert_eq!(mask(vm | vx.gt(vy)), reference(pm | px.gt(py)));
             assert_eq!(mask(!vm), reference(!pm));
+            let lanes = rng.next_u64();
+            assert_eq!(
+                mask(V::from_bits(lanes)),
+                reference(Portable::<N>::from_bits(lanes))
+            );
+            assert_eq!(V::bits(V::from_bits(lanes)), lanes & (u64::MAX >> (64 - N)));
             assert_eq!(
                 bits(V::select(vm, vx, vy)),
                 want(Portable::select(pm, px, py))
