@@ -141,7 +141,7 @@ pub fn trace_wide<const W: usize, S: Stats, const ANY: bool>(
         };
         if S::ENABLED {
             stats.node(depth as usize);
-            let tested = (slots & cell.used).count_ones();
+            let tested = (slots & cell.used()).count_ones();
             (0..tested).for_each(|_| stats.aabb_test(depth as usize + 1));
         }
         let (enter, hit) = boxes.test(cell, tmin, tmax);
