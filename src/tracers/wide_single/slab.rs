@@ -241,13 +241,12 @@ mod tests {
     /// The node tests this build has for `W = 8`: SSE groups of 4 (every build), AVX groups of 8
     /// (AVX builds), and `test`'s pick between them.
     fn eight_wide_tests() -> Vec<(&'static str, EightWideTest)> {
-        let mut tests: Vec<(&'static str, EightWideTest)> = vec![
+        vec![
             ("test", |r, n, t0, t1| r.test(n, t0, t1)),
             ("sse", |r, n, t0, t1| r.test_in::<__m128, 8>(n, t0, t1)),
-        ];
-        #[cfg(target_feature = "avx")]
-        tests.push(("avx", |r, n, t0, t1| r.test_in::<__m256, 8>(n, t0, t1)));
-        tests
+            #[cfg(target_feature = "avx")]
+            ("avx", |r, n, t0, t1| r.test_in::<__m256, 8>(n, t0, t1)),
+        ]
     }
 
     type EightWideTest = fn(&WideRayTest, &WideNode<8>, f32, f32) -> ([f32; 8], u32);
