@@ -10,8 +10,11 @@
 //!
 //! Layout: child boxes in structure-of-arrays lanes (`lo[axis][child]`, `hi[axis][child]`), so a
 //! slab test of one ray interval against all children is a handful of W-wide vector operations.
-//! W = 4 is 128 bytes (two cache lines), W = 8 is 256. Unused child slots hold an empty box
-//! (`lo = +∞`, `hi = −∞`), which no slab test and no interval test can hit.
+//! Each child's reference is two u32 lanes, `first` and `count` (`WideNode::child`), and whether a
+//! slot is in use follows from them, so a node is its boxes and references and nothing else:
+//! W = 4 is 128 bytes (two cache lines), W = 8 is 256 (four), as Embree's 4- and 8-wide nodes;
+//! the walks are bound by these loads. Unused child slots hold an empty box (`lo = +∞`,
+//! `hi = −∞`), which no slab test and no interval test can hit.
 //!
 //! Entry points (`entry`): where each binary node sits in the wide tree — the wide node whose
 //! collapse took it in and the child slots below it — so a traversal that reached a binary node
@@ -31,18 +34,25 @@ pub enum WideChild {
     Empty,
 }
 
+/// A wide node: its children's boxes in structure-of-arrays lanes and their references.
+///
+/// A child's reference is `(first, count)`: a leaf is `(first triangle, count ≥ 1)`, an interior
+/// child `(node index, 0)`, an empty slot `(0, 0)`. Node 0 is the root, nobody's child, so an
+/// interior child's index is never 0 and the three kinds never meet. Both lanes are u32: a leaf
+/// is usually at most `BvhConfig::max_leaf_size` triangles, but one cut at `max_depth` holds
+/// whatever reached it, so a narrower count could overflow.
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(64))]
 pub struct WideNode<const W: usize> {
     pub lo: [[f32; W]; 3],
     pub hi: [[f32; W]; 3],
-    /// Interior child: its node index. Leaf child: its first triangle. Empty slot: 0.
     pub first: [u32; W],
-    /// Leaf child: its triangle count (≥ 1). Interior child and empty slot: 0.
     pub count: [u32; W],
-    /// Bit `c` set when slot `c` is in use.
-    pub used: u32,
 }
+
+// Exactly Embree's node sizes: no padding line (module doc).
+const _: () = assert!(std::mem::size_of::<WideNode<4>>() == 128);
+const _: () = assert!(std::mem::size_of::<WideNode<8>>() == 256);
 
 impl<const W: usize> WideNode<W> {
     const EMPTY: Self = WideNode {
@@ -50,21 +60,48 @@ impl<const W: usize> WideNode<W> {
         hi: [[f32::NEG_INFINITY; W]; 3],
         first: [0; W],
         count: [0; W],
-        used: 0,
     };
 
     #[inline(always)]
     pub fn child(&self, c: usize) -> WideChild {
-        if self.used & (1 << c) == 0 {
-            WideChild::Empty
-        } else if self.count[c] > 0 {
-            WideChild::Leaf {
-                first: self.first[c],
-                count: self.count[c],
-            }
-        } else {
-            WideChild::Node(self.first[c])
+        match (self.first[c], self.count[c]) {
+            (0, 0) => WideChild::Empty,
+            (node, 0) => WideChild::Node(node),
+            (first, count) => WideChild::Leaf { first, count },
         }
+    }
+
+    /// Makes slot `c` the child `child` with box `(lo, hi)` (an empty slot: the empty box,
+    /// whatever is passed). Panics on `Node(0)`, the root, which is nobody's child.
+    pub fn set_child(&mut self, c: usize, child: WideChild, lo: [f32; 3], hi: [f32; 3]) {
+        (self.first[c], self.count[c]) = match child {
+            WideChild::Node(node) => {
+                assert_ne!(node, 0, "the root is nobody's child");
+                (node, 0)
+            }
+            WideChild::Leaf { first, count } => {
+                assert_ne!(count, 0, "a leaf holds at least one triangle");
+                (first, count)
+            }
+            WideChild::Empty => (0, 0),
+        };
+        let (lo, hi) = match child {
+            WideChild::Empty => ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]),
+            _ => (lo, hi),
+        };
+        for a in 0..3 {
+            (self.lo[a][c], self.hi[a][c]) = (lo[a], hi[a]);
+        }
+    }
+
+    /// Bit `c` set when slot `c` holds a child.
+    #[inline(always)]
+    pub fn used(&self) -> u32 {
+        let mut used = 0;
+        for c in 0..W {
+            used |= u32::from(self.first[c] | self.count[c] != 0) << c;
+        }
+        used
     }
 
     /// Child `c`'s box as `(lo, hi)`.
@@ -121,20 +158,21 @@ impl<const W: usize> WideBvh<W> {
             let mut node = WideNode::EMPTY;
             for (c, &b) in children.iter().enumerate() {
                 let binary = &bvh.nodes[b];
-                for a in 0..3 {
-                    node.lo[a][c] = binary.bounds.min[a];
-                    node.hi[a][c] = binary.bounds.max[a];
-                }
-                node.used |= 1 << c;
-                if binary.is_leaf() {
-                    (node.first[c], node.count[c]) = (binary.first, binary.count);
+                let child = if binary.is_leaf() {
+                    WideChild::Leaf {
+                        first: binary.first,
+                        count: binary.count,
+                    }
                 } else {
+                    // Never 0: the root was pushed first.
                     let child = wide.nodes.len();
                     wide.nodes.push(WideNode::EMPTY);
                     wide.depth.push(wide.depth[index] + 1);
-                    node.first[c] = child as u32;
                     pending.push((child, b));
-                }
+                    WideChild::Node(child as u32)
+                };
+                let bounds = binary.bounds;
+                node.set_child(c, child, bounds.min.into(), bounds.max.into());
             }
             wide.nodes[index] = node;
         }
@@ -320,12 +358,12 @@ mod tests {
             assert_eq!(reached, below, "W = {W}, binary node {b}");
         }
         let root = wide.entry[Bvh::ROOT];
-        assert_eq!((root.node, root.slots), (0, wide.nodes[0].used));
+        assert_eq!((root.node, root.slots), (0, wide.nodes[0].used()));
         let refs: u32 = ranges.iter().map(|r| r.1).sum();
         assert_eq!(refs as usize, bvh.triangles.len());
         // A node is full unless every child is a leaf (nothing left to open).
         for node in &wide.nodes {
-            let used = node.used.count_ones() as usize;
+            let used = node.used().count_ones() as usize;
             let interior = (0..W).any(|c| matches!(node.child(c), WideChild::Node(_)));
             assert!((2..=W).contains(&used), "W = {W}: {used} children");
             assert!(
@@ -333,7 +371,7 @@ mod tests {
                 "W = {W}: a partial node with interior children"
             );
             // Unused slots hold the empty box.
-            for c in (0..W).filter(|&c| node.used & (1 << c) == 0) {
+            for c in (0..W).filter(|&c| node.used() & (1 << c) == 0) {
                 let (lo, hi) = node.child_box(c);
                 assert!(lo.iter().all(|&x| x == f32::INFINITY));
                 assert!(hi.iter().all(|&x| x == f32::NEG_INFINITY));
@@ -358,6 +396,93 @@ mod tests {
         }
     }
 
+    /// Every kind of child, at the ends of its ranges, reads back as written, in every slot, and
+    /// leaves the other slots alone; an empty slot gets the empty box whatever box is passed.
+    #[test]
+    fn every_child_kind_round_trips_through_the_compact_node() {
+        let kinds = [
+            WideChild::Node(1),
+            WideChild::Node(u32::MAX),
+            WideChild::Leaf { first: 0, count: 1 },
+            WideChild::Leaf {
+                first: 7,
+                count: BvhConfig::default().max_leaf_size as u32,
+            },
+            // Beyond any u8 or u16 count: a leaf cut at `max_depth` may hold this many.
+            WideChild::Leaf {
+                first: u32::MAX - 70_000,
+                count: 70_000,
+            },
+            WideChild::Empty,
+        ];
+        let (lo, hi) = ([1.0, -2.0, 3.0], [4.0, 5.0, 6.5]);
+        for kind in kinds {
+            for c in 0..8 {
+                let mut node = WideNode::<8>::EMPTY;
+                node.set_child(c, kind, lo, hi);
+                assert_eq!(node.child(c), kind);
+                let used = if kind == WideChild::Empty { 0 } else { 1 << c };
+                assert_eq!(node.used(), used);
+                let want = if kind == WideChild::Empty {
+                    ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3])
+                } else {
+                    (lo, hi)
+                };
+                assert_eq!(node.child_box(c), want);
+                for other in (0..8).filter(|&o| o != c) {
+                    assert_eq!(node.child(other), WideChild::Empty);
+                }
+            }
+        }
+        // A full node of mixed kinds keeps each one.
+        let mut node = WideNode::<4>::EMPTY;
+        for (c, kind) in kinds[..4].iter().enumerate() {
+            node.set_child(c, *kind, lo, hi);
+        }
+        assert_eq!(node.used(), 0b1111);
+        assert_eq!(
+            (0..4).map(|c| node.child(c)).collect::<Vec<_>>(),
+            kinds[..4]
+        );
+    }
+
+    #[test]
+    #[should_panic(expected = "the root is nobody's child")]
+    fn the_root_is_refused_as_a_child() {
+        let mut node = WideNode::<4>::EMPTY;
+        node.set_child(0, WideChild::Node(0), [0.0; 3], [1.0; 3]);
+    }
+
+    /// Leaves cut at `max_depth` far beyond `max_leaf_size` (and beyond 255 triangles) keep their
+    /// whole counts through the collapse.
+    #[test]
+    fn leaves_cut_at_max_depth_keep_their_counts() {
+        let tris = random_triangles(4000);
+        let config = BvhConfig {
+            max_depth: 3,
+            presplit: 0.0,
+            ..BvhConfig::default()
+        };
+        let bvh = Bvh::build(&tris, config);
+        let largest = bvh.nodes.iter().map(|n| n.count).max().unwrap();
+        assert!(largest > 255, "{largest}");
+        check::<4>(&bvh);
+        check::<8>(&bvh);
+        let eight = WideBvh::<8>::collapse(&bvh);
+        assert_eq!(
+            eight.nodes.len(),
+            1,
+            "a depth-3 tree of 8 leaves is one 8-wide node"
+        );
+        let counts: u32 = (0..8)
+            .map(|c| match eight.nodes[0].child(c) {
+                WideChild::Leaf { count, .. } => count,
+                other => panic!("slot {c}: {other:?}"),
+            })
+            .sum();
+        assert_eq!(counts, 4000);
+    }
+
     #[test]
     fn a_complete_binary_tree_of_eight_leaves_collapses_by_hand_count() {
         // Eight evenly spaced single-triangle leaves: SAH splits them 4|4, 2|2, 1|1, a balanced
@@ -374,11 +499,11 @@ mod tests {
         let slots = halves.map(|h| eight.entry[h].slots);
         assert_eq!(slots.map(u32::count_ones), [4, 4]);
         assert_eq!(slots[0] | slots[1], 0xff);
-        assert_eq!(eight.nodes[0].used.count_ones(), 8);
+        assert_eq!(eight.nodes[0].used().count_ones(), 8);
         let four = WideBvh::<4>::collapse(&bvh);
         assert_eq!(four.nodes.len(), 5);
-        assert_eq!(four.nodes[0].used.count_ones(), 4);
-        assert!(four.nodes[1..].iter().all(|n| n.used.count_ones() == 2));
+        assert_eq!(four.nodes[0].used().count_ones(), 4);
+        assert!(four.nodes[1..].iter().all(|n| n.used().count_ones() == 2));
         let two = WideBvh::<2>::collapse(&bvh);
         assert_eq!(two.nodes.len(), 7, "a 2-wide collapse is the binary tree");
         // A single triangle: one leaf under the root.

@@ -134,11 +134,12 @@ fn expand<const W: usize, const L: usize, S: Stats>(
     stats: &mut S,
 ) {
     let cell = &wide.nodes[node as usize];
-    let mut survivors = cell.used;
+    let used = cell.used();
+    let mut survivors = used;
     if let Some(interval) = &packet.interval {
         survivors &= interval.survivors(&cell.lo, &cell.hi, packet.max_t);
         if S::ENABLED {
-            let culled = (cell.used & !survivors).count_ones();
+            let culled = (used & !survivors).count_ones();
             stats.event(Event::BoxesCulled, culled as u64);
         }
     }

@@ -5,8 +5,8 @@
 //! is the stream tracer's hand-off kernel (`stream`'s `single_tree`) and shows on its own, beside
 //! `embree3-1`, what one ray at a time costs on a wide tree.
 //!
-//! - **Node**: one slab test of the ray against all `W` children (`slab`: SSE groups of 4
-//!   children), within `[tmin, tmax]` with `tmax` the current closest hit.
+//! - **Node**: one slab test of the ray against all `W` children (`slab`: 8 at a time in AVX,
+//!   else SSE groups of 4), within `[tmin, tmax]` with `tmax` the current closest hit.
 //! - **Order**: the children met go on the stack far to near by entry distance, so the nearest is
 //!   popped first; a popped child whose entry lies beyond the closest hit found meanwhile is
 //!   skipped untested. An interior child's node is prefetched as it is pushed (a wide node spans
@@ -141,7 +141,7 @@ pub fn trace_wide<const W: usize, S: Stats, const ANY: bool>(
         };
         if S::ENABLED {
             stats.node(depth as usize);
-            let tested = (slots & cell.used).count_ones();
+            let tested = (slots & cell.used()).count_ones();
             (0..tested).for_each(|_| stats.aabb_test(depth as usize + 1));
         }
         let (enter, hit) = boxes.test(cell, tmin, tmax);
