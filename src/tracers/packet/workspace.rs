@@ -65,6 +65,10 @@ pub struct Packet<const L: usize> {
     /// The largest closest-hit distance over the packet's lanes (interval culling and the
     /// frustum's far plane).
     pub max_t: f32,
+    /// The origin and watertight frame every lane of the packet shares, if one (camera rays):
+    /// found once per packet, as it then holds for every SIMD ray a leaf tests — found per
+    /// leaf over the leaf's SIMD rays it cost 4% of the wide traversal on camera rays.
+    pub frame: Option<SharedFrame>,
 }
 
 impl<const L: usize> Packet<L> {
@@ -81,6 +85,7 @@ impl<const L: usize> Packet<L> {
             negative: [false; 3],
             live: 0,
             max_t: f32::INFINITY,
+            frame: None,
         }
     }
 
@@ -119,6 +124,7 @@ impl<const L: usize> Packet<L> {
             None
         };
         self.interval = (interval && cull).then(|| IntervalPacket::from_lanes(&self.groups));
+        self.frame = SharedFrame::of(self.groups.iter());
     }
 
     /// The largest `tmax` over the packet's lanes (−∞ when none is live), folded lane-wise over
@@ -225,7 +231,7 @@ impl<const L: usize> Packet<L> {
         let bvh = tree.bvh;
         // Camera rays share one origin and frame across the packet: each triangle is then made
         // relative to it once, not once per SIMD ray (`SharedFrame`).
-        let shared = SharedFrame::of(ids.iter().map(|&g| &self.groups[g as usize]));
+        let shared = self.frame;
         // Lanes that found a closer hit here: without any, no `tmax` changed and the packet's
         // largest one (`max_t`) still holds, so its recount over every SIMD ray is skipped.
         let mut found = 0;
