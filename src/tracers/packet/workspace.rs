@@ -181,6 +181,31 @@ impl<const L: usize> Packet<L> {
         group.hits_box(lo, hi)
     }
 
+    /// Masked's leaf step (Fig. 2) after SIMD ray `first`, which meets the box `[lo, hi]`:
+    /// `alive` becomes `first` and every later SIMD ray that meets the box. Filled without a
+    /// branch on the verdicts (each SIMD ray is written, and the length advanced by its verdict):
+    /// whether a SIMD ray meets a leaf is close to a coin toss, which a branch mispredicts.
+    #[inline(always)]
+    pub fn keep_hitting<S: Stats>(
+        &mut self,
+        first: u32,
+        lo: [f32; 3],
+        hi: [f32; 3],
+        depth: usize,
+        stats: &mut S,
+    ) {
+        let mut alive = std::mem::take(&mut self.alive);
+        alive.clear();
+        alive.resize(self.groups.len() - first as usize, first);
+        let mut kept = 1;
+        for g in first + 1..self.groups.len() as u32 {
+            alive[kept] = g;
+            kept += self.hits_bounds(g, lo, hi, depth, stats) as usize;
+        }
+        alive.truncate(kept);
+        self.alive = alive;
+    }
+
     /// Whether the frustum culls the box of `node` for the whole packet (counted as a culled box).
     #[inline(always)]
     pub fn frustum_culls<S: Stats>(&self, node: &BvhNode, stats: &mut S) -> bool {
