@@ -12,7 +12,11 @@
 //! 3. A popped child runs Ranged's `getFirstHit` from `ia` (its first SIMD ray, then the frustum if
 //!    that one misses, then the rest) with the rays' current closest hits, so children behind
 //!    hits found meanwhile are skipped. At a leaf, every SIMD ray after the first hit is tested
-//!    against its box and only those that meet it test its triangles (Masked's leaf step, Fig. 2).
+//!    against its box and only those that meet it test its triangles (Masked's leaf step, Fig. 2;
+//!    `Packet::keep_hitting`, without a branch per verdict).
+//!
+//! Interior children's nodes are prefetched as they are pushed (our engineering): a popped child
+//! reads its node only after its box tests, by which time the node's cache lines have arrived.
 //!
 //! Counters as the binary traversals': `node` for the root and for every child popped (tested),
 //! box and triangle tests per lane of each SIMD ray tested; the node test is counted only as the
@@ -25,6 +29,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use crate::accel::{WideBvh, WideChild};
+use crate::geometry::ray::prefetch;
 use crate::stats::{Event, Stats};
 
 use super::ranged::first_hit_in;
@@ -103,13 +108,7 @@ pub fn traverse_wide<const W: usize, const L: usize, S: Stats, const ANY: bool>(
                     // leaf step, Fig. 2): one box test saves a SIMD ray the triangle tests of
                     // every triangle of the leaf, where Ranged's `getLastHit` range would test
                     // every SIMD ray between the first and the last that meet it.
-                    packet.alive.clear();
-                    packet.alive.push(first);
-                    for g in first + 1..packet.groups.len() as u32 {
-                        if packet.hits_bounds(g, lo, hi, depth, stats) {
-                            packet.alive.push(g);
-                        }
-                    }
+                    packet.keep_hitting(first, lo, hi, depth, stats);
                     let triangles = tri as usize..(tri + count) as usize;
                     let active = ActiveRays::Alive;
                     if packet.leaf::<S, ANY>(tree, triangles, depth, active, stats) {
@@ -176,5 +175,10 @@ fn expand<const W: usize, const L: usize, S: Stats>(
             ia,
         };
         *top += 1;
+        // A child node is read only after its box tests, so asked for now it is in the cache
+        // by then (each wide node is several cache lines, and otherwise missed once per visit).
+        if let WideChild::Node(child) = cell.child(slot as usize) {
+            prefetch(std::slice::from_ref(&wide.nodes[child as usize]));
+        }
     }
 }
