@@ -25,25 +25,17 @@ use super::width::Width;
 /// ends at its first hit).
 pub trait Answer {
     const ANY: bool;
-    /// The triangle test of every lane of `simd` for this query (`SimdRay::intersect::<ANY>`).
-    fn intersect<const L: usize>(simd: &mut SimdRay<L>, tri: &Triangle, prim: u32);
-    /// One ray's traversal of the subtree under `node` for this query (`Handoff::trace::<ANY>`).
-    fn trace_single<S: Stats>(
-        handoff: &Handoff,
-        bvh: &Bvh,
-        node: u32,
-        ray: &Ray,
-        stats: &mut S,
-    ) -> Hit;
-    fn record(&mut self, hit: Hit);
-}
-
-impl Answer for Hit {
-    const ANY: bool = false;
+    /// The triangle test of every lane of `simd` for this query (`SimdRay::intersect::<ANY>`;
+    /// the branch is on a constant, so each answer compiles to one of the two).
     #[inline(always)]
     fn intersect<const L: usize>(simd: &mut SimdRay<L>, tri: &Triangle, prim: u32) {
-        simd.intersect::<false>(tri, prim);
+        if Self::ANY {
+            simd.intersect::<true>(tri, prim);
+        } else {
+            simd.intersect::<false>(tri, prim);
+        }
     }
+    /// One ray's traversal of the subtree under `node` for this query (`Handoff::trace::<ANY>`).
     #[inline(always)]
     fn trace_single<S: Stats>(
         handoff: &Handoff,
@@ -52,8 +44,17 @@ impl Answer for Hit {
         ray: &Ray,
         stats: &mut S,
     ) -> Hit {
-        handoff.trace::<S, false>(bvh, node, ray, stats)
+        if Self::ANY {
+            handoff.trace::<S, true>(bvh, node, ray, stats)
+        } else {
+            handoff.trace::<S, false>(bvh, node, ray, stats)
+        }
     }
+    fn record(&mut self, hit: Hit);
+}
+
+impl Answer for Hit {
+    const ANY: bool = false;
     #[inline(always)]
     fn record(&mut self, hit: Hit) {
         *self = hit;
@@ -62,20 +63,6 @@ impl Answer for Hit {
 
 impl Answer for bool {
     const ANY: bool = true;
-    #[inline(always)]
-    fn intersect<const L: usize>(simd: &mut SimdRay<L>, tri: &Triangle, prim: u32) {
-        simd.intersect::<true>(tri, prim);
-    }
-    #[inline(always)]
-    fn trace_single<S: Stats>(
-        handoff: &Handoff,
-        bvh: &Bvh,
-        node: u32,
-        ray: &Ray,
-        stats: &mut S,
-    ) -> Hit {
-        handoff.trace::<S, true>(bvh, node, ray, stats)
-    }
     #[inline(always)]
     fn record(&mut self, _: Hit) {
         *self = true;
