@@ -8,10 +8,9 @@
 
 use std::time::Instant;
 
-use glam::Vec3;
-
 use super::child_pairs::{child_pairs, ChildPair};
 use super::presplit::{split_references, Reference};
+use super::spatial_split::{apply_spatial_split, best_spatial_split};
 use crate::error::{Error, Result};
 use crate::geometry::{Aabb, Triangle};
 use crate::params::Params;
@@ -28,6 +27,10 @@ pub struct BvhConfig {
     /// Early split clipping budget: at most this fraction of extra triangle references
     /// (0 disables it; see `presplit`).
     pub presplit: f32,
+    /// Spatial splits (SBVH, see `spatial_split`): tried at a node when its best object split's
+    /// children overlap by more than this fraction of the root's surface area (the paper's α;
+    /// 0 disables them).
+    pub spatial: f32,
 }
 
 impl Default for BvhConfig {
@@ -37,6 +40,7 @@ impl Default for BvhConfig {
             max_depth: 48,
             bins: 16,
             presplit: 0.5,
+            spatial: 0.0,
         }
     }
 }
@@ -44,7 +48,10 @@ impl Default for BvhConfig {
 impl BvhConfig {
     /// Deepest tree a traversal stack must hold; `max_depth` is capped to it.
     pub const DEPTH_LIMIT: usize = 62;
-    pub const PARAMS: &'static [&'static str] = &["leaf_size", "max_depth", "bins", "presplit"];
+    /// More SAH bins than this buy nothing and only cost memory and time.
+    pub const BINS_LIMIT: usize = 4096;
+    pub const PARAMS: &'static [&'static str] =
+        &["leaf_size", "max_depth", "bins", "presplit", "spatial"];
 
     pub fn from_params(p: &Params) -> Result<Self> {
         let d = BvhConfig::default();
@@ -53,11 +60,19 @@ impl BvhConfig {
             max_depth: p.get_or("max_depth", d.max_depth)?,
             bins: p.get_or("bins", d.bins)?,
             presplit: p.get_or("presplit", d.presplit)?,
+            spatial: p.get_or("spatial", d.spatial)?,
         };
         let presplit_ok = c.presplit.is_finite() && (0.0..=16.0).contains(&c.presplit);
-        if c.max_leaf_size == 0 || c.bins < 2 || c.max_depth > Self::DEPTH_LIMIT || !presplit_ok {
+        let spatial_ok = c.spatial.is_finite() && (0.0..=1.0).contains(&c.spatial);
+        if c.max_leaf_size == 0
+            || !(2..=Self::BINS_LIMIT).contains(&c.bins)
+            || c.max_depth > Self::DEPTH_LIMIT
+            || !presplit_ok
+            || !spatial_ok
+        {
             return Err(Error::usage(format!(
-                "BVH parameters out of range: leaf_size ≥ 1, bins ≥ 2, max_depth ≤ {}, presplit in [0, 16] (got {c:?})",
+                "BVH parameters out of range: leaf_size ≥ 1, bins in [2, {}], max_depth ≤ {}, presplit in [0, 16], spatial in [0, 1] (got {c:?})",
+                Self::BINS_LIMIT,
                 Self::DEPTH_LIMIT
             )));
         }
@@ -116,6 +131,100 @@ struct Split {
     /// Primitives with bin index < `bin` go left.
     bin: usize,
     cost: f32,
+    /// The two children's boxes (their overlap decides whether spatial splits are tried).
+    left: Aabb,
+    right: Aabb,
+}
+
+/// Spatial splits stop once they have added this many references per triangle: a guard against
+/// pathological scenes (the α threshold keeps real ones far below it).
+const MAX_SPATIAL_GROWTH: usize = 1;
+
+/// When the builder tries spatial splits.
+struct SpatialBudget {
+    /// The α of Stich et al. (§4.5); 0: never.
+    alpha: f32,
+    root_area: f32,
+    /// Extra references spatial splits may still add.
+    references_left: usize,
+}
+
+/// The state of one build: the tree so far and the references of the finished leaves.
+struct Builder<'a> {
+    config: BvhConfig,
+    triangles: &'a [Triangle],
+    spatial: SpatialBudget,
+    nodes: Vec<BvhNode>,
+    depth: Vec<u8>,
+    /// References of the leaves in tree order (what `triangles` and `prim_ids` are made from).
+    order: Vec<Reference>,
+    bins: Vec<[Bin; 3]>,
+}
+
+impl Builder<'_> {
+    /// Splits node `index` holding `refs` into its two children's references, or makes it a leaf
+    /// (then `None`): the cheapest of object split, spatial split and leaf by SAH, a node over
+    /// `max_leaf_size` always split (unless at `max_depth`).
+    fn split(
+        &mut self,
+        index: usize,
+        mut refs: Vec<Reference>,
+    ) -> Option<(Vec<Reference>, Vec<Reference>)> {
+        let count = refs.len();
+        let config = self.config;
+        if count > 1 && (self.depth[index] as usize) < config.max_depth.min(BvhConfig::DEPTH_LIMIT)
+        {
+            let centre_bounds = refs
+                .iter()
+                .fold(Aabb::EMPTY, |b, r| b.grow(r.bounds.center()));
+            let object = best_split(&refs, &centre_bounds, &mut self.bins);
+            let must_split = count > config.max_leaf_size;
+            let spatial = object
+                .as_ref()
+                .filter(|o| {
+                    let overlap = intersection(&o.left, &o.right).surface_area();
+                    self.spatial.alpha > 0.0
+                        && self.spatial.references_left > 0
+                        && overlap > self.spatial.alpha * self.spatial.root_area
+                })
+                .and_then(|o| {
+                    let bounds = self.nodes[index].bounds;
+                    best_spatial_split(&refs, self.triangles, &bounds, config.bins)
+                        .filter(|s| s.cost < o.cost)
+                });
+            let leaf_cost = count as f32;
+            if let Some(s) = spatial.filter(|s| must_split || s.cost < leaf_cost) {
+                let (left, right) = apply_spatial_split(refs, self.triangles, &s);
+                let added = (left.len() + right.len()).saturating_sub(count);
+                self.spatial.references_left = self.spatial.references_left.saturating_sub(added);
+                return Some((left, right));
+            }
+            let mid = match object {
+                Some(s) if must_split || s.cost < leaf_cost => {
+                    let (lo, extent) = (centre_bounds.min[s.axis], centre_bounds.extent()[s.axis]);
+                    let nb = config.bins;
+                    partition(&mut refs, |r| {
+                        bin_of(r.bounds.center()[s.axis], lo, extent, nb) < s.bin
+                    })
+                }
+                // All centroids coincide: SAH cannot separate them; split by count if we must.
+                None if must_split => count / 2,
+                _ => 0,
+            };
+            if mid > 0 {
+                let right = refs.split_off(mid);
+                return Some((refs, right));
+            }
+        }
+        self.nodes[index].first = self.order.len() as u32;
+        self.order.extend(refs);
+        None
+    }
+}
+
+/// The box both `a` and `b` contain (empty when they do not overlap).
+fn intersection(a: &Aabb, b: &Aabb) -> Aabb {
+    Aabb::new(a.min.max(b.min), a.max.min(b.max))
 }
 
 impl Bvh {
@@ -124,7 +233,7 @@ impl Bvh {
     pub fn build(triangles: &[Triangle], config: BvhConfig) -> Bvh {
         let start = Instant::now();
         let refs = split_references(triangles, config.presplit);
-        Self::build_over(&refs, triangles, None, config, start)
+        Self::build_over(refs, triangles, None, config, start)
     }
 
     /// The tree over a mesh moving linearly from `open` to `close` (same count and order) during
@@ -143,87 +252,72 @@ impl Bvh {
                 prim: i as u32,
             })
             .collect();
-        Self::build_over(&refs, open, Some(close), config, start)
+        Self::build_over(refs, open, Some(close), config, start)
     }
 
     fn build_over(
-        refs: &[Reference],
+        refs: Vec<Reference>,
         triangles: &[Triangle],
         close: Option<&[Triangle]>,
         config: BvhConfig,
         start: Instant,
     ) -> Bvh {
         let n = refs.len();
-        let boxes: Vec<Aabb> = refs.iter().map(|r| r.bounds).collect();
-        let centroids: Vec<Vec3> = boxes.iter().map(Aabb::center).collect();
-        let mut order: Vec<u32> = (0..n as u32).collect();
-        let mut nodes = Vec::with_capacity((2 * n).max(1));
-        let mut depth = Vec::with_capacity((2 * n).max(1));
-        nodes.push(BvhNode {
-            bounds: boxes.iter().fold(Aabb::EMPTY, |b, x| b.union(*x)),
+        let root_bounds = refs.iter().fold(Aabb::EMPTY, |b, r| b.union(r.bounds));
+        // Spatial splits cut triangles at a plane: not for a moving mesh, whose references bound
+        // a triangle over the whole shutter interval (as for early split clipping).
+        let spatial = SpatialBudget {
+            alpha: if close.is_none() { config.spatial } else { 0.0 },
+            root_area: root_bounds.surface_area(),
+            references_left: n.saturating_mul(MAX_SPATIAL_GROWTH),
+        };
+        let mut builder = Builder {
+            config,
+            triangles,
+            spatial,
+            nodes: Vec::with_capacity((2 * n).max(1)),
+            depth: Vec::with_capacity((2 * n).max(1)),
+            order: Vec::with_capacity(n),
+            bins: vec![[EMPTY_BIN; 3]; config.bins],
+        };
+        builder.nodes.push(BvhNode {
+            bounds: root_bounds,
             first: 0,
             count: n as u32,
         });
-        depth.push(0u8);
-
-        // Work list of nodes still to split, each owning order[first .. first + count].
-        let mut pending = if n > 0 { vec![0usize] } else { vec![] };
-        let mut bins = vec![[EMPTY_BIN; 3]; config.bins];
-        while let Some(index) = pending.pop() {
-            let node = nodes[index];
-            let (first, count) = (node.first as usize, node.count as usize);
-            let range = &mut order[first..first + count];
-            let node_depth = depth[index] as usize;
-            if count == 1 || node_depth >= config.max_depth.min(BvhConfig::DEPTH_LIMIT) {
-                continue;
-            }
-            let centre_bounds = range
-                .iter()
-                .fold(Aabb::EMPTY, |b, &i| b.grow(centroids[i as usize]));
-            let split = best_split(range, &boxes, &centroids, &centre_bounds, &mut bins);
-            let leaf_cost = count as f32;
-            let mid = match split {
-                Some(s) if count > config.max_leaf_size || s.cost < leaf_cost => {
-                    let (lo, extent) = (centre_bounds.min[s.axis], centre_bounds.extent()[s.axis]);
-                    let nb = config.bins;
-                    partition(range, |i| {
-                        bin_of(centroids[i as usize][s.axis], lo, extent, nb) < s.bin
-                    })
+        builder.depth.push(0u8);
+        // Work list of nodes still to split with their references; popped depth first, left child
+        // first, so leaves take their triangle ranges in tree order.
+        let mut pending = if n > 0 { vec![(0usize, refs)] } else { vec![] };
+        while let Some((index, refs)) = pending.pop() {
+            if let Some((left, right)) = builder.split(index, refs) {
+                let child = builder.nodes.len();
+                let node_depth = builder.depth[index];
+                for side in [&left, &right] {
+                    builder.nodes.push(BvhNode {
+                        bounds: side.iter().fold(Aabb::EMPTY, |b, r| b.union(r.bounds)),
+                        first: 0,
+                        count: side.len() as u32,
+                    });
+                    builder.depth.push(node_depth + 1);
                 }
-                // All centroids coincide: SAH cannot separate them; split by count if we must.
-                None if count > config.max_leaf_size => count / 2,
-                _ => continue,
-            };
-            let child = nodes.len();
-            for (offset, len) in [(0, mid), (mid, count - mid)] {
-                let sub = &order[first + offset..first + offset + len];
-                nodes.push(BvhNode {
-                    bounds: sub
-                        .iter()
-                        .fold(Aabb::EMPTY, |b, &i| b.union(boxes[i as usize])),
-                    first: (first + offset) as u32,
-                    count: len as u32,
-                });
-                depth.push((node_depth + 1) as u8);
+                builder.nodes[index].first = child as u32;
+                builder.nodes[index].count = 0;
+                pending.push((child + 1, right));
+                pending.push((child, left));
             }
-            nodes[index].first = child as u32;
-            nodes[index].count = 0;
-            pending.push(child + 1);
-            pending.push(child);
         }
 
+        let Builder {
+            nodes,
+            depth,
+            order,
+            ..
+        } = builder;
         Bvh {
-            triangles: order
-                .iter()
-                .map(|&i| triangles[refs[i as usize].prim as usize])
-                .collect(),
-            prim_ids: order.iter().map(|&i| refs[i as usize].prim).collect(),
-            motion_end: close.map(|close| {
-                order
-                    .iter()
-                    .map(|&i| close[refs[i as usize].prim as usize])
-                    .collect()
-            }),
+            triangles: order.iter().map(|r| triangles[r.prim as usize]).collect(),
+            prim_ids: order.iter().map(|r| r.prim).collect(),
+            motion_end: close.map(|close| order.iter().map(|r| close[r.prim as usize]).collect()),
             pairs: child_pairs(&nodes),
             nodes,
             depth,
@@ -243,6 +337,30 @@ impl Bvh {
     pub fn leaf_count(&self) -> usize {
         self.nodes.iter().filter(|n| n.is_leaf()).count()
     }
+
+    /// The tree's SAH cost with the builder's constants (traversal 1 per interior node, 1 per
+    /// triangle reference in a leaf), each node weighted by its surface area over the root's: the
+    /// expected work of a random ray through the root box (Goldsmith & Salmon 1987; MacDonald &
+    /// Booth 1990). 0 for an empty tree.
+    pub fn sah_cost(&self) -> f64 {
+        if self.is_empty() {
+            return 0.0;
+        }
+        let root_area = f64::from(self.nodes[Self::ROOT].bounds.surface_area());
+        self.nodes
+            .iter()
+            .map(|n| {
+                let work = if n.is_leaf() { f64::from(n.count) } else { 1.0 };
+                // A scene flat to a segment or a point: every ray through it meets every node.
+                let share = if root_area > 0.0 {
+                    f64::from(n.bounds.surface_area()) / root_area
+                } else {
+                    1.0
+                };
+                work * share
+            })
+            .sum()
+    }
 }
 
 #[inline(always)]
@@ -251,33 +369,27 @@ fn bin_of(c: f32, lo: f32, extent: f32, bins: usize) -> usize {
 }
 
 /// The cheapest SAH plane over all axes and bins, or `None` when every centroid is the same point.
-fn best_split(
-    range: &[u32],
-    boxes: &[Aabb],
-    centroids: &[Vec3],
-    centre_bounds: &Aabb,
-    bins: &mut [[Bin; 3]],
-) -> Option<Split> {
+fn best_split(refs: &[Reference], centre_bounds: &Aabb, bins: &mut [[Bin; 3]]) -> Option<Split> {
     let nb = bins.len();
     let extent = centre_bounds.extent();
     bins.fill([EMPTY_BIN; 3]);
-    for &i in range {
-        let c = centroids[i as usize];
+    for r in refs {
+        let c = r.bounds.center();
         for axis in 0..3 {
             if extent[axis] > 0.0 {
                 let b = &mut bins[bin_of(c[axis], centre_bounds.min[axis], extent[axis], nb)][axis];
-                b.bounds = b.bounds.union(boxes[i as usize]);
+                b.bounds = b.bounds.union(r.bounds);
                 b.count += 1;
             }
         }
     }
-    let parent_area = range
+    let parent_area = refs
         .iter()
-        .fold(Aabb::EMPTY, |b, &i| b.union(boxes[i as usize]))
+        .fold(Aabb::EMPTY, |b, r| b.union(r.bounds))
         .surface_area()
         .max(f32::MIN_POSITIVE);
     let mut best: Option<Split> = None;
-    let mut right_area = vec![0.0f32; nb];
+    let mut right_bounds = vec![Aabb::EMPTY; nb];
     let mut right_count = vec![0u32; nb];
     for axis in (0..3).filter(|&a| extent[a] > 0.0) {
         // Sweep from the right to get the cost of every "bins ≥ k go right" side.
@@ -285,7 +397,7 @@ fn best_split(
         for k in (1..nb).rev() {
             acc = acc.union(bins[k][axis].bounds);
             cnt += bins[k][axis].count;
-            right_area[k] = acc.surface_area();
+            right_bounds[k] = acc;
             right_count[k] = cnt;
         }
         let (mut acc, mut cnt) = (Aabb::EMPTY, 0);
@@ -296,11 +408,18 @@ fn best_split(
                 continue;
             }
             // Traversal cost 1, intersection cost 1 per triangle, relative to the parent's area.
+            let right = right_bounds[k];
             let cost = 1.0
-                + (acc.surface_area() * cnt as f32 + right_area[k] * right_count[k] as f32)
+                + (acc.surface_area() * cnt as f32 + right.surface_area() * right_count[k] as f32)
                     / parent_area;
             if best.as_ref().is_none_or(|b| cost < b.cost) {
-                best = Some(Split { axis, bin: k, cost });
+                best = Some(Split {
+                    axis,
+                    bin: k,
+                    cost,
+                    left: acc,
+                    right,
+                });
             }
         }
     }
@@ -308,10 +427,10 @@ fn best_split(
 }
 
 /// In-place partition; returns how many elements satisfy `left` (they come first).
-fn partition(v: &mut [u32], left: impl Fn(u32) -> bool) -> usize {
+fn partition<T>(v: &mut [T], left: impl Fn(&T) -> bool) -> usize {
     let mut mid = 0;
     for i in 0..v.len() {
-        if left(v[i]) {
+        if left(&v[i]) {
             v.swap(i, mid);
             mid += 1;
         }
@@ -321,7 +440,11 @@ fn partition(v: &mut [u32], left: impl Fn(u32) -> bool) -> usize {
 
 #[cfg(test)]
 mod tests {
+    use glam::Vec3;
+
     use super::*;
+    use crate::geometry::{RayBoxTest, WatertightRay};
+    use crate::random::SplitMix64;
 
     fn grid_of_triangles(n: usize) -> Vec<Triangle> {
         let mut tris = Vec::new();
@@ -450,6 +573,216 @@ mod tests {
             .iter()
             .filter(|n| n.is_leaf())
             .all(|n| n.count <= 4));
+    }
+
+    #[test]
+    fn sah_cost_of_two_separate_triangles_by_hand() {
+        // Two unit right triangles in z = 0, at x ∈ [0, 1] and x ∈ [3, 4]: each box has area
+        // 2·(1·1) = 2, the root's [0, 4] × [0, 1] has 2·(4·1) = 8. Split (cost 1 + (2 + 2)/8 = 1.5)
+        // beats a leaf of 2: SAH = 1 (root) + 1·2/8 + 1·2/8 = 1.5.
+        let tris = [
+            Triangle::new(Vec3::ZERO, Vec3::X, Vec3::Y),
+            Triangle::new(
+                Vec3::new(3.0, 0.0, 0.0),
+                Vec3::new(4.0, 0.0, 0.0),
+                Vec3::new(3.0, 1.0, 0.0),
+            ),
+        ];
+        let bvh = Bvh::build(&tris, BvhConfig::default());
+        assert_eq!(bvh.nodes.len(), 3);
+        assert!((bvh.sah_cost() - 1.5).abs() < 1e-9, "{}", bvh.sah_cost());
+        // Forced into one leaf (max_depth 0): 2 triangles over the root's own area.
+        let leaf = Bvh::build(
+            &tris,
+            BvhConfig {
+                max_depth: 0,
+                ..BvhConfig::default()
+            },
+        );
+        assert_eq!(leaf.sah_cost(), 2.0);
+        assert_eq!(Bvh::build(&[], BvhConfig::default()).sah_cost(), 0.0);
+    }
+
+    /// Long diagonal slivers crossing a field of small triangles: their boxes cover the whole
+    /// scene, so every object split leaves heavily overlapping children.
+    fn slivers_over_small_triangles() -> Vec<Triangle> {
+        let mut tris = grid_of_triangles(2000);
+        for i in 0..40 {
+            let o = Vec3::new(0.0, i as f32 * 0.25, 0.0);
+            tris.push(Triangle::new(
+                o,
+                o + Vec3::new(10.0, 0.0, 10.0),
+                o + Vec3::new(10.0, 0.1, 10.0),
+            ));
+        }
+        tris
+    }
+
+    fn spatial(alpha: f32) -> BvhConfig {
+        BvhConfig {
+            presplit: 0.0,
+            spatial: alpha,
+            ..BvhConfig::default()
+        }
+    }
+
+    #[test]
+    fn spatial_splits_lower_the_sah_cost_where_slivers_overlap_everything() {
+        let tris = slivers_over_small_triangles();
+        let plain = Bvh::build(&tris, spatial(0.0));
+        let split = Bvh::build(&tris, spatial(1e-5));
+        assert_eq!(plain.triangles.len(), tris.len());
+        assert!(split.triangles.len() > tris.len(), "slivers were split");
+        assert!(
+            split.sah_cost() < 0.9 * plain.sah_cost(),
+            "SAH {} with spatial splits, {} without",
+            split.sah_cost(),
+            plain.sah_cost()
+        );
+        // On triangles that overlap little no split pays much, and none costs more.
+        let small = grid_of_triangles(2000);
+        let (a, b) = (
+            Bvh::build(&small, spatial(0.0)),
+            Bvh::build(&small, spatial(1e-5)),
+        );
+        assert!(
+            b.sah_cost() <= a.sah_cost() * 1.0001,
+            "{} > {}",
+            b.sah_cost(),
+            a.sah_cost()
+        );
+    }
+
+    #[test]
+    fn spatial_split_references_lie_in_their_leaves_and_cover_their_triangles() {
+        let tris = slivers_over_small_triangles();
+        for config in [
+            spatial(1e-5),
+            BvhConfig {
+                spatial: 1e-5,
+                ..BvhConfig::default()
+            },
+        ] {
+            let bvh = Bvh::build(&tris, config);
+            // Boxes nest, and each leaf's box lies within the triangles' own boxes' union.
+            for (i, node) in bvh.nodes.iter().enumerate().filter(|(_, n)| !n.is_leaf()) {
+                for c in [node.first as usize, node.first as usize + 1] {
+                    assert!(
+                        node.bounds.contains(&bvh.nodes[c].bounds),
+                        "node {i}, child {c}"
+                    );
+                }
+            }
+            // Every sampled point of every triangle lies in a leaf that references it.
+            let mut leaves_of = vec![Vec::new(); tris.len()];
+            for node in bvh.nodes.iter().filter(|n| n.is_leaf()) {
+                assert!(node.count as usize <= config.max_leaf_size);
+                for k in node.first..node.first + node.count {
+                    let id = bvh.prim_ids[k as usize] as usize;
+                    assert_eq!(bvh.triangles[k as usize], tris[id]);
+                    leaves_of[id].push(node.bounds);
+                }
+            }
+            for (id, tri) in tris.iter().enumerate() {
+                let whole = tri.bounds();
+                for a in 0..=10 {
+                    for b in 0..=(10 - a) {
+                        let p = tri
+                            .point(a as f32 / 10.0, b as f32 / 10.0)
+                            .clamp(whole.min, whole.max);
+                        assert!(
+                            leaves_of[id].iter().any(|l| l.contains_point(p)),
+                            "triangle {id}: {p:?} in no leaf of it"
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    /// Closest hit of a ray by walking the tree (every box the ray enters, nothing pruned but by
+    /// the slab test and the closest hit so far).
+    fn closest_in_tree(bvh: &Bvh, origin: Vec3, dir: Vec3) -> Option<(f32, u32)> {
+        let (boxes, ray) = (
+            RayBoxTest::new(origin, dir),
+            WatertightRay::new(origin, dir),
+        );
+        let mut best: Option<(f32, u32)> = None;
+        let mut stack = vec![Bvh::ROOT];
+        while let Some(i) = stack.pop() {
+            let node = &bvh.nodes[i];
+            let tmax = best.map_or(f32::INFINITY, |b| b.0);
+            if boxes.hit(&node.bounds, 0.0, tmax).is_none() {
+                continue;
+            }
+            if node.is_leaf() {
+                for k in node.first..node.first + node.count {
+                    let tmax = best.map_or(f32::INFINITY, |b| b.0);
+                    if let Some((t, _, _)) = ray.intersect(&bvh.triangles[k as usize], 0.0, tmax) {
+                        best = Some((t, bvh.prim_ids[k as usize]));
+                    }
+                }
+            } else {
+                stack.extend([node.first as usize, node.first as usize + 1]);
+            }
+        }
+        best
+    }
+
+    #[test]
+    fn spatial_split_trees_find_every_closest_hit_of_a_brute_force_search() {
+        let tris = slivers_over_small_triangles();
+        let bvh = Bvh::build(
+            &tris,
+            BvhConfig {
+                spatial: 1e-5,
+                ..BvhConfig::default()
+            },
+        );
+        assert!(bvh.triangles.len() > tris.len());
+        let mut rng = SplitMix64::new(11);
+        let mut hits = 0;
+        for _ in 0..4000 {
+            let origin = rng.vec3(-2.0, 12.0);
+            let target = rng.vec3(0.0, 10.0);
+            let dir = target - origin;
+            let ray = WatertightRay::new(origin, dir);
+            let brute = tris
+                .iter()
+                .enumerate()
+                .filter_map(|(i, t)| {
+                    ray.intersect(t, 0.0, f32::INFINITY)
+                        .map(|h| (h.0, i as u32))
+                })
+                .min_by(|a, b| a.0.total_cmp(&b.0));
+            let walked = closest_in_tree(&bvh, origin, dir);
+            assert_eq!(
+                walked.map(|h| h.0),
+                brute.map(|h| h.0),
+                "ray {origin:?} → {target:?}"
+            );
+            hits += usize::from(brute.is_some());
+        }
+        assert!(hits > 1000, "only {hits} rays hit");
+    }
+
+    #[test]
+    fn bvh_parameters_out_of_range_are_usage_errors() {
+        for (key, value) in [
+            ("spatial", "-0.1"),
+            ("spatial", "2"),
+            ("spatial", "nan"),
+            ("spatial", "inf"),
+            ("bins", "1"),
+            ("bins", "100000"),
+            ("leaf_size", "0"),
+            ("presplit", "17"),
+        ] {
+            let err = BvhConfig::from_params(&Params::new().with(key, value)).unwrap_err();
+            assert_eq!(err.exit_code(), 2, "{key} = {value}: {err}");
+        }
+        let ok = BvhConfig::from_params(&Params::new().with("spatial", 1e-5)).unwrap();
+        assert_eq!(ok.spatial, 1e-5);
     }
 
     #[test]

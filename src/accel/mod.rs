@@ -7,6 +7,7 @@ pub mod embree;
 pub mod grid;
 pub mod obvhs;
 pub mod presplit;
+pub mod spatial_split;
 pub mod wide_bvh;
 
 use std::sync::Arc;

@@ -140,7 +140,12 @@ fn clipped_bounds(tri: &Triangle, region: &Aabb, whole: &Aabb) -> Aabb {
             }
         }
     }
-    let b = Aabb::from_points(&poly);
+    widened_within(Aabb::from_points(&poly), whole)
+}
+
+/// `b` widened by a few ULPs of its largest coordinate, so rounding in computed (clipped) vertices
+/// cannot open a gap between the pieces of a triangle, and kept inside `whole`.
+pub(super) fn widened_within(b: Aabb, whole: &Aabb) -> Aabb {
     let margin = Vec3::splat(4.0 * f32::EPSILON * b.min.abs().max(b.max.abs()).max_element());
     Aabb::new(
         (b.min - margin).max(whole.min),
