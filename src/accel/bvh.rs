@@ -1,6 +1,10 @@
 //! Binary BVH built with binned SAH (Wald 2007, "On fast construction of SAH-based bounding volume
 //! hierarchies"). Leaf size and maximum depth are configurable because later work compares deep
-//! and shallow trees; every node knows its depth for the per-depth histograms.
+//! and shallow trees; every node knows its depth for the per-depth histograms. Beyond the papers'
+//! plain SAH (`presplit = 0`, `spatial = 0`): early split clipping before the build (`presplit`,
+//! on by default) and spatial splits during it (`spatial_split`, the SBVH, off by default); with
+//! either, a triangle may be referenced by several leaves, each holding the box of its part only.
+//! `sah_cost` measures the result.
 //!
 //! Layout: the two children of an interior node are adjacent (`first`, `first + 1`), so a
 //! traversal step tests both boxes at once. Triangles are copied in leaf order for locality;
