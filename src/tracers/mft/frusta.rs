@@ -252,17 +252,20 @@ impl Frusta {
                 let (entry, exit) = (lanes(&self.rcp[a][0]), lanes(&self.rcp[a][1]));
                 let ascending = entry.gt(zero);
                 let free_inf = lanes(&self.free_inf[a]);
+                let minus_free_inf = zero - free_inf;
                 let side: [V; 4] = std::array::from_fn(|k| lanes(&self.side[k][a]));
                 let positive = side.map(|n| n.gt(zero));
                 for i in 0..B {
                     let (x0, x1) = (V::splat(lo[i][a]) - o, V::splat(hi[i][a]) - o);
-                    let enter = V::select(ascending, x0, x1) * entry - free_inf;
-                    let leave = V::select(ascending, x1, x0) * exit + free_inf;
+                    // Fused: the product's bits (± 0 adds nothing), or ∓∞ on a free axis.
+                    let enter = V::select(ascending, x0, x1).mul_add(entry, minus_free_inf);
+                    let leave = V::select(ascending, x1, x0).mul_add(exit, free_inf);
                     near[i] = enter.max(near[i]);
                     far[i] = leave.min(far[i]);
-                    // Per side plane, the box corner deepest inside it.
+                    // Per side plane, the box corner deepest inside it (fused: one rounding
+                    // fewer than the margins allow for).
                     for k in 0..4 {
-                        depth[i][k] = depth[i][k] + side[k] * V::select(positive[k], x0, x1);
+                        depth[i][k] = side[k].mul_add(V::select(positive[k], x0, x1), depth[i][k]);
                     }
                 }
             }
