@@ -18,8 +18,9 @@ use crate::lanes::SimdRay;
 use crate::stats::{Event, Stats};
 use crate::tracers::mft::descend::{depth, keep_counted, next_leaf, start_at_root};
 use crate::tracers::mft::frusta::{bits, Frusta, Margins};
+use crate::tracers::mft::vector::{Native, Vector};
 use crate::tracers::mft::MftConfig;
-use crate::tracers::visibility::{shadow_ray, VisibilityQuery};
+use crate::tracers::visibility::{shadow_ray, ShadingPoint, VisibilityQuery};
 
 /// One worker's state, reused from block to block.
 #[derive(Default)]
@@ -27,6 +28,8 @@ pub struct Scratch {
     pub frusta: Frusta,
     /// The light point of every sample of every set (`LightSamples` order).
     pub targets: Vec<Vec3>,
+    /// The same light points as lanes, with each set's (s, t) rectangle.
+    pub sets: SetLanes,
     /// Live (not yet occluded, casting a ray) samples: `words` per frustum.
     alive: Vec<u64>,
     /// The generated rays, 16 samples to a SIMD ray, `per_point.div_ceil(16)` per frustum.
@@ -43,6 +46,75 @@ pub fn light_points(query: &VisibilityQuery<'_>, targets: &mut Vec<Vec3>) {
     for set in 0..query.samples.sets() {
         let uv = query.samples.set(set as u32);
         targets.extend(uv.iter().map(|&[s, t]| query.light.point(s, t)));
+    }
+}
+
+/// The light points of the query's sample sets as lanes (one array per axis, each set's samples
+/// from a multiple of `SET_ALIGN`), so a point's samples in front of its surface are found one
+/// vector of samples per pass, and the (s, t) rectangle of each whole set: the frustum of a point
+/// all of whose samples are in front.
+#[derive(Default)]
+pub struct SetLanes {
+    xyz: [Vec<f32>; 3],
+    per_point: usize,
+    /// Floats from one set's first sample to the next's.
+    stride: usize,
+    rect: Vec<[f32; 4]>,
+}
+
+/// Alignment of a set's samples in `SetLanes`: a multiple of every vector width.
+const SET_ALIGN: usize = 16;
+
+impl SetLanes {
+    /// The lanes of `query`'s sample sets, from their light points `targets` (`light_points`).
+    pub fn fill(&mut self, query: &VisibilityQuery<'_>, targets: &[Vec3]) {
+        let per_point = query.samples.per_point();
+        self.per_point = per_point;
+        self.stride = per_point.next_multiple_of(SET_ALIGN);
+        // Padding lanes past the last set too, so every vector load stays in bounds.
+        let len = query.samples.sets() * self.stride + SET_ALIGN;
+        for (a, axis) in self.xyz.iter_mut().enumerate() {
+            axis.clear();
+            axis.resize(len, 0.0);
+            for (set, points) in targets.chunks(per_point).enumerate() {
+                for (s, point) in points.iter().enumerate() {
+                    axis[set * self.stride + s] = point[a];
+                }
+            }
+        }
+        self.rect.clear();
+        self.rect.extend((0..query.samples.sets()).map(|set| {
+            query.samples.set(set as u32).iter().fold(
+                [
+                    f32::INFINITY,
+                    f32::NEG_INFINITY,
+                    f32::INFINITY,
+                    f32::NEG_INFINITY,
+                ],
+                |r, &[u, v]| [r[0].min(u), r[1].max(u), r[2].min(v), r[3].max(v)],
+            )
+        }));
+    }
+
+    /// Sets in `alive` (zero on entry) the bits of point `p`'s samples in front of its surface
+    /// (`shadow_ray`'s test, the same operations lane by lane) and returns their number.
+    #[inline(always)]
+    fn in_front<V: Vector>(&self, p: &ShadingPoint, alive: &mut [u64]) -> u32 {
+        let first = p.set as usize * self.stride;
+        let (position, normal) = (
+            p.position.to_array().map(V::splat),
+            p.normal.to_array().map(V::splat),
+        );
+        let mut count = 0;
+        for s in (0..self.per_point).step_by(V::WIDTH) {
+            let to = |a: usize| V::load(&self.xyz[a], first + s) - position[a];
+            let facing = to(0) * normal[0] + to(1) * normal[1] + to(2) * normal[2];
+            let samples = u64::MAX >> (64 - (self.per_point - s).min(V::WIDTH));
+            let front = V::bits(facing.gt(V::splat(0.0))) & samples;
+            alive[s / 64] |= front << (s % 64);
+            count += front.count_ones();
+        }
+        count
     }
 }
 
@@ -79,6 +151,7 @@ pub fn trace_block<S: Stats>(
     let Scratch {
         frusta,
         targets,
+        sets,
         alive,
         rays,
         stack,
@@ -90,38 +163,25 @@ pub fn trace_block<S: Stats>(
         rays.resize(len * groups, SimdRay::default());
     }
     frusta.len = len;
-    let uv = |set: u32| query.samples.set(set);
 
     // Frusta: the samples in front of each point's surface (`shadow_ray`'s test) are live, and
-    // bounded by the (s, t) rectangle of those samples.
+    // bounded by the (s, t) rectangle of those samples (the whole set's when all are).
     let mut live = 0u64;
     for f in 0..len {
         let p = &query.points[first + f];
-        let set_targets = &targets[p.set as usize * per_point..][..per_point];
-        let mut rect = [
-            f32::INFINITY,
-            f32::NEG_INFINITY,
-            f32::INFINITY,
-            f32::NEG_INFINITY,
-        ];
-        for (s, target) in set_targets.iter().enumerate() {
-            if (*target - p.position).dot(p.normal) > 0.0 {
-                alive[f * words + s / 64] |= 1 << (s % 64);
-                let [u, v] = uv(p.set)[s];
-                rect = [
-                    rect[0].min(u),
-                    rect[1].max(u),
-                    rect[2].min(v),
-                    rect[3].max(v),
-                ];
-                if S::ENABLED {
-                    stats.ray();
-                }
-            }
+        let point_alive = &mut alive[f * words..(f + 1) * words];
+        let in_front = sets.in_front::<Native>(p, point_alive);
+        if S::ENABLED {
+            (0..in_front).for_each(|_| stats.ray());
         }
         // A point without a finite origin casts only ill-formed rays, which meet nothing (as in
         // the reference tracer): its samples stay live and end visible, without a frustum.
-        if rect[0] <= rect[1] && p.origin.is_finite() {
+        if in_front > 0 && p.origin.is_finite() {
+            let rect = if in_front as usize == per_point {
+                sets.rect[p.set as usize]
+            } else {
+                live_rect(query, first + f, point_alive)
+            };
             frusta.set(f, p.origin, &query.light, rect);
             live |= 1 << f;
         }

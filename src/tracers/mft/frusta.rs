@@ -49,8 +49,10 @@ pub struct Frusta {
     pub corner_len_sq: [Lanes; 4],
     /// The longest corner ray in the 1-norm (a bound of every ray's length, for rounding margins).
     pub reach: Lanes,
-    /// Per axis, the interval `[1/D_max, 1/D_min]` of reciprocal directions (ordered either
-    /// way); 0 on a free axis, where the directions straddle 0 and the axis bounds nothing.
+    /// Per axis, the reciprocal directions `[entry, exit]`: the rays enter the axis's slab at
+    /// `u = (slab − o) · 1/D` with `D` the component of largest magnitude (the fastest ray) and
+    /// leave it with the smallest; both carry the directions' sign (positive: entry through the
+    /// low slab). 0 on a free axis, where the directions straddle 0 and the axis bounds nothing.
     pub rcp: [[Lanes; 2]; 3],
     /// +∞ on a free axis (the box test's entry −∞, exit +∞: no bound), else 0.
     pub free_inf: [Lanes; 3],
@@ -190,16 +192,21 @@ impl Frusta {
                 let finite = |x: V| x.abs().lt(inf);
                 let bounded = (lo.gt(zero) | hi.lt(zero)) & finite(rcp_lo) & finite(rcp_hi);
                 put(&mut self.free_inf[a], V::select(bounded, zero, inf));
-                put(&mut self.rcp[a][0], V::select(bounded, rcp_hi, zero));
-                put(&mut self.rcp[a][1], V::select(bounded, rcp_lo, zero));
+                // Positive directions: the largest is `hi`; negative ones: `lo`.
+                let (entry, exit) = (
+                    V::select(lo.gt(zero), rcp_hi, rcp_lo),
+                    V::select(lo.gt(zero), rcp_lo, rcp_hi),
+                );
+                put(&mut self.rcp[a][0], V::select(bounded, entry, zero));
+                put(&mut self.rcp[a][1], V::select(bounded, exit, zero));
             }
         }
     }
 
     /// Per box of `boxes`, the frusta of `candidates` whose rays may meet it: an
-    /// interval-arithmetic slab test on `o + u·D`, u ∈ [0, 1] (a ray in the box at `u` has, per
-    /// axis, `u` between the products of the slab's relative bounds and the reciprocal
-    /// interval's ends), and the four side planes. One vector of frusta per pass, at the
+    /// interval-arithmetic slab test on `o + u·D`, u ∈ [0, 1] (per axis, no ray is in the box
+    /// before the fastest ray reaches the entry slab nor after the slowest leaves the exit slab),
+    /// and the four side planes. One vector of frusta per pass, at the
     /// machine's width (`vector::Native`); the frusta are loaded once for all `B` boxes (both
     /// children of a node).
     #[inline(always)]
@@ -215,6 +222,12 @@ impl Frusta {
     /// `box_masks` on vectors `V`. Minima and maxima are compare-and-select (one instruction;
     /// `f32::min`'s NaN rule costs three): a NaN, which finite boxes and reciprocals never make,
     /// keeps the running bound, so it never culls.
+    ///
+    /// One product per slab, not the four of general interval arithmetic: with the slab's
+    /// relative bound `x` of either sign, `x · 1/D_entry` is the least entry where `x ≥ 0` (on the
+    /// ray's side) and negative, so below the running 0, where not; likewise at the exit, where a
+    /// negative product culls either way. The rounding allowance is applied once to the
+    /// intersection of the axes' intervals: it is monotone, so that is the same as per axis.
     #[inline(always)]
     pub fn box_masks_with<V: Vector, const B: usize>(
         &self,
@@ -232,32 +245,36 @@ impl Frusta {
         for base in (0..len).step_by(V::WIDTH) {
             let lanes = |x: &Lanes| V::load(x, base);
             let mut near = [zero; B];
-            let mut far = [V::splat(1.0); B];
+            let mut far = [V::splat(f32::INFINITY); B];
             let mut depth = [[zero; 4]; B];
             for a in 0..3 {
                 let o = lanes(&self.origin[a]);
-                let (r0, r1) = (lanes(&self.rcp[a][0]), lanes(&self.rcp[a][1]));
+                let (entry, exit) = (lanes(&self.rcp[a][0]), lanes(&self.rcp[a][1]));
+                let ascending = entry.gt(zero);
                 let free_inf = lanes(&self.free_inf[a]);
+                let minus_free_inf = zero - free_inf;
                 let side: [V; 4] = std::array::from_fn(|k| lanes(&self.side[k][a]));
                 let positive = side.map(|n| n.gt(zero));
                 for i in 0..B {
                     let (x0, x1) = (V::splat(lo[i][a]) - o, V::splat(hi[i][a]) - o);
-                    let (p, q, r, s) = (x0 * r0, x0 * r1, x1 * r0, x1 * r1);
-                    let enter = p.min(q).min(r.min(s));
-                    let leave = p.max(q).max(r.max(s));
-                    let enter = enter - widen * enter.abs() - free_inf;
-                    let leave = leave + widen * leave.abs() + free_inf;
+                    // Fused: the product's bits (± 0 adds nothing), or ∓∞ on a free axis.
+                    let enter = V::select(ascending, x0, x1).mul_add(entry, minus_free_inf);
+                    let leave = V::select(ascending, x1, x0).mul_add(exit, free_inf);
                     near[i] = enter.max(near[i]);
                     far[i] = leave.min(far[i]);
-                    // Per side plane, the box corner deepest inside it.
+                    // Per side plane, the box corner deepest inside it (fused: one rounding
+                    // fewer than the margins allow for).
                     for k in 0..4 {
-                        depth[i][k] = depth[i][k] + side[k] * V::select(positive[k], x0, x1);
+                        depth[i][k] = side[k].mul_add(V::select(positive[k], x0, x1), depth[i][k]);
                     }
                 }
             }
             let slack: [V; 4] = std::array::from_fn(|k| lanes(&self.side_slack[k]));
             for i in 0..B {
-                let mut inside = near[i].le(far[i]);
+                // `near` ≥ 0.
+                let near = near[i] - widen * near[i];
+                let far = (far[i] + widen * far[i].abs()).min(V::splat(1.0));
+                let mut inside = near.le(far);
                 for k in 0..4 {
                     inside = inside & depth[i][k].le(slack[k]);
                 }
@@ -350,7 +367,12 @@ mod tests {
             let free =
                 !(lo > 0.0 || hi < 0.0) || !(1.0 / lo).is_finite() || !(1.0 / hi).is_finite();
             out.push(if free { f32::INFINITY } else { 0.0 });
-            rcp.extend(if free { [0.0; 2] } else { [1.0 / hi, 1.0 / lo] });
+            let (entry, exit) = if lo > 0.0 { (hi, lo) } else { (lo, hi) };
+            rcp.extend(if free {
+                [0.0; 2]
+            } else {
+                [1.0 / entry, 1.0 / exit]
+            });
         }
         out.extend(rcp);
         out

@@ -231,6 +231,7 @@ impl Kernel for MftTracer {
         let margins = self.margins(&query);
         SCRATCH.with_borrow_mut(|scratch| {
             block::light_points(&query, &mut scratch.targets);
+            scratch.sets.fill(&query, &scratch.targets);
             for first in (0..query.len()).step_by(self.config.block) {
                 let len = self.config.block.min(query.len() - first);
                 block::trace_block(

@@ -34,6 +34,8 @@ pub trait Vector:
     fn abs(self) -> Self;
     /// The correctly rounded square root (as `f32::sqrt`).
     fn sqrt(self) -> Self;
+    /// `self · a + b` rounded once (as `f32::mul_add`).
+    fn mul_add(self, a: Self, b: Self) -> Self;
     /// `self < y ? self : y` per lane.
     fn min(self, y: Self) -> Self;
     /// `self > y ? self : y` per lane.
@@ -212,6 +214,10 @@ mod portable {
             Portable(self.0.map(f32::sqrt))
         }
         #[inline(always)]
+        fn mul_add(self, a: Self, b: Self) -> Self {
+            Portable(std::array::from_fn(|l| self.0[l].mul_add(a.0[l], b.0[l])))
+        }
+        #[inline(always)]
         fn min(self, y: Self) -> Self {
             self.map2(y, |a, b| if a < b { a } else { b })
         }
@@ -298,6 +304,10 @@ mod avx512 {
         #[inline(always)]
         fn sqrt(self) -> Self {
             Avx512(unsafe { _mm512_sqrt_ps(self.0) })
+        }
+        #[inline(always)]
+        fn mul_add(self, a: Self, b: Self) -> Self {
+            Avx512(unsafe { _mm512_fmadd_ps(self.0, a.0, b.0) })
         }
         #[inline(always)]
         fn min(self, y: Self) -> Self {
@@ -420,6 +430,26 @@ mod avx2 {
         fn sqrt(self) -> Self {
             Avx2(unsafe { _mm256_sqrt_ps(self.0) })
         }
+        #[cfg(target_feature = "fma")]
+        #[inline(always)]
+        fn mul_add(self, a: Self, b: Self) -> Self {
+            Avx2(unsafe { _mm256_fmadd_ps(self.0, a.0, b.0) })
+        }
+        /// Without FMA instructions, lane by lane (`f32::mul_add`'s bits).
+        #[cfg(not(target_feature = "fma"))]
+        #[inline(always)]
+        fn mul_add(self, a: Self, b: Self) -> Self {
+            let lanes = |v: Self| {
+                let mut out = [0.0; 8];
+                v.store(&mut out);
+                out
+            };
+            let (x, y, z) = (lanes(self), lanes(a), lanes(b));
+            Avx2::load(
+                &std::array::from_fn::<f32, 8, _>(|l| x[l].mul_add(y[l], z[l])),
+                0,
+            )
+        }
         #[inline(always)]
         fn min(self, y: Self) -> Self {
             Avx2(unsafe { _mm256_min_ps(self.0, y.0) })
@@ -522,6 +552,7 @@ mod tests {
             assert_eq!(bits(vx * vy), want(px * py));
             assert_eq!(bits(vx / vy), want(px / py));
             assert_eq!(bits(vx.sqrt()), want(px.sqrt()));
+            assert_eq!(bits(vx.mul_add(vy, vz)), want(px.mul_add(py, pz)));
             assert_eq!(bits(vx.abs()), want(px.abs()));
             assert_eq!(bits(vx.min(vy)), want(px.min(py)));
             assert_eq!(bits(vx.max(vy)), want(px.max(py)));
