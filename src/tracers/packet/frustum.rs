@@ -45,6 +45,8 @@ use glam::Vec3;
 
 use crate::geometry::{Aabb, Rays, Triangle};
 
+use super::workspace::lane_sum;
+
 /// Relative width of the safety margin: 2⁻¹⁵ (module doc).
 const MARGIN: f32 = 1.0 / 32768.0;
 /// A packet's lines meet in one point when each passes that close to it, relative to the
@@ -112,11 +114,9 @@ impl Frustum {
         if n == 0 || scene.is_empty() {
             return None;
         }
-        let dir_sum = Vec3::new(
-            rays.dx.iter().sum(),
-            rays.dy.iter().sum(),
-            rays.dz.iter().sum(),
-        );
+        // Summed lane-wise, as the packet's front-to-back order is (a sequential sum is one long
+        // dependency chain).
+        let dir_sum = Vec3::from_array([rays.dx, rays.dy, rays.dz].map(lane_sum::<L>));
         let k = dir_sum.abs().max_position();
         let j = [(k + 1) % 3, (k + 2) % 3];
         let scale = max_abs(scene.min).max(max_abs(scene.max));
@@ -124,8 +124,8 @@ impl Frustum {
         if same(rays.ox) && same(rays.oy) && same(rays.oz) {
             return Self::shared_origin::<L>(rays, k, j, dir_sum[k].signum(), scale);
         }
-        if let Some(apex) = shared_end(rays) {
-            if let Some(f) = Self::shared_end(rays, apex, k, j, -dir_sum[k].signum(), scale) {
+        if let Some(apex) = shared_end::<L>(rays) {
+            if let Some(f) = Self::shared_end::<L>(rays, apex, k, j, -dir_sum[k].signum(), scale) {
                 return Some(f);
             }
         }
@@ -192,7 +192,11 @@ impl Frustum {
         )
     }
 
-    fn shared_end(
+    /// The §4.2 frustum of apex `apex`. Extremes kept per lane of an `L`-wide accumulator and
+    /// the checks folded, not returned early, so the loop vectorizes (ray by ray, with the apex
+    /// search, it took as long as tracing the packet's shadow rays); min and max of non-NaN
+    /// values do not depend on the order, so the frustum is the same.
+    fn shared_end<const L: usize>(
         rays: Rays<'_>,
         apex: Vec3,
         k: usize,
@@ -200,24 +204,46 @@ impl Frustum {
         sigma: f32,
         scale: f32,
     ) -> Option<Self> {
-        let mut slope = [Range::EMPTY; 2];
-        let mut tau_near = f32::INFINITY;
-        let mut magnitude = scale.max(max_abs(apex));
-        for i in 0..rays.len() {
-            let r = rays.ray(i);
-            for p in [r.at(r.tmin), r.at(r.tmax)] {
-                let tau = sigma * (p[k] - apex[k]);
-                let ahead = tau > 0.0;
-                if !ahead || !p.is_finite() {
-                    return None;
+        let (o, d) = ([rays.ox, rays.oy, rays.oz], [rays.dx, rays.dy, rays.dz]);
+        // The axes' arrays picked once: indexing by `k` and `j` inside the loop kept it scalar.
+        let (ok_, dk) = (o[k], d[k]);
+        let (ou, du, ov, dv) = (o[j[0]], d[j[0]], o[j[1]], d[j[1]]);
+        let (ak, au, av) = (apex[k], apex[j[0]], apex[j[1]]);
+        let (mut lo, mut hi) = ([[f32::INFINITY; L]; 2], [[f32::NEG_INFINITY; L]; 2]);
+        let (mut near, mut magnitude) = ([f32::INFINITY; L], [0.0f32; L]);
+        let mut ok = [true; L];
+        for base in (0..rays.len()).step_by(L) {
+            let [ok_, dk, ou, du, ov, dv, t0, t1] =
+                [ok_, dk, ou, du, ov, dv, rays.tmin, rays.tmax].map(|src| lanes::<L>(src, base));
+            for l in 0..L {
+                for t in [t0[l], t1[l]] {
+                    // `Ray::at`: the same operations, so the same point.
+                    let (pk, pu, pv) = (ok_[l] + dk[l] * t, ou[l] + du[l] * t, ov[l] + dv[l] * t);
+                    let tau = sigma * (pk - ak);
+                    ok[l] &= (tau > 0.0) & pk.is_finite() & pu.is_finite() & pv.is_finite();
+                    let (x, y) = ((pu - au) / tau, (pv - av) / tau);
+                    lo[0][l] = if x < lo[0][l] { x } else { lo[0][l] };
+                    hi[0][l] = if x > hi[0][l] { x } else { hi[0][l] };
+                    lo[1][l] = if y < lo[1][l] { y } else { lo[1][l] };
+                    hi[1][l] = if y > hi[1][l] { y } else { hi[1][l] };
+                    near[l] = if tau < near[l] { tau } else { near[l] };
+                    let m = pk.abs().max(pu.abs()).max(pv.abs());
+                    magnitude[l] = if m > magnitude[l] { m } else { magnitude[l] };
                 }
-                for s in 0..2 {
-                    slope[s].add((p[j[s]] - apex[j[s]]) / tau);
-                }
-                tau_near = tau_near.min(tau);
-                magnitude = magnitude.max(max_abs(p));
             }
         }
+        let ok = ok.iter().all(|&o| o);
+        if !ok {
+            return None;
+        }
+        let fold =
+            |v: &[f32; L], f: fn(f32, f32) -> f32, init: f32| v.iter().copied().fold(init, f);
+        let slope = [0, 1].map(|s| Range {
+            lo: fold(&lo[s], f32::min, f32::INFINITY),
+            hi: fold(&hi[s], f32::max, f32::NEG_INFINITY),
+        });
+        let tau_near = fold(&near, f32::min, f32::INFINITY);
+        let magnitude = fold(&magnitude, f32::max, scale.max(max_abs(apex)));
         let a = [apex[j[0]], apex[j[1]]];
         let far = [f32::INFINITY, f32::INFINITY];
         Self::finish(
@@ -395,6 +421,38 @@ impl Frustum {
         false
     }
 
+    /// `culls_box` for `W` boxes at once (`lo[axis][box]`, `hi[axis][box]`; a wide BVH node's
+    /// children), by the same operations box by box, so each box gets `culls_box`'s verdict: bit
+    /// `b` set when box `b` is not culled. One SIMD pass over a node's children where the per-box
+    /// test ran once per child popped.
+    #[inline(always)]
+    #[allow(clippy::needless_range_loop)]
+    pub fn survivors<const W: usize>(&self, lo: &[[f32; W]; 3], hi: &[[f32; W]; 3]) -> u32 {
+        let mut culled = [false; W];
+        let (near_limit, far_limit) = (self.tau_near - self.eps, self.tau_far + self.eps);
+        let (mut t_near, mut t_far) = ([0.0f32; W], [0.0f32; W]);
+        for b in 0..W {
+            let (ta, tb) = (self.tau(lo[self.k][b]), self.tau(hi[self.k][b]));
+            (t_near[b], t_far[b]) = if ta < tb { (ta, tb) } else { (tb, ta) };
+            culled[b] = (t_far[b] < near_limit) | (t_near[b] > far_limit);
+        }
+        for s in 0..2 {
+            let axis = self.j[s];
+            let (sl, sh) = (self.slope_lo[s], self.slope_hi[s]);
+            let (below, above) = (self.lo[s] - self.eps, self.hi[s] + self.eps);
+            for b in 0..W {
+                let low = hi[axis][b] - (sl * t_near[b]).min(sl * t_far[b]);
+                let high = lo[axis][b] - (sh * t_near[b]).max(sh * t_far[b]);
+                culled[b] |= (low < below) | (high > above);
+            }
+        }
+        let mut mask = 0;
+        for b in 0..W {
+            mask |= (!culled[b] as u32) << b;
+        }
+        mask
+    }
+
     /// Whether no ray of the packet can meet `tri` (Eq. 1 on its three vertices).
     #[inline(always)]
     pub fn culls_triangle(&self, tri: &Triangle) -> bool {
@@ -418,22 +476,55 @@ impl Frustum {
     }
 }
 
+/// Lanes `base .. base + L` of a batch's array; past its end, copies of ray `base` (a repeated
+/// ray changes no extreme and no verdict of the folds over the rays).
+#[inline(always)]
+fn lanes<const L: usize>(src: &[f32], base: usize) -> [f32; L] {
+    match src.get(base..base + L) {
+        Some(full) => <[f32; L]>::try_from(full).expect("L lanes"),
+        None => std::array::from_fn(|l| src.get(base + l).copied().unwrap_or(src[base])),
+    }
+}
+
 /// The point all lines of `rays` pass through, beyond every segment's end, if there is one
-/// (module doc, "shared end point").
-fn shared_end(rays: Rays<'_>) -> Option<Vec3> {
+/// (module doc, "shared end point"). Both passes over the rays read the batch's arrays and fold
+/// their verdicts without an early exit, so they vectorize.
+fn shared_end<const L: usize>(rays: Rays<'_>) -> Option<Vec3> {
     let n = rays.len();
-    if n < 2 || (0..n).any(|i| !rays.tmax[i].is_finite()) {
+    if n < 2 || !rays.tmax.iter().fold(true, |all, t| all & t.is_finite()) {
         return None;
     }
-    let r0 = rays.ray(0);
-    // The line most different in direction from the first pins the point down best.
-    let other = (1..n).map(|i| rays.ray(i)).max_by(|a, b| {
-        let ca = r0.dir.cross(a.dir).length_squared();
-        let cb = r0.dir.cross(b.dir).length_squared();
-        ca.total_cmp(&cb)
-    })?;
-    let (d0, d1) = (r0.dir, other.dir);
-    let w = r0.origin - other.origin;
+    let origin = |i: usize| Vec3::new(rays.ox[i], rays.oy[i], rays.oz[i]);
+    let dir = |i: usize| Vec3::new(rays.dx[i], rays.dy[i], rays.dz[i]);
+    let arrays = [
+        rays.ox, rays.oy, rays.oz, rays.dx, rays.dy, rays.dz, rays.tmax,
+    ];
+    let d0 = dir(0);
+    // The line most different in direction from the first pins the point down best: the last
+    // of the largest `|d0 × d|²` (ray 0's own is 0, and padding repeats a chunk's first ray, so
+    // neither changes which), kept per lane so the search vectorizes. A non-finite one (no
+    // point to find) ends the search.
+    let (mut best, mut at) = ([f32::NEG_INFINITY; L], [0u32; L]);
+    for base in (0..n).step_by(L) {
+        let [_, _, _, dx, dy, dz, _] = arrays.map(|src| lanes::<L>(src, base));
+        for l in 0..L {
+            let spread = d0.cross(Vec3::new(dx[l], dy[l], dz[l])).length_squared();
+            let later = spread >= best[l];
+            best[l] = if later { spread } else { best[l] };
+            let i = if base + l < n { base + l } else { base };
+            at[l] = if later { i as u32 } else { at[l] };
+        }
+    }
+    let largest = best.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+    if !largest.is_finite() || largest == 0.0 {
+        return None;
+    }
+    let other = (0..L)
+        .filter(|&l| best[l] == largest)
+        .map(|l| at[l] as usize)
+        .max()?;
+    let d1 = dir(other);
+    let w = origin(0) - origin(other);
     let (a, b, c) = (d0.dot(d0), d0.dot(d1), d1.dot(d1));
     let (d, e) = (d0.dot(w), d1.dot(w));
     let denom = a * c - b * b;
@@ -441,16 +532,21 @@ fn shared_end(rays: Rays<'_>) -> Option<Vec3> {
     if !independent {
         return None;
     }
-    let p0 = r0.origin + d0 * ((b * e - c * d) / denom);
-    let p1 = other.origin + d1 * ((a * e - b * d) / denom);
+    let p0 = origin(0) + d0 * ((b * e - c * d) / denom);
+    let p1 = origin(other) + d1 * ((a * e - b * d) / denom);
     let apex = (p0 + p1) * 0.5;
-    let meets = (0..n).all(|i| {
-        let r = rays.ray(i);
-        let to_apex = apex - r.origin;
-        let along = to_apex.dot(r.dir) / r.dir.length_squared();
-        let off = to_apex.cross(r.dir).length() / r.dir.length();
-        along >= r.tmax && off <= MEET_TOLERANCE * to_apex.length()
-    });
+    let mut meets = [true; L];
+    for base in (0..n).step_by(L) {
+        let [ox, oy, oz, dx, dy, dz, tmax] = arrays.map(|src| lanes::<L>(src, base));
+        for l in 0..L {
+            let dir = Vec3::new(dx[l], dy[l], dz[l]);
+            let to_apex = apex - Vec3::new(ox[l], oy[l], oz[l]);
+            let along = to_apex.dot(dir) / dir.length_squared();
+            let off = to_apex.cross(dir).length() / dir.length();
+            meets[l] &= (along >= tmax[l]) & (off <= MEET_TOLERANCE * to_apex.length());
+        }
+    }
+    let meets = meets.iter().all(|&m| m);
     meets.then_some(apex)
 }
 
@@ -556,6 +652,37 @@ mod tests {
                 checked[i]
             );
         }
+    }
+
+    #[test]
+    fn survivors_of_eight_boxes_are_the_boxes_culls_box_keeps() {
+        let mut rng = SplitMix64::new(77);
+        let scene = Aabb::new(Vec3::splat(-6.0), Vec3::splat(6.0));
+        let mut culled = 0;
+        for _ in 0..40 {
+            for (kind, rays) in packets(&mut rng) {
+                let b = batch(&rays);
+                let mut f = Frustum::build::<16>(b.view(), &scene).expect("a frustum");
+                f.clip_far(rays.iter().fold(0.0f32, |m, r| m.max(r.tmax)));
+                for _ in 0..20 {
+                    let (mut lo, mut hi) = ([[0.0f32; 8]; 3], [[0.0f32; 8]; 3]);
+                    for c in 0..8 {
+                        let l = rng.vec3(-5.0, 5.0);
+                        let h = l + rng.vec3(0.0, 1.5);
+                        for a in 0..3 {
+                            (lo[a][c], hi[a][c]) = (l[a], h[a]);
+                        }
+                    }
+                    let want = (0..8).fold(0u32, |m, c| {
+                        let (l, h) = ([0, 1, 2].map(|a| lo[a][c]), [0, 1, 2].map(|a| hi[a][c]));
+                        m | (!f.culls_box(l, h) as u32) << c
+                    });
+                    assert_eq!(f.survivors(&lo, &hi), want, "{kind:?}");
+                    culled += (!want & 0xff).count_ones();
+                }
+            }
+        }
+        assert!(culled > 1000, "only {culled} boxes culled");
     }
 
     #[test]

@@ -5,7 +5,10 @@
 //!
 //! 1. At a node, one SIMD interval test (`IntervalPacket::survivors`, Wald et al. 2007 §4) of all
 //!    `W` children against the whole packet's bounds — origins × reciprocal directions, clipped to
-//!    the packet's largest current closest hit — drops every child no ray can meet.
+//!    the packet's largest current closest hit — drops every child no ray can meet; with
+//!    `frustum` = true, one SIMD test of the children against the packet's frustum
+//!    (`Frustum::survivors`, §4) drops more before they are pushed (shadow rays' shared end
+//!    point: the interval of their spread origins bounds them loosely).
 //! 2. The survivors go on the stack far to near, by their near corners along the packet's
 //!    direction signs (Overbeck et al.'s `nearChild`/`farChild` generalised to W children), with
 //!    the packet's first active SIMD ray `ia`.
@@ -137,10 +140,13 @@ fn expand<const W: usize, const L: usize, S: Stats>(
     let mut survivors = used;
     if let Some(interval) = &packet.interval {
         survivors &= interval.survivors(&cell.lo, &cell.hi, packet.max_t);
-        if S::ENABLED {
-            let culled = (used & !survivors).count_ones();
-            stats.event(Event::BoxesCulled, culled as u64);
-        }
+    }
+    if let Some(frustum) = &packet.frustum {
+        survivors &= frustum.survivors(&cell.lo, &cell.hi);
+    }
+    if S::ENABLED {
+        let culled = (used & !survivors).count_ones();
+        stats.event(Event::BoxesCulled, culled as u64);
     }
     // Distance key of each child's near corner along the packet's direction signs: the
     // nearer child has the smaller key.

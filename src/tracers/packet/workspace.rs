@@ -306,7 +306,7 @@ impl<const L: usize> Packet<L> {
 }
 
 /// The sum of `x`, accumulated in `L` lanes.
-fn lane_sum<const L: usize>(x: &[f32]) -> f32 {
+pub fn lane_sum<const L: usize>(x: &[f32]) -> f32 {
     let mut acc = [0.0f32; L];
     let chunks = x.chunks_exact(L);
     let rest: f32 = chunks.remainder().iter().sum();
