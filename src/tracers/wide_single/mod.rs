@@ -30,9 +30,9 @@ use std::sync::Arc;
 
 use crate::accel::{Bvh, BvhConfig, WideBvh, WideEntry, WideNode};
 use crate::error::{Error, Result};
-use crate::geometry::{Hit, Ray, Triangle, WatertightRay};
+use crate::geometry::{Hit, Ray, Triangle};
 use crate::stats::Stats;
-use crate::tracers::reference::{intersect_leaf, LeafRange};
+use crate::tracers::reference::{intersect_leaf, LeafRange, LeafRay};
 use crate::tracers::{Params, SingleRayKernel, Tracer};
 
 pub use slab::WideRayTest;
@@ -75,7 +75,27 @@ impl<const W: usize> SingleRayKernel for WideSingleTracer<W> {
             return Hit::MISS;
         }
         let root = self.wide.entry[Bvh::ROOT];
-        trace_wide::<W, S, ANY>(&self.bvh, &self.wide, root, ray, stats)
+        trace_wide::<W, S, ANY>(&self.bvh, &self.wide, root, &WideRay::new(ray), stats)
+    }
+}
+
+/// One ray as `trace_wide` reads it: its test of a wide node's children, what the leaf stage
+/// reads, and its segment's end.
+#[derive(Clone, Copy)]
+pub struct WideRay {
+    pub boxes: WideRayTest,
+    pub leaf: LeafRay,
+    pub tmax: f32,
+}
+
+impl WideRay {
+    #[inline(always)]
+    pub fn new(ray: &Ray) -> Self {
+        WideRay {
+            boxes: WideRayTest::new(ray.origin, ray.dir),
+            leaf: LeafRay::new(ray),
+            tmax: ray.tmax,
+        }
     }
 }
 
@@ -128,14 +148,14 @@ const MAX_WIDTH: usize = 8;
 const STACK: usize = MAX_WIDTH * (BvhConfig::DEPTH_LIMIT + 2);
 
 /// One ray's traversal (module doc) of the subtree at `start` (its slots of its wide node, whose
-/// boxes are tested here): the closest hit (`ANY`: the first found) within `[ray.tmin,
+/// boxes are tested here): the closest hit (`ANY`: the first found) within `[ray.leaf.tmin,
 /// ray.tmax]`, or a miss. `wide` was collapsed from `bvh`, whose triangles the leaves index.
 #[inline(always)]
 pub fn trace_wide<const W: usize, S: Stats, const ANY: bool>(
     bvh: &Bvh,
     wide: &WideBvh<W>,
     start: WideEntry,
-    ray: &Ray,
+    ray: &WideRay,
     stats: &mut S,
 ) -> Hit {
     const {
@@ -145,9 +165,8 @@ pub fn trace_wide<const W: usize, S: Stats, const ANY: bool>(
         )
     };
     let mut best = Hit::MISS;
-    let (tmin, mut tmax) = (ray.tmin, ray.tmax);
-    let boxes = WideRayTest::new(ray.origin, ray.dir);
-    let tris = WatertightRay::new(ray.origin, ray.dir);
+    let (tmin, mut tmax) = (ray.leaf.tmin, ray.tmax);
+    let boxes = &ray.boxes;
     // Uninitialised: zeroing kilobytes of stack per ray would cost more than a short traversal;
     // only entries below `top`, all written first, are read. `depths` is written and read only
     // when counting.
@@ -186,7 +205,7 @@ pub fn trace_wide<const W: usize, S: Stats, const ANY: bool>(
             if S::ENABLED {
                 stats.node(leaf.depth);
             }
-            if intersect_leaf::<S, ANY>(bvh, &tris, ray, leaf, &mut tmax, &mut best, stats) {
+            if intersect_leaf::<S, ANY>(bvh, &ray.leaf, leaf, &mut tmax, &mut best, stats) {
                 return best;
             }
         } else {
@@ -252,7 +271,7 @@ pub fn trace_wide<const W: usize, S: Stats, const ANY: bool>(
             if S::ENABLED {
                 stats.node(leaf.depth);
             }
-            if intersect_leaf::<S, ANY>(bvh, &tris, ray, leaf, &mut tmax, &mut best, stats) {
+            if intersect_leaf::<S, ANY>(bvh, &ray.leaf, leaf, &mut tmax, &mut best, stats) {
                 return best;
             }
         }
