@@ -141,6 +141,13 @@ impl WatertightRay {
         (self.origin, self.k, self.shear)
     }
 
+    /// The ray from `origin` whose direction gave the axes `k` and shear `shear` (`parts`), as
+    /// `new` makes it: for callers that keep the frame, not the direction (the stream tracer).
+    #[inline(always)]
+    pub fn from_parts(origin: [f32; 3], k: [usize; 3], shear: [f32; 3]) -> Self {
+        WatertightRay { origin, k, shear }
+    }
+
     /// `(t, u, v)` if the ray hits `tri` with `tmin <= t <= tmax`; both faces count.
     #[inline(always)]
     pub fn intersect(&self, tri: &Triangle, tmin: f32, tmax: f32) -> Option<(f32, f32, f32)> {

@@ -19,7 +19,13 @@ pub struct BroadcastRay {
 impl BroadcastRay {
     #[inline(always)]
     pub fn new(origin: Vec3, dir: Vec3) -> Self {
-        let inv = Vec3::ONE / dir;
+        Self::from_inv(origin, Vec3::ONE / dir)
+    }
+
+    /// As `new`, from the reciprocal direction `inv = 1 / dir` (its sign bits are the
+    /// direction's, `1 / −0.0 = −∞`).
+    #[inline(always)]
+    pub fn from_inv(origin: Vec3, inv: Vec3) -> Self {
         // SAFETY: SSE is part of the x86_64 baseline.
         unsafe {
             BroadcastRay {
@@ -30,9 +36,9 @@ impl BroadcastRay {
                 ],
                 inv_dir: [_mm_set1_ps(inv.x), _mm_set1_ps(inv.y), _mm_set1_ps(inv.z)],
                 negative: [
-                    dir.x.is_sign_negative(),
-                    dir.y.is_sign_negative(),
-                    dir.z.is_sign_negative(),
+                    inv.x.is_sign_negative(),
+                    inv.y.is_sign_negative(),
+                    inv.z.is_sign_negative(),
                 ],
             }
         }

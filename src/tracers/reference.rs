@@ -62,14 +62,33 @@ pub struct LeafRange {
     pub depth: usize,
 }
 
+/// What the leaf stage reads of a ray: its watertight frame, where its segment starts, and its
+/// time (motion blur).
+#[derive(Clone, Copy)]
+pub struct LeafRay {
+    pub tris: WatertightRay,
+    pub tmin: f32,
+    pub time: f32,
+}
+
+impl LeafRay {
+    #[inline(always)]
+    pub fn new(ray: &Ray) -> Self {
+        LeafRay {
+            tris: WatertightRay::new(ray.origin, ray.dir),
+            tmin: ray.tmin,
+            time: ray.time,
+        }
+    }
+}
+
 /// The reference tracer's leaf stage, shared with the wide single-ray traversal so both find
 /// bit-identical hits: each triangle's watertight test within `[ray.tmin, tmax]`, a hit becoming
 /// `best` and shortening `tmax`. Returns whether to stop (`ANY` and something was hit).
 #[inline(always)]
 pub fn intersect_leaf<S: Stats, const ANY: bool>(
     bvh: &Bvh,
-    tris: &WatertightRay,
-    ray: &Ray,
+    ray: &LeafRay,
     leaf: LeafRange,
     tmax: &mut f32,
     best: &mut Hit,
@@ -89,7 +108,7 @@ pub fn intersect_leaf<S: Stats, const ANY: bool>(
                 &moved
             }
         };
-        if let Some((t, u, v)) = tris.intersect(tri, ray.tmin, *tmax) {
+        if let Some((t, u, v)) = ray.tris.intersect(tri, ray.tmin, *tmax) {
             *best = Hit {
                 t,
                 prim: bvh.prim_ids[i],
@@ -125,7 +144,7 @@ pub fn trace_subtree<S: Stats, const ANY: bool>(
         }
     };
     let boxes = PairRayTest::new(ray.origin, ray.dir);
-    let tris = WatertightRay::new(ray.origin, ray.dir);
+    let leaf_ray = LeafRay::new(ray);
     // Far children wait here with their entry distance, so a pop can skip boxes that now lie
     // beyond the closest hit without testing them again.
     let mut stack = [Pending::default(); BvhConfig::DEPTH_LIMIT + 2];
@@ -147,7 +166,7 @@ pub fn trace_subtree<S: Stats, const ANY: bool>(
                 count: node.count,
                 depth: depth(node.index),
             };
-            if intersect_leaf::<S, ANY>(bvh, &tris, ray, leaf, &mut tmax, &mut best, stats) {
+            if intersect_leaf::<S, ANY>(bvh, &leaf_ray, leaf, &mut tmax, &mut best, stats) {
                 return best;
             }
         } else {

@@ -5,11 +5,13 @@
 //! (`WideBvh::entry`). Both find the reference's hits.
 
 use crate::accel::{Bvh, WideBvh};
-use crate::geometry::{Hit, Ray};
+use crate::geometry::{Hit, Rays};
 use crate::stats::Stats;
 use crate::tracers::packet::TreeWidth;
 use crate::tracers::reference::trace_subtree;
 use crate::tracers::wide_single::trace_wide;
+
+use super::rays::StreamRays;
 
 pub enum Handoff {
     Binary,
@@ -28,22 +30,33 @@ impl Handoff {
         }
     }
 
-    /// One ray's traversal of the subtree under binary node `node`, whose box it meets.
+    /// One ray's traversal of the subtree under binary node `node`, whose box it meets: the ray
+    /// at position `at` of the stream `rays` (of the chunk `input`), within its segment so far.
+    /// The wide traversal reads the ray from the stream's own records (`StreamRays::wide_ray`),
+    /// which lie in stream order where the filters left them, instead of gathering it from
+    /// `input`'s eight columns at its index, scattered by the filters' reordering; the binary
+    /// one needs the direction, which only `input` keeps.
     #[inline(always)]
-    pub fn trace<S: Stats, const ANY: bool>(
+    pub fn trace<S: Stats, const ANY: bool, const L: usize>(
         &self,
         bvh: &Bvh,
         node: u32,
-        ray: &Ray,
+        (rays, at, input): (&StreamRays<L>, usize, &Rays<'_>),
         stats: &mut S,
     ) -> Hit {
         match self {
-            Handoff::Binary => trace_subtree::<S, ANY>(bvh, node, ray, stats),
+            Handoff::Binary => {
+                let mut ray = input.ray(rays.id(at));
+                ray.tmax = rays.tmax(at);
+                trace_subtree::<S, ANY>(bvh, node, &ray, stats)
+            }
             Handoff::Four(wide) => {
-                trace_wide::<4, S, ANY>(bvh, wide, wide.entry[node as usize], ray, stats)
+                let start = wide.entry[node as usize];
+                trace_wide::<4, S, ANY>(bvh, wide, start, &rays.wide_ray(at), stats)
             }
             Handoff::Eight(wide) => {
-                trace_wide::<8, S, ANY>(bvh, wide, wide.entry[node as usize], ray, stats)
+                let start = wide.entry[node as usize];
+                trace_wide::<8, S, ANY>(bvh, wide, start, &rays.wide_ray(at), stats)
             }
         }
     }

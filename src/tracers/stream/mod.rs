@@ -21,9 +21,10 @@
 //!   its own: by the reference tracer's traversal of the binary tree (`single_tree` = 2, the
 //!   default) or by single rays through the tree collapsed to 4 or 8 children per node
 //!   (`single_tree` = 4 | 8: `wide_single`, one SIMD slab test of all children; the wide tree is
-//!   built with the tracer, as the packet tracer's are; `handoff`). Not in the paper: deep in the tree the sub-streams are
-//!   a few rays long (Table 4), and a box filter over them costs more than the rays' own
-//!   traversal. T = 0 is the paper's stream filtering to the leaves; the lane counters count the
+//!   built with the tracer, as the packet tracer's are; `handoff`, which reads each ray from the
+//!   stream's own records where the filters left it, not from the chunk's columns). Not in the
+//!   paper: deep in the tree the sub-streams are a few rays long (Table 4), and a box filter over
+//!   them costs more than the rays' own traversal. T = 0 is the paper's stream filtering to the leaves; the lane counters count the
 //!   filters only, so with T > 0 they describe the stream part of the traversal.
 //! - **Exact hits**: every lane runs the reference tracer's slab and watertight tests bit for
 //!   bit, so each ray gets the reference's closest hit (up to the order in which triangles at

@@ -16,11 +16,15 @@
 // Lane loops index lane arrays in lock step: the indexed form is what LLVM vectorizes.
 #![allow(clippy::needless_range_loop)]
 
+use glam::Vec3;
+
 use crate::geometry::{Hit, Rays, WatertightRay};
 use crate::lanes::slab::SlabRays;
 use crate::lanes::stream::SoaRays;
 use crate::lanes::watertight::common_axes;
 use crate::lanes::SimdRay;
+use crate::tracers::reference::LeafRay;
+use crate::tracers::wide_single::{WideRay, WideRayTest};
 
 /// What the slab test reads of one ray: origin, `1 / dir` (its sign bit is the direction's,
 /// `1 / −0.0 = −∞`, which is all the slab test needs of the direction), `tmin`, and `tmax`, the
@@ -101,7 +105,7 @@ impl<const L: usize> StreamRays<L> {
             if !ray.is_well_formed() {
                 continue;
             }
-            let (_, k, shear) = WatertightRay::new(glam::Vec3::ZERO, ray.dir).parts();
+            let (_, k, shear) = WatertightRay::new(Vec3::ZERO, ray.dir).parts();
             self.slab.push(SlabRecord {
                 origin: ray.origin.to_array(),
                 inv_dir: ray.dir.to_array().map(|d| 1.0 / d),
@@ -165,6 +169,25 @@ impl<const L: usize> StreamRays<L> {
         simd.prim = [Hit::NO_PRIM; L];
         simd.used = used as u32;
         simd.common_axes = common_axes(&simd.axes, used);
+    }
+
+    /// The ray at stream position `at` as the wide single-ray traversal reads it, from its record
+    /// and frame: the very tests `WideRay::new` makes of the input ray (the record's `1 / dir`
+    /// and the frame are what those compute from its direction).
+    #[inline(always)]
+    pub fn wide_ray(&self, at: usize) -> WideRay {
+        let (r, f) = (&self.slab[at], &self.frame[self.stream[at] as usize]);
+        let k = [0, 1, 2].map(|a| (f.axes >> (2 * a) & 3) as usize);
+        WideRay {
+            boxes: WideRayTest::from_inv(Vec3::from(r.origin), Vec3::from(r.inv_dir)),
+            leaf: LeafRay {
+                tris: WatertightRay::from_parts(r.origin, k, f.shear),
+                tmin: r.tmin,
+                // Static geometry only (`StreamTracer::from_params` refuses a moving BVH).
+                time: 0.0,
+            },
+            tmax: r.tmax,
+        }
     }
 
     /// The chunk index of the ray at stream position `at`.

@@ -9,7 +9,7 @@
 //! stream's live rays on the way back up, so no later filter tests it.
 
 use crate::accel::Bvh;
-use crate::geometry::{Hit, Ray, Rays, Triangle};
+use crate::geometry::{Hit, Rays, Triangle};
 use crate::lanes::stream::{partition_by, SoaRays};
 use crate::lanes::LaneMask;
 use crate::lanes::SimdRay;
@@ -35,19 +35,20 @@ pub trait Answer {
             simd.intersect::<false>(tri, prim);
         }
     }
-    /// One ray's traversal of the subtree under `node` for this query (`Handoff::trace::<ANY>`).
+    /// One ray's traversal of the subtree under `node` for this query (`Handoff::trace::<ANY>`;
+    /// `ray`: the stream, the ray's position in it, the chunk).
     #[inline(always)]
-    fn trace_single<S: Stats>(
+    fn trace_single<S: Stats, const L: usize>(
         handoff: &Handoff,
         bvh: &Bvh,
         node: u32,
-        ray: &Ray,
+        ray: (&StreamRays<L>, usize, &Rays<'_>),
         stats: &mut S,
     ) -> Hit {
         if Self::ANY {
-            handoff.trace::<S, true>(bvh, node, ray, stats)
+            handoff.trace::<S, true, L>(bvh, node, ray, stats)
         } else {
-            handoff.trace::<S, false>(bvh, node, ray, stats)
+            handoff.trace::<S, false, L>(bvh, node, ray, stats)
         }
     }
     fn record(&mut self, hit: Hit);
@@ -126,12 +127,10 @@ impl<const L: usize, const N: usize, A: Answer> Walk<'_, L, N, A> {
     /// live, moved to the front.
     fn single_rays<S: Stats>(&mut self, node: u32, len: usize, stats: &mut S) -> usize {
         for at in 0..len {
-            let id = self.rays.id(at);
-            let mut ray = self.input.ray(id);
-            ray.tmax = self.rays.tmax(at);
-            let hit = A::trace_single(self.handoff, self.bvh, node, &ray, stats);
+            let ray = (&*self.rays, at, &self.input);
+            let hit = A::trace_single(self.handoff, self.bvh, node, ray, stats);
             if hit.is_hit() {
-                self.answers[id].record(hit);
+                self.answers[self.rays.id(at)].record(hit);
                 self.rays
                     .set_tmax(at, if A::ANY { f32::NEG_INFINITY } else { hit.t });
             }

@@ -7,10 +7,12 @@
 //!
 //! - **Node**: one slab test of the ray against all `W` children (`slab`: 8 at a time in AVX,
 //!   else SSE groups of 4), within `[tmin, tmax]` with `tmax` the current closest hit.
-//! - **Order**: the children met go on the stack far to near by entry distance, so the nearest is
+//! - **Order**: a lone child met is entered at once (Embree's `BVHNNodeTraverser1Hit` does the
+//!   same; on incoherent rays it is the common case, and it saves the stack's store and load);
+//!   otherwise the children met go on the stack far to near by entry distance, so the nearest is
 //!   popped first; a popped child whose entry lies beyond the closest hit found meanwhile is
-//!   skipped untested. An interior child's node is prefetched as it is pushed (a wide node spans
-//!   four cache lines and the walk is bound by their loads).
+//!   skipped untested. A pushed child's node or leaf triangles are prefetched (a wide node spans
+//!   four cache lines and the walk is bound by their loads: the siblings' misses overlap).
 //! - **Leaves**: the reference tracer's leaf stage (`reference::intersect_leaf`: the watertight
 //!   test, in the leaf's order, moving triangles at the ray's time), and the slab verdicts are the
 //!   reference's, so every ray gets the reference's closest hit (up to the order in which
@@ -28,9 +30,9 @@ use std::sync::Arc;
 
 use crate::accel::{Bvh, BvhConfig, WideBvh, WideEntry, WideNode};
 use crate::error::{Error, Result};
-use crate::geometry::{Hit, Ray, WatertightRay};
+use crate::geometry::{Hit, Ray, Triangle};
 use crate::stats::Stats;
-use crate::tracers::reference::{intersect_leaf, LeafRange};
+use crate::tracers::reference::{intersect_leaf, LeafRange, LeafRay};
 use crate::tracers::{Params, SingleRayKernel, Tracer};
 
 pub use slab::WideRayTest;
@@ -73,18 +75,38 @@ impl<const W: usize> SingleRayKernel for WideSingleTracer<W> {
             return Hit::MISS;
         }
         let root = self.wide.entry[Bvh::ROOT];
-        trace_wide::<W, S, ANY>(&self.bvh, &self.wide, root, ray, stats)
+        trace_wide::<W, S, ANY>(&self.bvh, &self.wide, root, &WideRay::new(ray), stats)
+    }
+}
+
+/// One ray as `trace_wide` reads it: its test of a wide node's children, what the leaf stage
+/// reads, and its segment's end.
+#[derive(Clone, Copy)]
+pub struct WideRay {
+    pub boxes: WideRayTest,
+    pub leaf: LeafRay,
+    pub tmax: f32,
+}
+
+impl WideRay {
+    #[inline(always)]
+    pub fn new(ray: &Ray) -> Self {
+        WideRay {
+            boxes: WideRayTest::new(ray.origin, ray.dir),
+            leaf: LeafRay::new(ray),
+            tmax: ray.tmax,
+        }
     }
 }
 
 /// A child waiting on the stack: an interior wide node (`count = 0`: node `first`) or a leaf's
-/// triangles, the distance at which the ray enters its box, and its depth (counters).
+/// triangles, and the distance at which the ray enters its box. 12 bytes: its depth (counters
+/// only) waits beside it in an array the uncounted traversal never touches.
 #[derive(Clone, Copy)]
 struct Pending {
     first: u32,
     count: u32,
     enter: f32,
-    depth: u32,
 }
 
 /// Asks for all of `node`'s cache lines (a wide node spans several).
@@ -98,6 +120,25 @@ fn prefetch_node<const W: usize>(node: &WideNode<W>) {
     }
 }
 
+/// Asks for the cache lines of a leaf's triangles `first .. first + count` (at most
+/// `LEAF_PREFETCH_LINES`: a leaf is usually a few triangles, one cut at `max_depth` may be many).
+#[inline(always)]
+fn prefetch_triangles(bvh: &Bvh, first: u32, count: u32) {
+    let tris = &bvh.triangles[first as usize..];
+    let base = tris.as_ptr() as *const i8;
+    let bytes = (count as usize).min(tris.len()) * std::mem::size_of::<Triangle>();
+    // From the line holding the first byte to the one holding the last.
+    let (start, end) = (base as usize & !63, (base as usize + bytes - 1) & !63);
+    for line in (start..=end).step_by(64).take(LEAF_PREFETCH_LINES) {
+        // SAFETY: as in `prefetch_node`; the lines hold bytes of `tris` (an address outside
+        // would not fault either).
+        unsafe { _mm_prefetch::<_MM_HINT_T0>(line as *const i8) };
+    }
+}
+
+/// Lines of a leaf's triangles asked for ahead (four 36-byte triangles span at most 3).
+const LEAF_PREFETCH_LINES: usize = 3;
+
 /// The widest node this traversal takes.
 const MAX_WIDTH: usize = 8;
 
@@ -107,14 +148,14 @@ const MAX_WIDTH: usize = 8;
 const STACK: usize = MAX_WIDTH * (BvhConfig::DEPTH_LIMIT + 2);
 
 /// One ray's traversal (module doc) of the subtree at `start` (its slots of its wide node, whose
-/// boxes are tested here): the closest hit (`ANY`: the first found) within `[ray.tmin,
+/// boxes are tested here): the closest hit (`ANY`: the first found) within `[ray.leaf.tmin,
 /// ray.tmax]`, or a miss. `wide` was collapsed from `bvh`, whose triangles the leaves index.
 #[inline(always)]
 pub fn trace_wide<const W: usize, S: Stats, const ANY: bool>(
     bvh: &Bvh,
     wide: &WideBvh<W>,
     start: WideEntry,
-    ray: &Ray,
+    ray: &WideRay,
     stats: &mut S,
 ) -> Hit {
     const {
@@ -124,18 +165,19 @@ pub fn trace_wide<const W: usize, S: Stats, const ANY: bool>(
         )
     };
     let mut best = Hit::MISS;
-    let (tmin, mut tmax) = (ray.tmin, ray.tmax);
-    let boxes = WideRayTest::new(ray.origin, ray.dir);
-    let tris = WatertightRay::new(ray.origin, ray.dir);
+    let (tmin, mut tmax) = (ray.leaf.tmin, ray.tmax);
+    let boxes = &ray.boxes;
     // Uninitialised: zeroing kilobytes of stack per ray would cost more than a short traversal;
-    // only entries below `top`, all written first, are read.
+    // only entries below `top`, all written first, are read. `depths` is written and read only
+    // when counting.
     let mut stack = [const { MaybeUninit::<Pending>::uninit() }; STACK];
+    let mut depths = [const { MaybeUninit::<u8>::uninit() }; STACK];
     let mut top = 0;
     let (mut node, mut slots) = (start.node, start.slots);
     loop {
         let cell = &wide.nodes[node as usize];
         let depth = if S::ENABLED {
-            wide.depth[node as usize] as u32
+            wide.depth[node as usize]
         } else {
             0
         };
@@ -145,30 +187,61 @@ pub fn trace_wide<const W: usize, S: Stats, const ANY: bool>(
             (0..tested).for_each(|_| stats.aabb_test(depth as usize + 1));
         }
         let (enter, hit) = boxes.test(cell, tmin, tmax);
-        // Push the children met, keeping this node's run of the stack sorted far to near.
-        let base = top;
         let mut hit = hit & slots;
-        while hit != 0 {
+        if hit != 0 && hit & (hit - 1) == 0 {
+            // One child met (the common case on incoherent rays): straight into it, no stack
+            // round trip. Its entry lies within the closest hit, so nothing is skipped that the
+            // pop below would not skip either.
             let c = hit.trailing_zeros() as usize;
-            hit &= hit - 1;
-            let child = Pending {
+            if cell.count[c] == 0 {
+                (node, slots) = (cell.first[c], u32::MAX);
+                continue;
+            }
+            let leaf = LeafRange {
                 first: cell.first[c],
                 count: cell.count[c],
-                enter: enter[c],
-                depth: depth + 1,
+                depth: depth as usize + 1,
             };
-            if child.count == 0 {
-                // Its node is read soon (the nearest child next): start the load now.
-                prefetch_node(&wide.nodes[child.first as usize]);
+            if S::ENABLED {
+                stats.node(leaf.depth);
             }
-            let mut at = top;
-            // SAFETY: entries base..top were written by this loop.
-            while at > base && unsafe { stack[at - 1].assume_init_ref() }.enter < child.enter {
-                stack[at] = stack[at - 1];
-                at -= 1;
+            if intersect_leaf::<S, ANY>(bvh, &ray.leaf, leaf, &mut tmax, &mut best, stats) {
+                return best;
             }
-            stack[at].write(child);
-            top += 1;
+        } else {
+            // Push the children met, keeping this node's run of the stack sorted far to near
+            // (equal entries: the later slot first, as popped).
+            let base = top;
+            while hit != 0 {
+                let c = hit.trailing_zeros() as usize;
+                hit &= hit - 1;
+                let child = Pending {
+                    first: cell.first[c],
+                    count: cell.count[c],
+                    enter: enter[c],
+                };
+                // Its node or triangles are read soon (the nearest child next): start the loads
+                // now, so the children's misses overlap.
+                if child.count == 0 {
+                    prefetch_node(&wide.nodes[child.first as usize]);
+                } else {
+                    prefetch_triangles(bvh, child.first, child.count);
+                }
+                let mut at = top;
+                // SAFETY: entries base..top were written by this loop.
+                while at > base && unsafe { stack[at - 1].assume_init_ref() }.enter < child.enter {
+                    stack[at] = stack[at - 1];
+                    if S::ENABLED {
+                        depths[at] = depths[at - 1];
+                    }
+                    at -= 1;
+                }
+                stack[at].write(child);
+                if S::ENABLED {
+                    depths[at].write(depth + 1);
+                }
+                top += 1;
+            }
         }
         // Pop the nearest, skipping children now beyond the closest hit, until an interior node.
         loop {
@@ -176,7 +249,8 @@ pub fn trace_wide<const W: usize, S: Stats, const ANY: bool>(
                 return best;
             }
             top -= 1;
-            // SAFETY: every entry below the old `top` was written by a push.
+            // SAFETY: every entry below the old `top` was written by a push (and its depth, when
+            // counting).
             let next = unsafe { stack[top].assume_init() };
             if next.enter > tmax {
                 continue;
@@ -185,15 +259,19 @@ pub fn trace_wide<const W: usize, S: Stats, const ANY: bool>(
                 (node, slots) = (next.first, u32::MAX);
                 break;
             }
-            if S::ENABLED {
-                stats.node(next.depth as usize);
-            }
             let leaf = LeafRange {
                 first: next.first,
                 count: next.count,
-                depth: next.depth as usize,
+                depth: if S::ENABLED {
+                    unsafe { depths[top].assume_init() as usize }
+                } else {
+                    0
+                },
             };
-            if intersect_leaf::<S, ANY>(bvh, &tris, ray, leaf, &mut tmax, &mut best, stats) {
+            if S::ENABLED {
+                stats.node(leaf.depth);
+            }
+            if intersect_leaf::<S, ANY>(bvh, &ray.leaf, leaf, &mut tmax, &mut best, stats) {
                 return best;
             }
         }

@@ -34,13 +34,16 @@ pub struct WideRayTest {
 impl WideRayTest {
     #[inline(always)]
     pub fn new(origin: Vec3, dir: Vec3) -> Self {
+        Self::from_inv(origin, Vec3::ONE / dir)
+    }
+
+    /// As `new`, from the reciprocal direction `inv = 1 / dir`.
+    #[inline(always)]
+    pub fn from_inv(origin: Vec3, inv: Vec3) -> Self {
         WideRayTest {
-            sse: BroadcastRay::new(origin, dir),
+            sse: BroadcastRay::from_inv(origin, inv),
             #[cfg(target_feature = "avx")]
-            avx: {
-                let inv = Vec3::ONE / dir;
-                [origin, inv].map(|v| v.to_array().map(<__m256 as SlabLanes>::splat))
-            },
+            avx: [origin, inv].map(|v| v.to_array().map(<__m256 as SlabLanes>::splat)),
         }
     }
 
