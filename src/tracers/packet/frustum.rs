@@ -90,6 +90,20 @@ struct Range {
     hi: f32,
 }
 
+/// The per-lane extremes of a frustum set-up's `L`-wide accumulators folded into its two slope
+/// ranges and its nearest depth (min and max of non-NaN values do not depend on the order).
+fn fold_lanes<const L: usize>(
+    lo: &[[f32; L]; 2],
+    hi: &[[f32; L]; 2],
+    near: &[f32; L],
+) -> ([Range; 2], f32) {
+    let slope = [0, 1].map(|s| Range {
+        lo: lo[s].iter().copied().fold(f32::INFINITY, f32::min),
+        hi: hi[s].iter().copied().fold(f32::NEG_INFINITY, f32::max),
+    });
+    (slope, near.iter().copied().fold(f32::INFINITY, f32::min))
+}
+
 impl Range {
     const EMPTY: Range = Range {
         lo: f32::INFINITY,
@@ -168,15 +182,9 @@ impl Frustum {
         if ok.contains(&false) {
             return None;
         }
-        let fold =
-            |v: &[f32; L], f: fn(f32, f32) -> f32, init: f32| v.iter().copied().fold(init, f);
-        let slope = [0, 1].map(|s| Range {
-            lo: fold(&lo[s], f32::min, f32::INFINITY),
-            hi: fold(&hi[s], f32::max, f32::NEG_INFINITY),
-        });
-        let tau_near = fold(&near, f32::min, f32::INFINITY);
+        let (slope, tau_near) = fold_lanes(&lo, &hi, &near);
         let apex = [o[j[0]], o[j[1]]];
-        let far = [0.0, fold(&along_max, f32::max, 0.0)];
+        let far = [0.0, along_max.iter().copied().fold(0.0, f32::max)];
         Self::finish(
             FrustumKind::SharedOrigin,
             k,
@@ -236,14 +244,11 @@ impl Frustum {
         if !ok {
             return None;
         }
-        let fold =
-            |v: &[f32; L], f: fn(f32, f32) -> f32, init: f32| v.iter().copied().fold(init, f);
-        let slope = [0, 1].map(|s| Range {
-            lo: fold(&lo[s], f32::min, f32::INFINITY),
-            hi: fold(&hi[s], f32::max, f32::NEG_INFINITY),
-        });
-        let tau_near = fold(&near, f32::min, f32::INFINITY);
-        let magnitude = fold(&magnitude, f32::max, scale.max(max_abs(apex)));
+        let (slope, tau_near) = fold_lanes(&lo, &hi, &near);
+        let magnitude = magnitude
+            .iter()
+            .copied()
+            .fold(scale.max(max_abs(apex)), f32::max);
         let a = [apex[j[0]], apex[j[1]]];
         let far = [f32::INFINITY, f32::INFINITY];
         Self::finish(
