@@ -128,10 +128,7 @@ fn clipped_bounds(tri: &Triangle, region: &Aabb, whole: &Aabb) -> Aabb {
                     clipped.push(a);
                 }
                 if inside(a) != inside(b) {
-                    let s = (plane - a[axis]) / (b[axis] - a[axis]);
-                    let mut p = a + (b - a) * s;
-                    p[axis] = plane;
-                    clipped.push(p);
+                    clipped.push(plane_crossing(a, b, axis, plane));
                 }
             }
             poly = clipped;
@@ -141,6 +138,15 @@ fn clipped_bounds(tri: &Triangle, region: &Aabb, whole: &Aabb) -> Aabb {
         }
     }
     widened_within(Aabb::from_points(&poly), whole)
+}
+
+/// Where the edge `a`–`b`, whose ends lie on opposite sides of the plane `axis = plane`, crosses
+/// it (on it exactly along `axis`).
+pub(super) fn plane_crossing(a: Vec3, b: Vec3, axis: usize, plane: f32) -> Vec3 {
+    let s = (plane - a[axis]) / (b[axis] - a[axis]);
+    let mut p = a + (b - a) * s;
+    p[axis] = plane;
+    p
 }
 
 /// `b` widened by a few ULPs of its largest coordinate, so rounding in computed (clipped) vertices

@@ -11,7 +11,7 @@
 //! The builder keeps the split with the lowest SAH cost among the object split, the spatial split
 //! and a leaf, so the tree's SAH cost with spatial splits is never above the plain one at a node.
 
-use super::presplit::{widened_within, Reference};
+use super::presplit::{plane_crossing, widened_within, Reference};
 use crate::geometry::{Aabb, Triangle};
 
 /// A spatial split candidate: references whose box ends at or below `plane` on `axis` go left,
@@ -60,9 +60,7 @@ pub fn split_reference(tri: &Triangle, bounds: &Aabb, axis: usize, plane: f32) -
             right = right.grow(a);
         }
         if (a[axis] < plane && b[axis] > plane) || (b[axis] < plane && a[axis] > plane) {
-            let s = (plane - a[axis]) / (b[axis] - a[axis]);
-            let mut p = a + (b - a) * s;
-            p[axis] = plane;
+            let p = plane_crossing(a, b, axis, plane);
             left = left.grow(p);
             right = right.grow(p);
         }

@@ -83,17 +83,9 @@ impl SetLanes {
             }
         }
         self.rect.clear();
-        self.rect.extend((0..query.samples.sets()).map(|set| {
-            query.samples.set(set as u32).iter().fold(
-                [
-                    f32::INFINITY,
-                    f32::NEG_INFINITY,
-                    f32::INFINITY,
-                    f32::NEG_INFINITY,
-                ],
-                |r, &[u, v]| [r[0].min(u), r[1].max(u), r[2].min(v), r[3].max(v)],
-            )
-        }));
+        self.rect.extend(
+            (0..query.samples.sets()).map(|set| uv_rect(query.samples.set(set as u32).iter())),
+        );
     }
 
     /// Sets in `alive` (zero on entry) the bits of point `p`'s samples in front of its surface
@@ -329,24 +321,24 @@ fn generate<S: Stats>(
 /// The (s, t) rectangle of point `i`'s live samples (§5.3 CR).
 fn live_rect(query: &VisibilityQuery<'_>, i: usize, alive: &[u64]) -> [f32; 4] {
     let uv = query.samples.set(query.points[i].set);
-    let mut rect = [
-        f32::INFINITY,
-        f32::NEG_INFINITY,
-        f32::INFINITY,
-        f32::NEG_INFINITY,
-    ];
-    for (w, &word) in alive.iter().enumerate() {
-        for b in bits(word) {
-            let [u, v] = uv[w * 64 + b];
-            rect = [
-                rect[0].min(u),
-                rect[1].max(u),
-                rect[2].min(v),
-                rect[3].max(v),
-            ];
-        }
-    }
-    rect
+    let live = alive
+        .iter()
+        .enumerate()
+        .flat_map(|(w, &word)| bits(word).map(move |b| &uv[w * 64 + b]));
+    uv_rect(live)
+}
+
+/// The (s, t) rectangle `[s_min, s_max, t_min, t_max]` of light samples `uv` (empty: min > max).
+fn uv_rect<'a>(uv: impl Iterator<Item = &'a [f32; 2]>) -> [f32; 4] {
+    uv.fold(
+        [
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+        ],
+        |r, &[u, v]| [r[0].min(u), r[1].max(u), r[2].min(v), r[3].max(v)],
+    )
 }
 
 /// The samples still live at the end see the light: their bits are cleared.

@@ -24,8 +24,9 @@
 //!   built with the tracer, as the packet tracer's are; `handoff`, which reads each ray from the
 //!   stream's own records where the filters left it, not from the chunk's columns). Not in the
 //!   paper: deep in the tree the sub-streams are a few rays long (Table 4), and a box filter over
-//!   them costs more than the rays' own traversal. T = 0 is the paper's stream filtering to the leaves; the lane counters count the
-//!   filters only, so with T > 0 they describe the stream part of the traversal.
+//!   them costs more than the rays' own traversal. T = 0 is the paper's stream filtering to the
+//!   leaves; the lane counters count the filters only, so with T > 0 they describe the stream
+//!   part of the traversal.
 //! - **Exact hits**: every lane runs the reference tracer's slab and watertight tests bit for
 //!   bit, so each ray gets the reference's closest hit (up to the order in which triangles at
 //!   exactly equal distance are met). Occlusion rays end at their first hit and leave the stream.

@@ -54,6 +54,14 @@ struct FrameRecord {
     axes: u32,
 }
 
+impl FrameRecord {
+    /// The frame's axis `a` (0: kx, 1: ky, 2: kz).
+    #[inline(always)]
+    fn axis(&self, a: usize) -> u32 {
+        self.axes >> (2 * a) & 3
+    }
+}
+
 /// What the slab test reads for `L` rays, owned (`SlabRays` borrows it).
 pub struct SlabLanes<const L: usize> {
     origin: [[f32; L]; 3],
@@ -161,7 +169,7 @@ impl<const L: usize> StreamRays<L> {
             for a in 0..3 {
                 simd.origin[a][l] = r.origin[a];
                 simd.shear[a][l] = f.shear[a];
-                simd.axes[a][l] = f.axes >> (2 * a) & 3;
+                simd.axes[a][l] = f.axis(a);
             }
             simd.tmin[l] = r.tmin;
             simd.tmax[l] = if l < used { r.tmax } else { f32::NEG_INFINITY };
@@ -177,7 +185,7 @@ impl<const L: usize> StreamRays<L> {
     #[inline(always)]
     pub fn wide_ray(&self, at: usize) -> WideRay {
         let (r, f) = (&self.slab[at], &self.frame[self.stream[at] as usize]);
-        let k = [0, 1, 2].map(|a| (f.axes >> (2 * a) & 3) as usize);
+        let k = [0, 1, 2].map(|a| f.axis(a) as usize);
         WideRay {
             boxes: WideRayTest::from_inv(Vec3::from(r.origin), Vec3::from(r.inv_dir)),
             leaf: LeafRay {

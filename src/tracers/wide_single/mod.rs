@@ -139,6 +139,22 @@ fn prefetch_triangles(bvh: &Bvh, first: u32, count: u32) {
 /// Lines of a leaf's triangles asked for ahead (four 36-byte triangles span at most 3).
 const LEAF_PREFETCH_LINES: usize = 3;
 
+/// A leaf's triangles (`intersect_leaf`), counted as a node at its depth: whether to stop.
+#[inline(always)]
+fn visit_leaf<S: Stats, const ANY: bool>(
+    bvh: &Bvh,
+    ray: &LeafRay,
+    leaf: LeafRange,
+    tmax: &mut f32,
+    best: &mut Hit,
+    stats: &mut S,
+) -> bool {
+    if S::ENABLED {
+        stats.node(leaf.depth);
+    }
+    intersect_leaf::<S, ANY>(bvh, ray, leaf, tmax, best, stats)
+}
+
 /// The widest node this traversal takes.
 const MAX_WIDTH: usize = 8;
 
@@ -202,10 +218,7 @@ pub fn trace_wide<const W: usize, S: Stats, const ANY: bool>(
                 count: cell.count[c],
                 depth: depth as usize + 1,
             };
-            if S::ENABLED {
-                stats.node(leaf.depth);
-            }
-            if intersect_leaf::<S, ANY>(bvh, &ray.leaf, leaf, &mut tmax, &mut best, stats) {
+            if visit_leaf::<S, ANY>(bvh, &ray.leaf, leaf, &mut tmax, &mut best, stats) {
                 return best;
             }
         } else {
@@ -268,10 +281,7 @@ pub fn trace_wide<const W: usize, S: Stats, const ANY: bool>(
                     0
                 },
             };
-            if S::ENABLED {
-                stats.node(leaf.depth);
-            }
-            if intersect_leaf::<S, ANY>(bvh, &ray.leaf, leaf, &mut tmax, &mut best, stats) {
+            if visit_leaf::<S, ANY>(bvh, &ray.leaf, leaf, &mut tmax, &mut best, stats) {
                 return best;
             }
         }
