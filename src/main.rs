@@ -313,12 +313,22 @@ fn params_of(pairs: Vec<(String, String)>) -> Params {
 }
 
 fn check_frame(frame: usize, frames: usize) -> Result<()> {
-    if frames == 0 || frame >= frames {
+    at_least_one("--frames", frames)?;
+    if frame >= frames {
         return Err(Error::usage(format!(
             "--frame {frame} is not one of --frames {frames}"
         )));
     }
     Ok(())
+}
+
+/// Refuses a count of zero given for `option` (an empty image or batch would "pass" vacuously or
+/// fail only after the work, when the PNG is written).
+fn at_least_one(option: &str, n: usize) -> Result<()> {
+    match n {
+        0 => Err(Error::usage(format!("{option} must be at least 1"))),
+        _ => Ok(()),
+    }
 }
 
 fn execute(command: Command) -> Result<bool> {
@@ -403,6 +413,17 @@ fn execute(command: Command) -> Result<bool> {
             drt,
         } => {
             check_frame(frame, frames)?;
+            at_least_one("--width", width as usize)?;
+            at_least_one("--height", height as usize)?;
+            if !output
+                .extension()
+                .is_some_and(|e| e.eq_ignore_ascii_case("png"))
+            {
+                return Err(Error::usage(format!(
+                    "--output {}: the image is a PNG, so its name must end in .png",
+                    output.display()
+                )));
+            }
             let samples = match renderer {
                 Renderer::Distribution | Renderer::Path => drt.spp as u64,
                 _ => 1,
@@ -489,6 +510,12 @@ fn execute(command: Command) -> Result<bool> {
             out,
         } => {
             check_frame(frame, frames)?;
+            at_least_one("--resolution", resolution as usize)?;
+            if max_distance_error.is_nan() || max_distance_error < 0.0 {
+                return Err(Error::usage(format!(
+                    "--max-distance-error must be a number ≥ 0, not {max_distance_error}"
+                )));
+            }
             let file_rays = rays
                 .map(|path| read_rays(&path).map(|batch| (path, batch)))
                 .transpose()?;

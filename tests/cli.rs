@@ -165,6 +165,19 @@ fn bad_experiments_fail_cleanly() {
     fails_with(&dir, &["run", &unknown], "warp-drive");
     let scene = experiment(&dir, "scene.toml", "name = \"x\"\nscenes = [\"room\", \"no-such-scene\"]\ntracers = [\"reference\"]\nrays = [\"primary\"]\nresolution = { width = 8, height = 8 }\n");
     fails_with(&dir, &["run", &scene], "no-such-scene");
+    // Once: the same rows measured and written twice, and a pool of 100,000 threads that never
+    // finished starting.
+    let room = experiment(&dir, "room.toml", "name = \"x\"\nscenes = [\"room\"]\ntracers = [\"reference\"]\nrays = [\"primary\"]\nresolution = { width = 8, height = 8 }\n");
+    fails_with(
+        &dir,
+        &["run", &room, "--threads", "2", "2"],
+        "thread count 2 is listed twice",
+    );
+    fails_with(
+        &dir,
+        &["run", &room, "--threads", "100000"],
+        "100000 threads are more than 1024",
+    );
     no_results(&dir);
 }
 
@@ -224,6 +237,60 @@ fn absurd_sizes_are_refused_before_allocating() {
     );
     fails_with(&dir, &["run", &exp], "huge.toml");
     no_results(&dir);
+}
+
+#[test]
+fn empty_sizes_and_wrong_outputs_are_refused_before_the_work() {
+    let dir = scratch("empty-sizes");
+    // Once: a PASS on zero rays (exit 0), and a render that failed (exit 1) only when writing.
+    let verify = [
+        "verify",
+        "--scene",
+        "room",
+        "--tracer",
+        "reference",
+        "--out",
+        "res",
+    ];
+    for (extra, message) in [
+        (
+            &["--resolution", "0"][..],
+            "raylab: --resolution must be at least 1",
+        ),
+        (
+            &["--frames", "0"][..],
+            "raylab: --frames must be at least 1",
+        ),
+        (
+            &["--max-distance-error", "NaN"][..],
+            "raylab: --max-distance-error must be a number ≥ 0, not NaN",
+        ),
+    ] {
+        let args: Vec<&str> = verify.iter().chain(extra).copied().collect();
+        let (code, stderr) = raylab(&dir, &args);
+        assert_eq!((code, stderr.trim()), (2, message), "{args:?}");
+    }
+    assert!(!dir.join("res").exists());
+    let render = ["render", "--scene", "room", "--width", "8", "--height", "8"];
+    for (extra, message) in [
+        (
+            &["--width", "0", "-o", "x.png"][..],
+            "raylab: --width must be at least 1",
+        ),
+        (
+            &["--height", "0", "-o", "x.png"][..],
+            "raylab: --height must be at least 1",
+        ),
+        (
+            &["-o", "x.txt"][..],
+            "raylab: --output x.txt: the image is a PNG, so its name must end in .png",
+        ),
+    ] {
+        let args: Vec<&str> = render.iter().chain(extra).copied().collect();
+        let (code, stderr) = raylab(&dir, &args);
+        assert_eq!((code, stderr.trim()), (2, message), "{args:?}");
+    }
+    assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 0);
 }
 
 #[test]

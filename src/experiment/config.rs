@@ -278,6 +278,8 @@ pub struct TracerInstance {
     pub info: &'static TracerInfo,
     /// The tracer's and its structure's parameters (the structure reads its own subset).
     pub params: Params,
+    /// The line of its entry in the experiment file, where an error in its values points.
+    pub line: usize,
 }
 
 /// The structure a tracer instance traverses: instances with equal keys share one build.
@@ -691,12 +693,7 @@ impl Experiment {
             (None, None) => return Err(src.input_error(&(0..0), "missing field `resolution`")),
         };
         let threads = file.threads.get_ref().clone();
-        if threads.is_empty() || threads.contains(&0) {
-            return Err(src.input_error(
-                &file.threads.span(),
-                "threads must be a non-empty list of counts ≥ 1",
-            ));
-        }
+        check_threads(&threads).map_err(|e| src.input_error(&file.threads.span(), e))?;
         // The name becomes a directory: one plain path component.
         let name = file.name.get_ref();
         let name_ok = !name.is_empty()
@@ -877,7 +874,11 @@ fn expand_tracers(src: &Source, file: &ExperimentFile) -> Result<Vec<TracerInsta
             return Err(too_many(src, &entry.span()));
         }
         for params in grid {
-            let instance = TracerInstance { info, params };
+            let instance = TracerInstance {
+                info,
+                params,
+                line: line_of(src.text, &entry.span()),
+            };
             if instances
                 .iter()
                 .any(|i| i.info.name == info.name && i.params == instance.params)
@@ -1010,6 +1011,30 @@ fn expand_render_grid(
 /// committed ones have at most 36): a few short lists multiply to millions, each checked against
 /// the others for repeats.
 const MAX_COMBINATIONS: usize = 1000;
+
+/// The most threads a measurement may ask for: each is an OS thread of a rayon pool, and far
+/// more than any machine's cores only measures the scheduler (a pool of 100,000 never finished
+/// starting).
+pub const MAX_THREADS: usize = 1024;
+
+/// A list of thread counts to measure at: non-empty, each in 1..=`MAX_THREADS`, none twice (a
+/// count listed twice would measure and write the same rows twice).
+pub fn check_threads(threads: &[usize]) -> std::result::Result<(), String> {
+    if threads.is_empty() || threads.contains(&0) {
+        return Err("threads must be a non-empty list of counts ≥ 1".into());
+    }
+    if let Some(n) = threads.iter().find(|&&n| n > MAX_THREADS) {
+        return Err(format!("{n} threads are more than {MAX_THREADS}"));
+    }
+    if let Some((_, n)) = threads
+        .iter()
+        .enumerate()
+        .find(|(i, n)| threads[..*i].contains(n))
+    {
+        return Err(format!("thread count {n} is listed twice"));
+    }
+    Ok(())
+}
 
 fn too_many(src: &Source, span: &Range<usize>) -> Error {
     src.input_error(
@@ -1180,6 +1205,25 @@ mod tests {
         // Instances differing only in tracer-side parameters would share the structure; these
         // all differ in BVH parameters.
         assert_eq!(exp.instances[0].structure().params, exp.instances[0].params);
+    }
+
+    #[test]
+    fn thread_counts_twice_or_absurd_are_refused_at_their_line() {
+        for (threads, message) in [
+            ("[1, 1]", "exp.toml:6: thread count 1 is listed twice"),
+            ("[2, 1, 2]", "exp.toml:6: thread count 2 is listed twice"),
+            ("[100000]", "exp.toml:6: 100000 threads are more than 1024"),
+            (
+                "[0]",
+                "exp.toml:6: threads must be a non-empty list of counts ≥ 1",
+            ),
+        ] {
+            let text = format!("{BASE}tracers = [\"reference\"]\nthreads = {threads}\n");
+            let err = parse(&text).unwrap_err();
+            assert_eq!(err.exit_code(), 2);
+            assert_eq!(err.to_string(), message);
+        }
+        assert_eq!(check_threads(&[1, 2, MAX_THREADS]), Ok(()));
     }
 
     #[test]

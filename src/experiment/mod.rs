@@ -33,7 +33,7 @@ use serde::{Deserialize, Serialize};
 use crate::error::{Error, Result};
 use crate::scene::library::load_scene;
 
-pub use config::{Experiment, SceneSpec, StructureKey, TracerInstance};
+pub use config::{check_threads, Experiment, SceneSpec, StructureKey, TracerInstance};
 pub use plan::{Plan, SceneLoader};
 
 /// Where `--dump-rays` writes the generated batches, in the results directory.
@@ -94,11 +94,7 @@ impl RunOverrides {
             exp.output = output.clone();
         }
         if let Some(threads) = &self.threads {
-            if threads.is_empty() || threads.contains(&0) {
-                return Err(Error::usage(
-                    "threads must be a non-empty list of counts ≥ 1",
-                ));
-            }
+            check_threads(threads).map_err(Error::usage)?;
             exp.threads = threads.clone();
         }
         if let Some((width, height)) = self.resolution {

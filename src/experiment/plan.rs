@@ -224,8 +224,13 @@ fn plan_instances(exp: &Experiment) -> Result<Vec<InstancePlan>> {
     exp.instances
         .iter()
         .map(|instance| {
-            let fail =
-                |e: Error| Error::usage(format!("{}: tracer {instance}: {e}", exp.path.display()));
+            let fail = |e: Error| {
+                Error::usage(format!(
+                    "{}:{}: tracer {instance}: {e}",
+                    exp.path.display(),
+                    instance.line
+                ))
+            };
             let key = instance.structure();
             if !built.contains_key(&key) {
                 let accel = key.kind.build(&probe, &key.params).map_err(fail)?;
@@ -628,7 +633,7 @@ pub(crate) mod tests {
         );
         match Plan::derive(&exp, &load_quads).unwrap_err() {
             Error::Usage(m) => assert!(
-                m.starts_with("t.toml: tracer reference[leaf_size=0]: BVH parameters"),
+                m.starts_with("t.toml:4: tracer reference[leaf_size=0]: BVH parameters"),
                 "{m}"
             ),
             e => panic!("{e:?}"),

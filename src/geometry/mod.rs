@@ -8,5 +8,5 @@ pub mod triangle;
 
 pub use aabb::{Aabb, RayBoxTest};
 pub use camera_grid::CameraGrid;
-pub use ray::{Hit, Ray, RayBatch, RayKind, Rays};
+pub use ray::{Hit, Ray, RayBatch, RayKind, Rays, LARGEST_COORDINATE};
 pub use triangle::{Triangle, WatertightRay};

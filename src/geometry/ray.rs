@@ -5,6 +5,12 @@ use glam::Vec3;
 
 use crate::geometry::CameraGrid;
 
+/// The largest coordinate magnitude raylab traces: Embree's `FLT_LARGE`, beyond which its ray
+/// validity check rejects a ray (the Debian build asserts and aborts). Scene files with vertices
+/// beyond it are refused (`scene::loaders`): Embree could not check their hits, and obvhs's
+/// builder panics on scenes a few times larger.
+pub const LARGEST_COORDINATE: f32 = 1.844e18;
+
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Ray {
     pub origin: Vec3,

@@ -281,6 +281,8 @@ fn parse_csv(path: &Path, bytes: &[u8]) -> Result<RayBatch> {
             "neither a binary ray file (magic RAYLABRY) nor CSV text (not UTF-8)",
         )
     })?;
+    // A byte-order mark, as spreadsheet programs write, is not part of the header.
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let mut lines = text
         .lines()
         .enumerate()
@@ -540,6 +542,13 @@ mod tests {
         let rays = parse_rays(path(), ok.as_bytes()).unwrap();
         assert_eq!(rays.len(), 1);
         assert!(rays.dx[0].is_nan() && rays.dy[0] == f32::NEG_INFINITY);
+        // A byte-order mark before the header was once "not a ray file".
+        let bom = "\u{feff}ox,oy,oz,dx,dy,dz,tmin,tmax\n0.25,0.5,1,0,0,-1,0,inf\n";
+        let rays = parse_rays(path(), bom.as_bytes()).unwrap();
+        assert_eq!(
+            (rays.len(), rays.ox[0], rays.oy[0], rays.dz[0]),
+            (1, 0.25, 0.5, -1.0)
+        );
     }
 
     #[test]

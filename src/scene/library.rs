@@ -143,6 +143,9 @@ impl Resolver<'_> {
         }
         if looks_like_path(name) {
             let path = Path::new(name);
+            if path.is_dir() {
+                return Err(Error::input(path, None, "a directory, not a scene file"));
+            }
             if !path.is_file() {
                 return Err(Error::input(path, None, "no such scene file"));
             }
@@ -515,6 +518,15 @@ mod tests {
         assert!(
             message.contains("no/such/file.toml") && message.contains("no such scene file"),
             "{message}"
+        );
+        // A directory named like a mesh file was once "no such scene file".
+        let folder = project.0.join("folder.obj");
+        std::fs::create_dir_all(&folder).unwrap();
+        let err = load_scene_in(folder.to_str().unwrap(), None, &dirs).unwrap_err();
+        assert_eq!(err.exit_code(), 2);
+        assert_eq!(
+            err.to_string(),
+            format!("{}: a directory, not a scene file", folder.display())
         );
 
         // Listing survives the broken file and reports it.

@@ -329,6 +329,11 @@ impl SceneFile {
                 ));
             }
             scene.camera = self.camera(camera, scene.camera)?;
+            // A [camera] without keys of its own is the view of every frame: the base's path
+            // (the built-ins fly through theirs) would otherwise override it at every frame.
+            if spec.camera_path.is_none() {
+                scene.camera_path = None;
+            }
         }
         if let Some(keys) = &spec.camera_path {
             scene.camera_path = self.camera_path(keys, scene.camera)?;
@@ -758,6 +763,20 @@ red = { preset = "glass", ior = 1.33 }
             err.starts_with("scenes/test.toml:4:") && err.contains("0.5"),
             "{err}"
         );
+    }
+
+    #[test]
+    fn a_camera_without_keys_replaces_the_base_camera_path() {
+        // The room flies along its camera path; a [camera] over it was once silently ignored.
+        let mut scene = builtin::generate("room", None).unwrap();
+        assert!(scene.camera_path.is_some());
+        let file = parse("extends = \"room\"\n[camera]\nposition = [0.5, 5.0, 0.5]\n").unwrap();
+        file.apply(&mut scene).unwrap();
+        assert!(scene.camera_path.is_none());
+        for (index, count) in [(0, 1), (1, 3)] {
+            let frame = scene.frame(index, count);
+            assert_eq!(frame.camera.position, Vec3::new(0.5, 5.0, 0.5));
+        }
     }
 
     #[test]

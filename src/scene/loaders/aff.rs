@@ -32,7 +32,7 @@ use super::keyframes::{self, TransformTrack};
 use super::nff::{self, View};
 use super::scene_graph::{Clock, Morph, SceneGraph};
 use super::tokens::Tokens;
-use super::{default_camera, require_triangles, scene_name, triangulate, Files, LoadOptions};
+use super::{default_camera, require_traceable, scene_name, triangulate, Files, LoadOptions};
 use crate::error::{Error, Result};
 use crate::geometry::Triangle;
 use crate::scene::{CameraKey, CameraPath, Light, Material, Scene};
@@ -386,7 +386,7 @@ impl Reader<'_> {
             end: a.end.into(),
         });
         let (mesh, animation) = self.graph.finish(&self.tracks, clock);
-        require_triangles(path, &mesh)?;
+        require_traceable(path, &mesh)?;
         let view = self.view.unwrap_or_else(|| {
             let c = default_camera(&mesh.bounds());
             View {

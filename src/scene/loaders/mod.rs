@@ -22,7 +22,9 @@ mod triangulate;
 use std::path::Path;
 
 use crate::error::{Error, Result};
-use crate::geometry::Aabb;
+use glam::Vec3;
+
+use crate::geometry::{Aabb, LARGEST_COORDINATE};
 use crate::scene::{Camera, Material, Mesh, Scene};
 
 pub use triangulate::triangulate;
@@ -131,11 +133,11 @@ pub fn default_camera(bounds: &Aabb) -> Camera {
     let radius = 0.5 * bounds.extent().length();
     let radius = if radius > 0.0 { radius } else { 1.0 };
     let distance = radius / (0.5 * FOV_Y_DEG.to_radians()).sin();
-    let direction = glam::Vec3::new(1.0, 0.5, 1.0).normalize();
+    let direction = Vec3::new(1.0, 0.5, 1.0).normalize();
     Camera {
         position: centre + direction * distance,
         target: centre,
-        up: glam::Vec3::Y,
+        up: Vec3::Y,
         fov_y_deg: FOV_Y_DEG,
         aperture: 0.0,
         focus_distance: distance,
@@ -157,19 +159,33 @@ fn scene_name(path: &Path) -> String {
     name.to_string()
 }
 
-/// Refuses a file that produced no triangles.
-fn require_triangles(path: &Path, mesh: &Mesh) -> Result<()> {
+/// Refuses a file that produced no triangles, or a vertex (after any transform) that is not
+/// finite or lies beyond `LARGEST_COORDINATE`, where Embree cannot check the hits.
+fn require_traceable(path: &Path, mesh: &Mesh) -> Result<()> {
     if mesh.is_empty() {
-        Err(Error::input(path, None, "the file contains no triangles"))
-    } else {
-        Ok(())
+        return Err(Error::input(path, None, "the file contains no triangles"));
+    }
+    let out_of_range = |v: &Vec3| !(v.is_finite() && v.abs().max_element() <= LARGEST_COORDINATE);
+    match (mesh.triangles.iter().enumerate())
+        .find_map(|(i, t)| t.v.iter().find(|v| out_of_range(v)).map(|v| (i, v)))
+    {
+        Some((i, v)) => Err(Error::input(
+            path,
+            None,
+            format!(
+                "triangle {i} has a vertex at ({:e}, {:e}, {:e}), beyond ±{LARGEST_COORDINATE:e} (the largest \
+                 coordinate Embree traces; scale the scene down)",
+                v.x, v.y, v.z
+            ),
+        )),
+        None => Ok(()),
     }
 }
 
 /// The scene of a file that holds geometry and materials only (OBJ, PLY): named after the file,
 /// no lights, the default view, nothing moves. Refuses a file without triangles.
 fn still_mesh_scene(path: &Path, mesh: Mesh, materials: Vec<Material>) -> Result<Scene> {
-    require_triangles(path, &mesh)?;
+    require_traceable(path, &mesh)?;
     Ok(Scene {
         name: scene_name(path),
         source: path.display().to_string(),
@@ -213,6 +229,54 @@ mod tests {
         let d = (cam.position - cam.target).length();
         assert!((d * (22.5f32).to_radians().sin() - radius).abs() < 1e-4);
         assert!(cam.position.x > 1.0 && cam.position.y > 1.0 && cam.position.z > 0.0);
+    }
+
+    #[test]
+    fn vertices_beyond_embree_range_or_empty_files_are_refused() {
+        let no_files: Files = &|_| Err(std::io::ErrorKind::NotFound.into());
+        // obvhs's builder panicked (index out of bounds) on this scene; Embree rejects its rays.
+        let huge = b"v -1e19 -1e19 0\nv 1e19 -1e19 0\nv 0 1e19 0\nf 1 2 3\n";
+        let err = parse_obj(Path::new("huge.obj"), huge, no_files).unwrap_err();
+        assert_eq!(err.exit_code(), 2);
+        assert!(
+            err.to_string().starts_with(
+                "huge.obj: triangle 0 has a vertex at (-1e19, -1e19, 0e0), beyond ±1.844e18"
+            ),
+            "{err}"
+        );
+        let err = parse_nff(
+            Path::new("big.nff"),
+            b"s 0 0 0 1e30\n",
+            &LoadOptions::default(),
+        )
+        .unwrap_err();
+        assert!(
+            err.to_string()
+                .starts_with("big.nff: triangle 0 has a vertex"),
+            "{err}"
+        );
+        // A transform overflowing finite vertices to infinity (obvhs panicked on this too).
+        let scaled = b"xs 1e30 1e30 1e30 0 0 1 0 0 0 0 {\np 3\n0 0 0\n1e10 0 0\n0 1e10 0\n}\n";
+        let err = parse_aff(
+            Path::new("x.aff"),
+            scaled,
+            &LoadOptions::default(),
+            no_files,
+        )
+        .unwrap_err();
+        assert_eq!(err.exit_code(), 2);
+        assert!(
+            err.to_string()
+                .starts_with("x.aff: triangle 0 has a vertex at (inf, "),
+            "{err}"
+        );
+        let edge = b"v -1.8e18 0 0\nv 1.8e18 0 0\nv 0 1.8e18 0\nf 1 2 3\n";
+        assert_eq!(
+            parse_obj(Path::new("edge.obj"), edge, no_files)
+                .unwrap()
+                .triangle_count(),
+            1
+        );
     }
 
     #[test]

@@ -69,6 +69,8 @@ impl Statements {
 pub fn parse(path: &Path, text: &str) -> Result<Vec<Material>> {
     let mut materials = Vec::new();
     let mut current: Option<(String, Statements)> = None;
+    // A byte-order mark (editors on Windows write one) is not part of the first keyword.
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     for (index, line) in text.lines().enumerate() {
         let at = |message: String| Error::at_line(path, index + 1, message);
         let line = line.split('#').next().unwrap_or("").trim();
@@ -221,5 +223,11 @@ map_Kd veil.ppm
             assert!(err.starts_with(&format!("bad.mtl:{line}:")), "{err}");
             assert!(err.contains(what), "{err}");
         }
+    }
+
+    #[test]
+    fn a_byte_order_mark_is_not_part_of_the_first_keyword() {
+        let m = parse(Path::new("bom.mtl"), "\u{feff}newmtl red\nKd 1 0 0\n").unwrap();
+        assert_eq!((m[0].name.as_str(), m[0].diffuse), ("red", Vec3::X));
     }
 }

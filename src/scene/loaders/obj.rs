@@ -24,6 +24,9 @@ pub fn load(path: &Path) -> Result<Scene> {
 /// The OBJ file `bytes` (named `path` in errors); material libraries are read through `files`,
 /// relative to `path`'s directory.
 pub fn parse(path: &Path, bytes: &[u8], files: Files) -> Result<Scene> {
+    // A byte-order mark (editors on Windows write one) would hide the first line's keyword from
+    // tobj, which then drops that line.
+    let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
     let dir = path.parent().unwrap_or(Path::new("")).to_path_buf();
 
     // Materials of every library that loaded, in the order tobj numbers them, and the first
@@ -327,6 +330,18 @@ mod tests {
         assert_eq!(scene.mesh.triangles[8].v[2], Vec3::new(1.5, 0.5, 0.0));
         assert!(scene.lights.is_empty() && scene.animation.is_none());
         assert_eq!(scene.camera, default_camera(&scene.mesh.bounds()));
+    }
+
+    #[test]
+    fn a_byte_order_mark_keeps_the_first_line() {
+        // tobj dropped the first vertex behind the mark: "vertex index 3 is out of range".
+        let no_files: Files = &|_| Err(std::io::ErrorKind::NotFound.into());
+        let text = b"\xEF\xBB\xBFv 0 0 0\r\nv 1 0 0\r\nv 0 1 0\r\nf 1 2 3\r\n";
+        let scene = parse(Path::new("bom.obj"), text, no_files).unwrap();
+        assert_eq!(
+            scene.mesh.triangles,
+            [Triangle::new(Vec3::ZERO, Vec3::X, Vec3::Y)]
+        );
     }
 
     #[test]

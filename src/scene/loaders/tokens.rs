@@ -17,6 +17,8 @@ pub struct Tokens<'a> {
 
 impl<'a> Tokens<'a> {
     pub fn new(path: &'a Path, text: &'a str) -> Self {
+        // A byte-order mark (editors on Windows write one) is not part of the first word.
+        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
         let mut words = Vec::new();
         for (index, line) in text.lines().enumerate() {
             let content = line.split(['#', '%']).next().unwrap_or("");
@@ -145,6 +147,10 @@ mod tests {
         assert!(t.next_word().is_none());
         let err = t.word("more").unwrap_err().to_string();
         assert_eq!(err, "x.aff:5: unexpected end of file: expected more");
+        // A byte-order mark was once part of the first word ("unknown NFF command '\u{feff}p'").
+        let mut t = Tokens::new(Path::new("bom.nff"), "\u{feff}p 3\n");
+        assert_eq!(t.word("p").unwrap(), "p");
+        assert_eq!((t.integer("n").unwrap(), t.line()), (3, 1));
     }
 
     #[test]

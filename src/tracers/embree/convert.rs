@@ -5,14 +5,10 @@
 //! (`Triangle::point(u, v)`).
 
 use crate::accel::embree::ffi::{RTCHit, RTCRay, RTCRayHit, RTC_INVALID_GEOMETRY_ID};
-use crate::geometry::{Hit, Rays};
+use crate::geometry::{Hit, Rays, LARGEST_COORDINATE};
 
 /// Every ray sees every geometry.
 pub const ALL_MASK_BITS: u32 = u32::MAX;
-
-/// Embree rejects (and the Debian build asserts on, aborting the process) coordinates beyond
-/// this magnitude (`FLT_LARGE` in Embree's ray validity check).
-const EMBREE_LARGEST: f32 = 1.844e18;
 
 /// What Embree is handed for a ray that is not well formed (`Ray::is_well_formed`), or that it
 /// would reject: a valid ray with an empty interval (tnear > tfar ≥ 0), which hits nothing and
@@ -35,7 +31,7 @@ const DISABLED: RTCRay = RTCRay {
 #[inline(always)]
 pub fn ray(rays: &Rays<'_>, i: usize) -> RTCRay {
     let r = rays.ray(i);
-    let in_range = r.origin.abs().max(r.dir.abs()).max_element() <= EMBREE_LARGEST;
+    let in_range = r.origin.abs().max(r.dir.abs()).max_element() <= LARGEST_COORDINATE;
     if !(r.is_well_formed() && in_range) {
         return DISABLED;
     }
