@@ -271,18 +271,18 @@ fn empty_sizes_and_wrong_outputs_are_refused_before_the_work() {
         assert_eq!((code, stderr.trim()), (2, message), "{args:?}");
     }
     assert!(!dir.join("res").exists());
-    let render = ["render", "--scene", "room", "--width", "8", "--height", "8"];
+    let render = ["render", "--scene", "room"];
     for (extra, message) in [
         (
-            &["--width", "0", "-o", "x.png"][..],
+            &["--width", "0", "--height", "8", "-o", "x.png"][..],
             "raylab: --width must be at least 1",
         ),
         (
-            &["--height", "0", "-o", "x.png"][..],
+            &["--width", "8", "--height", "0", "-o", "x.png"][..],
             "raylab: --height must be at least 1",
         ),
         (
-            &["-o", "x.txt"][..],
+            &["--width", "8", "--height", "8", "-o", "x.txt"][..],
             "raylab: --output x.txt: the image is a PNG, so its name must end in .png",
         ),
     ] {

@@ -6,7 +6,8 @@
 //! about = "Grynberg & Ward's conference room"
 //! mesh = "conference/conference.obj"   # or builtin = "room" (+ size = 3), or extends = "room"
 //!
-//! [camera]                             # every field optional: missing ones keep the base's
+//! [camera]                             # every field optional: missing ones keep the base's;
+//!                                      # without [[camera_path]] it replaces the base's path
 //! position = [-600.0, 300.0, 300.0]
 //! target = [300.0, 150.0, -200.0]
 //! up = [0.0, 1.0, 0.0]
