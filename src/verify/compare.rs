@@ -100,7 +100,7 @@ fn grazes_edge(mesh: &Mesh, hit: &Hit) -> bool {
     })
 }
 
-fn at_range_end(ray: &Ray, hit: &Hit) -> bool {
+pub fn at_range_end(ray: &Ray, hit: &Hit) -> bool {
     (ray.tmax.is_finite() && same_distance(hit.t, ray.tmax))
         || hit.t <= ray.tmin + SAME_DISTANCE * ray.tmin.abs().max(SAME_DISTANCE)
 }
