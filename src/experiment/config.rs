@@ -118,6 +118,8 @@ pub struct Experiment {
     pub name: String,
     pub description: String,
     pub scenes: Vec<SceneSpec>,
+    /// The line of the `scenes` entry, where an unknown scene name points.
+    pub scenes_line: usize,
     /// Every (tracer, parameter combination) to measure, in file order, grid in key order.
     pub instances: Vec<TracerInstance>,
     pub ray_kinds: Vec<RayKind>,
@@ -812,6 +814,7 @@ impl Experiment {
             name: file.name.into_inner(),
             description: file.description,
             scenes,
+            scenes_line: line_of(src.text, &file.scenes.span()),
             instances,
             ray_kinds,
             ray_files,

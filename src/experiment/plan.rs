@@ -160,9 +160,11 @@ impl Plan {
             .collect::<Result<Vec<_>>>()?;
         let mut scenes = Vec::with_capacity(exp.scenes.len());
         for spec in &exp.scenes {
-            // A bad scene name is a mistake in the experiment file: say which file.
+            // A bad scene name is a mistake in the experiment file: say which file and line.
             let scene = load(spec).map_err(|e| match e {
-                Error::Usage(m) => Error::usage(format!("{}: {m}", exp.path.display())),
+                Error::Usage(m) => {
+                    Error::usage(format!("{}:{}: {m}", exp.path.display(), exp.scenes_line))
+                }
                 other => other,
             })?;
             let interleaved = exp.renders.iter().any(|r| {
@@ -636,6 +638,17 @@ pub(crate) mod tests {
                 m.starts_with("t.toml:4: tracer reference[leaf_size=0]: BVH parameters"),
                 "{m}"
             ),
+            e => panic!("{e:?}"),
+        }
+    }
+
+    #[test]
+    fn an_unknown_scene_names_the_file_and_line_of_the_scenes_entry() {
+        let exp = experiment(
+            "tracers = [\"reference\"]\nrays = [\"primary\"]\nscenes = [\"lit\",\n  \"nowhere\"]\n",
+        );
+        match Plan::derive(&exp, &load_quads).unwrap_err() {
+            Error::Usage(m) => assert_eq!(m, "t.toml:5: unknown scene \"nowhere\""),
             e => panic!("{e:?}"),
         }
     }
