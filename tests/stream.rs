@@ -474,6 +474,11 @@ fn bad_parameters_are_rejected() {
         let p = Params::new().with(k, v);
         assert!(StreamConfig::from_params(&p).is_err(), "{k} = {v}");
     }
+    let zero = StreamConfig::from_params(&Params::new().with("stream", "0")).unwrap_err();
+    assert_eq!(
+        zero.to_string(),
+        "stream tracer: stream must be a number of rays ≥ 1 or \"frame\" (got \"0\")"
+    );
     let p = Params::new().with("stream", "frame").with("width", "12");
     assert_eq!(
         StreamConfig::from_params(&p).unwrap(),

@@ -118,7 +118,12 @@ impl StreamConfig {
     pub fn from_params(p: &Params) -> Result<Self> {
         let d = StreamConfig::default();
         let c = StreamConfig {
-            stream: p.get_or("stream", d.stream)?,
+            stream: p.get_or("stream", d.stream).map_err(|_| {
+                Error::usage(format!(
+                    "stream tracer: stream must be a number of rays ≥ 1 or \"frame\" (got {:?})",
+                    p.0.get("stream").map_or("", String::as_str)
+                ))
+            })?,
             width: p.get_or("width", d.width)?,
             single: p.get_or("single", d.single)?,
             single_tree: TreeWidth::of(p.get_or("single_tree", 2usize)?).map_err(|_| {
