@@ -99,6 +99,8 @@ fn every_tracer_sees_the_same_light_samples() {
                 .with("leaf_rays", false),
         ),
         ("mft", Params::new().with("fs", false).with("block", 64)),
+        ("mft", Params::new().with("width", 4)),
+        ("mft", Params::new().with("width", 8).with("block", 64)),
     ];
     for (name, scene) in scenes() {
         let (expected, rays) = visibility(&scene, "embree16", &oracle_params());
@@ -135,10 +137,13 @@ fn every_tracer_sees_the_same_light_samples() {
 fn mft_bits_equal_the_reference_tracers_shadow_rays() {
     for (name, scene) in scenes() {
         let (expected, rays) = visibility(&scene, "reference", &Params::new());
-        for block in [4, 16, 64] {
-            let params = Params::new().with("block", block);
+        for (block, width) in [(4, 2), (16, 2), (64, 2), (16, 4), (16, 8)] {
+            let params = Params::new().with("block", block).with("width", width);
             let (got, _) = visibility(&scene, "mft", &params);
-            assert_eq!(got, expected, "{name}: mft block {block} ({rays} rays)");
+            assert_eq!(
+                got, expected,
+                "{name}: mft block {block} width {width} ({rays} rays)"
+            );
         }
     }
 }

@@ -16,7 +16,7 @@ use crate::accel::Bvh;
 use crate::geometry::Ray;
 use crate::lanes::SimdRay;
 use crate::stats::{Event, Stats};
-use crate::tracers::mft::descend::{depth, keep_counted, next_leaf, start_at_root};
+use crate::tracers::mft::descend::{keep_counted, next_leaf, start_at_root, FrustumTree};
 use crate::tracers::mft::frusta::{bits, Frusta, Margins};
 use crate::tracers::mft::vector::{Native, Vector};
 use crate::tracers::mft::MftConfig;
@@ -125,10 +125,12 @@ pub fn sample_ray(
 }
 
 /// Block `first..first + len` of `query`: `occluded` (the block's words) must hold every sample
-/// occluded on entry; the samples found visible are cleared.
+/// occluded on entry; the samples found visible are cleared. The frusta walk `tree`, made from
+/// `bvh` (`bvh` itself or a wide tree collapsed from it).
 #[allow(clippy::too_many_arguments)]
-pub fn trace_block<S: Stats>(
+pub fn trace_block<T: FrustumTree, S: Stats>(
     bvh: &Bvh,
+    tree: &T,
     config: &MftConfig,
     margins: &Margins,
     query: &VisibilityQuery<'_>,
@@ -185,12 +187,10 @@ pub fn trace_block<S: Stats>(
 
     // Children are visited nearer first along the block's mean direction to the light.
     let towards = query.light.point(0.5, 0.5) - query.points[first].origin;
-    let depth = |i: u32| depth::<S>(bvh, i);
     // Frusta whose rays exist: made at the first leaf that needs them, kept for the block.
     let mut generated = 0u64;
-    start_at_root(bvh, live, frusta, margins, stack, stats);
-    while let Some((index, mask)) = next_leaf(bvh, live, frusta, margins, towards, stack, stats) {
-        let node = &bvh.nodes[index as usize];
+    start_at_root::<T, S>(bvh, live, frusta, margins, stack, stats);
+    while let Some((leaf, mask)) = next_leaf(tree, live, frusta, margins, towards, stack, stats) {
         // A leaf: per triangle, cull for all frusta, then the remaining frusta's rays.
         if S::ENABLED {
             stats.event(Event::LeavesVisited, 1);
@@ -205,7 +205,7 @@ pub fn trace_block<S: Stats>(
         // box, and those none of whose rays meets it (robust slabs, as the reference tracer
         // enters a leaf), which skip the leaf.
         let (mut box_tested, mut box_missed) = (0u64, 0u64);
-        for tri in &bvh.triangles[node.first as usize..][..node.count as usize] {
+        for tri in &bvh.triangles[leaf.first as usize..][..leaf.count as usize] {
             let candidates = mask & live & !box_missed;
             if candidates == 0 {
                 break;
@@ -231,9 +231,9 @@ pub fn trace_block<S: Stats>(
                     box_tested |= 1 << f;
                     if S::ENABLED {
                         let lanes: u32 = point_alive.iter().map(|w| w.count_ones()).sum();
-                        (0..lanes).for_each(|_| stats.aabb_test(depth(index)));
+                        (0..lanes).for_each(|_| stats.aabb_test(leaf.depth));
                     }
-                    let (lo, hi) = (node.bounds.min.to_array(), node.bounds.max.to_array());
+                    let (lo, hi) = (leaf.bounds.min.to_array(), leaf.bounds.max.to_array());
                     if !simd.iter().any(|ray| ray.hits_box(lo, hi)) {
                         box_missed |= 1 << f;
                         continue;
@@ -247,7 +247,7 @@ pub fn trace_block<S: Stats>(
                         continue;
                     }
                     if S::ENABLED {
-                        (0..lanes.count_ones()).for_each(|_| stats.triangle_test(depth(index)));
+                        (0..lanes.count_ones()).for_each(|_| stats.triangle_test(leaf.depth));
                     }
                     if ray.intersect::<true>(tri, 0) > 0 {
                         *word &= !((lanes & !ray.live_mask()) << shift);

@@ -56,17 +56,19 @@ mod primary_tests;
 #[cfg(test)]
 mod tests;
 mod vector;
+mod wide_walk;
 
 use std::cell::RefCell;
 use std::str::FromStr;
 use std::sync::Arc;
 
-use crate::accel::Bvh;
+use crate::accel::{Bvh, WideBvh};
 use crate::error::{Error, Result};
 use crate::geometry::{Hit, Rays};
 use crate::stats::Stats;
 use crate::tracers::packet::{PacketConfig, PacketTracer, Traversal};
 use crate::tracers::{Kernel, Params, VisibilityQuery};
+use descend::FrustumTree;
 
 pub use block::{light_points, sample_ray};
 pub use cull::keep_mask;
@@ -107,6 +109,9 @@ pub struct MftConfig {
     /// The paper's back-face culling of triangles for shadow frusta (`cull`): exact on closed
     /// meshes only, so off by default.
     pub backface: bool,
+    /// Children per node of the tree the frusta walk (`WIDTHS`): 2 is the binary tree (the
+    /// paper's), 4 and 8 a wide tree collapsed from it (`wide_walk`).
+    pub width: usize,
 }
 
 impl Default for MftConfig {
@@ -120,13 +125,22 @@ impl Default for MftConfig {
             // at 1024² but 0.3–1.1× at 256² (wider frusta cull less): packets unless asked.
             primary: PrimaryRays::Packets,
             backface: false,
+            width: 2,
         }
     }
 }
 
 impl MftConfig {
-    pub const PARAMS: &'static [&'static str] =
-        &["block", "cr", "fs", "leaf_rays", "primary", "backface"];
+    pub const PARAMS: &'static [&'static str] = &[
+        "block",
+        "cr",
+        "fs",
+        "leaf_rays",
+        "primary",
+        "backface",
+        "width",
+    ];
+    pub const WIDTHS: &'static [usize] = &[2, 4, 8];
 
     pub fn from_params(p: &Params) -> Result<Self> {
         let d = MftConfig::default();
@@ -137,7 +151,15 @@ impl MftConfig {
             leaf_rays: p.get_or("leaf_rays", d.leaf_rays)?,
             primary: p.get_or("primary", d.primary)?,
             backface: p.get_or("backface", d.backface)?,
+            width: p.get_or("width", d.width)?,
         };
+        if !Self::WIDTHS.contains(&c.width) {
+            return Err(Error::usage(format!(
+                "mft tracer: width must be one of {:?} (children per BVH node; got {})",
+                Self::WIDTHS,
+                c.width
+            )));
+        }
         if !(1..=MAX_FRUSTA).contains(&c.block) {
             return Err(Error::usage(format!(
                 "mft tracer: block must be 1 to {MAX_FRUSTA} frusta (got {})",
@@ -148,8 +170,16 @@ impl MftConfig {
     }
 }
 
+/// The tree the frusta walk (`MftConfig::width`); a wide one is built only when asked for.
+enum Tree {
+    Binary,
+    Four(WideBvh<4>),
+    Eight(WideBvh<8>),
+}
+
 pub struct MftTracer {
     bvh: Arc<Bvh>,
+    tree: Tree,
     config: MftConfig,
     /// Ordinary ray batches (P-Packet, see the module doc).
     packets: PacketTracer,
@@ -166,8 +196,14 @@ impl MftTracer {
                 frustum: true,
             },
         );
+        let tree = match config.width {
+            4 => Tree::Four(WideBvh::collapse(&bvh)),
+            8 => Tree::Eight(WideBvh::collapse(&bvh)),
+            _ => Tree::Binary,
+        };
         MftTracer {
             bvh,
+            tree,
             config,
             packets,
         }
@@ -196,31 +232,11 @@ impl MftTracer {
         }
         Margins::new(scale)
     }
-}
 
-thread_local! {
-    static SCRATCH: RefCell<block::Scratch> = RefCell::default();
-}
-
-impl Kernel for MftTracer {
-    fn intersect_with<S: Stats>(&self, rays: Rays<'_>, hits: &mut [Hit], stats: &mut S) {
-        match rays.camera {
-            // Primary frusta test static triangles only.
-            Some(grid)
-                if self.config.primary == PrimaryRays::Frusta && self.bvh.motion_end.is_none() =>
-            {
-                primary::intersect(&self.bvh, grid, &self.config, rays, hits, stats)
-            }
-            _ => self.packets.intersect_with(rays, hits, stats),
-        }
-    }
-
-    fn occluded_with<S: Stats>(&self, rays: Rays<'_>, occluded: &mut [bool], stats: &mut S) {
-        self.packets.occluded_with(rays, occluded, stats)
-    }
-
-    fn light_visibility_with<S: Stats>(
+    /// `light_visibility_with` with the frusta walking `tree` (`self.bvh` or a wide tree from it).
+    fn visibility_over<T: FrustumTree, S: Stats>(
         &self,
+        tree: &T,
         query: VisibilityQuery<'_>,
         occluded: &mut [u64],
         stats: &mut S,
@@ -236,6 +252,7 @@ impl Kernel for MftTracer {
                 let len = self.config.block.min(query.len() - first);
                 block::trace_block(
                     &self.bvh,
+                    tree,
                     &self.config,
                     &margins,
                     &query,
@@ -247,5 +264,45 @@ impl Kernel for MftTracer {
                 );
             }
         })
+    }
+}
+
+thread_local! {
+    static SCRATCH: RefCell<block::Scratch> = RefCell::default();
+}
+
+impl Kernel for MftTracer {
+    fn intersect_with<S: Stats>(&self, rays: Rays<'_>, hits: &mut [Hit], stats: &mut S) {
+        match rays.camera {
+            // Primary frusta test static triangles only.
+            Some(grid)
+                if self.config.primary == PrimaryRays::Frusta && self.bvh.motion_end.is_none() =>
+            {
+                let (bvh, config) = (&*self.bvh, &self.config);
+                match &self.tree {
+                    Tree::Binary => primary::intersect(bvh, bvh, grid, config, rays, hits, stats),
+                    Tree::Four(w) => primary::intersect(bvh, w, grid, config, rays, hits, stats),
+                    Tree::Eight(w) => primary::intersect(bvh, w, grid, config, rays, hits, stats),
+                }
+            }
+            _ => self.packets.intersect_with(rays, hits, stats),
+        }
+    }
+
+    fn occluded_with<S: Stats>(&self, rays: Rays<'_>, occluded: &mut [bool], stats: &mut S) {
+        self.packets.occluded_with(rays, occluded, stats)
+    }
+
+    fn light_visibility_with<S: Stats>(
+        &self,
+        query: VisibilityQuery<'_>,
+        occluded: &mut [u64],
+        stats: &mut S,
+    ) {
+        match &self.tree {
+            Tree::Binary => self.visibility_over(&*self.bvh, query, occluded, stats),
+            Tree::Four(w) => self.visibility_over(w, query, occluded, stats),
+            Tree::Eight(w) => self.visibility_over(w, query, occluded, stats),
+        }
     }
 }

@@ -37,7 +37,7 @@ use crate::accel::Bvh;
 use crate::geometry::{CameraGrid, Hit, Rays};
 use crate::lanes::SimdRay;
 use crate::stats::{Event, Stats};
-use crate::tracers::mft::descend::{depth, keep_counted, next_leaf, start_at_root};
+use crate::tracers::mft::descend::{keep_counted, next_leaf, start_at_root, FrustumTree};
 use crate::tracers::mft::frusta::{bits, Frusta, Margins, MAX_FRUSTA};
 use crate::tracers::mft::MftConfig;
 
@@ -76,9 +76,11 @@ thread_local! {
 }
 
 /// `hits[i]` becomes the closest hit of camera ray `i` of `rays` (`grid`'s rays through the
-/// centres of `rays.pixel`), `config.block` frusta at a time.
-pub fn intersect<S: Stats>(
+/// centres of `rays.pixel`), `config.block` frusta at a time, walking `tree` (`bvh` or a wide tree
+/// collapsed from it).
+pub fn intersect<T: FrustumTree, S: Stats>(
     bvh: &Bvh,
+    tree: &T,
     grid: &CameraGrid,
     config: &MftConfig,
     rays: Rays<'_>,
@@ -127,6 +129,7 @@ pub fn intersect<S: Stats>(
         for group in packets.chunks(config.block) {
             let frame = Frame {
                 bvh,
+                tree,
                 grid,
                 margins: &margins,
                 scene_far: far,
@@ -151,8 +154,10 @@ fn aim(frusta: &mut Frusta, f: usize, grid: &CameraGrid, far: f32) {
 }
 
 /// What every block of a batch shares.
-struct Frame<'a> {
+struct Frame<'a, T> {
     bvh: &'a Bvh,
+    /// The tree the frusta walk: `bvh` or a wide tree collapsed from it.
+    tree: &'a T,
     grid: &'a CameraGrid,
     margins: &'a Margins,
     /// A far distance past the scene's box.
@@ -162,8 +167,8 @@ struct Frame<'a> {
 
 /// The frusta of `group` (ray ranges of `rays`, ≤ `MAX_FRUSTA` of them) through the BVH; their
 /// hits into `hits`, which holds misses on entry.
-fn trace_block<S: Stats>(
-    frame: &Frame<'_>,
+fn trace_block<T: FrustumTree, S: Stats>(
+    frame: &Frame<'_, T>,
     group: &[Range<usize>],
     rays: Rays<'_>,
     hits: &mut [Hit],
@@ -172,6 +177,7 @@ fn trace_block<S: Stats>(
 ) {
     let Frame {
         bvh,
+        tree,
         grid,
         margins,
         scene_far,
@@ -216,12 +222,10 @@ fn trace_block<S: Stats>(
     // Children are visited nearer first along the first frustum's middle direction.
     let [x0, x1, y0, y1] = frusta.rect[0];
     let towards = grid.through(0.5 * (x0 + x1), 0.5 * (y0 + y1));
-    let depth = |i: u32| depth::<S>(bvh, i);
     // Frusta whose rays exist: made at the first leaf that needs them.
     let mut generated = 0u64;
-    start_at_root(bvh, all, frusta, margins, stack, stats);
-    while let Some((index, mask)) = next_leaf(bvh, !0, frusta, margins, towards, stack, stats) {
-        let node = &bvh.nodes[index as usize];
+    start_at_root::<T, S>(bvh, all, frusta, margins, stack, stats);
+    while let Some((leaf, mask)) = next_leaf(tree, !0, frusta, margins, towards, stack, stats) {
         // A leaf: per triangle, cull for all frusta, then the remaining frusta's rays.
         if S::ENABLED {
             stats.event(Event::LeavesVisited, 1);
@@ -232,7 +236,7 @@ fn trace_block<S: Stats>(
         // `leaf_rays`: frusta whose rays were tested against the leaf's box, and those none of
         // whose rays meets it within its closest hit so far, which skip the leaf.
         let (mut box_tested, mut box_missed) = (0u64, 0u64);
-        for t in node.first as usize..(node.first + node.count) as usize {
+        for t in leaf.first as usize..(leaf.first + leaf.count) as usize {
             let candidates = mask & !box_missed;
             if candidates == 0 {
                 break;
@@ -249,16 +253,16 @@ fn trace_block<S: Stats>(
                 if leaf_rays && box_tested & 1 << f == 0 {
                     box_tested |= 1 << f;
                     if S::ENABLED {
-                        (0..pixels.len()).for_each(|_| stats.aabb_test(depth(index)));
+                        (0..pixels.len()).for_each(|_| stats.aabb_test(leaf.depth));
                     }
-                    let (lo, hi) = (node.bounds.min.to_array(), node.bounds.max.to_array());
+                    let (lo, hi) = (leaf.bounds.min.to_array(), leaf.bounds.max.to_array());
                     if !simd[f].hits_box(lo, hi) {
                         box_missed |= 1 << f;
                         continue;
                     }
                 }
                 if S::ENABLED {
-                    (0..pixels.len()).for_each(|_| stats.triangle_test(depth(index)));
+                    (0..pixels.len()).for_each(|_| stats.triangle_test(leaf.depth));
                 }
                 if simd[f].intersect::<false>(tri, prim) > 0 {
                     hit_frusta |= 1 << f;

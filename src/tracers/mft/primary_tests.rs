@@ -84,8 +84,13 @@ fn agrees_with_reference(name: &str, triangles: &[Triangle], batch: &RayBatch) -
         batch.len()
     );
     let mut default_counters = None;
-    for block in [16, 1, 5, 64] {
-        let config = MftConfig { block, ..frusta() };
+    // Blocks of frusta over the binary tree, and over wide trees (`width`).
+    for (block, width) in [(16, 2), (1, 2), (5, 2), (64, 2), (16, 4), (16, 8), (64, 8)] {
+        let config = MftConfig {
+            block,
+            width,
+            ..frusta()
+        };
         let mut counters = Counters::default();
         let got = hits_of(&MftTracer::new(bvh.clone(), config), batch, &mut counters);
         let mut ties = 0;
@@ -94,7 +99,7 @@ fn agrees_with_reference(name: &str, triangles: &[Triangle], batch: &RayBatch) -
                 let ray = batch.ray(i);
                 assert!(
                     same_or_tie(triangles, &ray, &got[i], &expected[i]),
-                    "{name}, block {block}, ray {i}: {:?} vs reference {:?}",
+                    "{name}, block {block}, width {width}, ray {i}: {:?} vs reference {:?}",
                     got[i],
                     expected[i]
                 );
@@ -108,7 +113,7 @@ fn agrees_with_reference(name: &str, triangles: &[Triangle], batch: &RayBatch) -
         assert_eq!(counters.rays as usize, batch.len());
         let generated = counters.get(Event::RaysOnDemand) as usize;
         assert!(generated >= hit && generated <= batch.len(), "{name}");
-        if block == 16 {
+        if (block, width) == (16, 2) {
             default_counters = Some(counters);
         }
     }

@@ -116,6 +116,22 @@ fn bits_equal_the_reference_tracers_on_the_same_rays() {
             fs: false,
             ..MftConfig::default()
         },
+        MftConfig {
+            width: 4,
+            ..MftConfig::default()
+        },
+        MftConfig {
+            width: 8,
+            ..MftConfig::default()
+        },
+        MftConfig {
+            width: 8,
+            block: 37,
+            cr: false,
+            fs: false,
+            leaf_rays: false,
+            ..MftConfig::default()
+        },
     ];
     for (seed, per_point, side) in [(1, 16, 1.0), (2, 100, 2.5), (3, 4, 0.0)] {
         let bvh = bvh(&soup(seed));
@@ -206,17 +222,127 @@ fn on_demand_rays_are_the_querys_rays_bit_for_bit() {
     // never generated.
     let nan_point = (0..24).filter(|&s| query.ray(9, s).is_some()).count();
     assert!(nan_point > 0);
-    let mft = MftTracer::new(bvh(&[blocker]), MftConfig::default());
-    let mut counters = Counters::default();
-    let v = answer(&mft, query, &mut counters);
-    let generated = query.ray_count() - nan_point;
-    assert_eq!(counters.get(Event::RaysOnDemand) as usize, generated);
-    assert_eq!(counters.triangle_tests as usize, generated);
-    assert_eq!(v.total_occluded(), 64 * 24 - nan_point);
+    // The same over wide trees: their root holds the one leaf.
+    for width in [2, 4, 8] {
+        let config = MftConfig {
+            width,
+            ..MftConfig::default()
+        };
+        let mft = MftTracer::new(bvh(&[blocker]), config);
+        let mut counters = Counters::default();
+        let v = answer(&mft, query, &mut counters);
+        let generated = query.ray_count() - nan_point;
+        assert_eq!(counters.get(Event::RaysOnDemand) as usize, generated);
+        assert_eq!(counters.triangle_tests as usize, generated);
+        assert_eq!(v.total_occluded(), 64 * 24 - nan_point);
+    }
 }
 
 /// Culling never removes a box or a triangle that a sample ray of the frustum hits, and it removes
 /// a fair share of those no ray hits.
+/// The wide walks reach the binary walk's leaves through wide nodes: the same bits, and the same
+/// rays made on demand (a frustum's rays are made at the first leaf that keeps a triangle for it,
+/// whatever the order the leaves are reached in).
+#[test]
+fn wide_walks_answer_as_the_binary_walk() {
+    for seed in [1, 2, 5] {
+        let bvh = bvh(&soup(seed));
+        let points = points(160, 4, seed);
+        let samples = samples(16, 4, seed);
+        let query = VisibilityQuery::new(&points, light(1.5), &samples).unwrap();
+        let run = |width: usize| {
+            let config = MftConfig {
+                width,
+                ..MftConfig::default()
+            };
+            let mut counters = Counters::default();
+            let v = answer(&MftTracer::new(bvh.clone(), config), query, &mut counters);
+            (v, counters)
+        };
+        let (binary, binary_counts) = run(2);
+        for width in [4, 8] {
+            let (wide, wide_counts) = run(width);
+            assert_eq!(wide, binary, "seed {seed}, width {width}");
+            assert_eq!(
+                wide_counts.get(Event::RaysOnDemand),
+                binary_counts.get(Event::RaysOnDemand),
+                "seed {seed}, width {width}"
+            );
+            // Fewer nodes: each wide node stands for up to W − 1 binary ones.
+            assert!(
+                wide_counts.nodes_visited < binary_counts.nodes_visited,
+                "seed {seed}, width {width}"
+            );
+        }
+    }
+}
+
+/// Four small triangles, one per leaf, inside every frustum of a block of four points: the binary
+/// walk tests the root's box and 3 inner nodes × 2 children (7 boxes, frusta at 3 inner nodes),
+/// a 4- or 8-wide walk the root's box and the one wide node's 4 children (5 boxes, frusta at 1
+/// node); both reach the 4 leaves and make every ray.
+#[test]
+fn a_wide_node_tests_all_its_children_at_once() {
+    let small = |x: f32, z: f32| {
+        Triangle::new(
+            Vec3::new(x, 0.5, z),
+            Vec3::new(x + 0.1, 0.5, z),
+            Vec3::new(x, 0.5, z + 0.1),
+        )
+    };
+    let triangles = [(-0.5, -0.5), (0.5, -0.5), (-0.5, 0.5), (0.5, 0.5)].map(|(x, z)| small(x, z));
+    let config = BvhConfig {
+        max_leaf_size: 1,
+        ..BvhConfig::default()
+    };
+    let bvh = Arc::new(Bvh::build(&triangles, config));
+    let mut points = ShadingPoints::default();
+    for (x, z) in [(-0.1, -0.1), (0.1, -0.1), (-0.1, 0.1), (0.1, 0.1)] {
+        let position = Vec3::new(x, -1.5, z);
+        let point = ShadingPoint {
+            position,
+            normal: Vec3::Y,
+            origin: position + Vec3::Y * 1e-4,
+            time: 0.0,
+            set: 0,
+        };
+        points.push(point, true);
+    }
+    let samples = samples(16, 1, 7);
+    let query = VisibilityQuery::new(&points, light(20.0), &samples).unwrap();
+    let expected = answer(
+        &ReferenceTracer::new(bvh.clone()),
+        query,
+        &mut Counters::default(),
+    );
+    for (width, boxes, inner) in [(2, 7, 3), (4, 5, 1), (8, 5, 1)] {
+        // No shrinking nor leaf box test: every frustum stays as wide as made.
+        let config = MftConfig {
+            width,
+            cr: false,
+            fs: false,
+            leaf_rays: false,
+            ..MftConfig::default()
+        };
+        let mut counters = Counters::default();
+        let got = answer(&MftTracer::new(bvh.clone(), config), query, &mut counters);
+        assert_eq!(got, expected, "width {width}");
+        assert_eq!(counters.get(Event::FrustumBoxTests), boxes, "width {width}");
+        assert_eq!(
+            counters.get(Event::FrustaAtNodes),
+            4 * inner,
+            "width {width}"
+        );
+        assert_eq!(counters.aabb_tests, 4 * boxes, "width {width}");
+        assert_eq!(counters.get(Event::BoxesCulled), 0, "width {width}");
+        assert_eq!(counters.get(Event::LeavesVisited), 4, "width {width}");
+        assert_eq!(counters.get(Event::TrianglesAccessed), 4, "width {width}");
+        assert_eq!(counters.get(Event::RaysOnDemand), 4 * 16, "width {width}");
+        // Inner nodes and leaves visited: the binary tree's 3 + 4, the wide tree's 1 + 4.
+        assert_eq!(counters.nodes_visited, inner + 4, "width {width}");
+    }
+}
+
 #[test]
 fn culling_never_removes_what_a_sample_ray_hits() {
     let mut rng = SplitMix64::new(6);
@@ -328,9 +454,16 @@ fn blocks_out_of_range_are_refused() {
             leaf_rays: true,
             primary: PrimaryRays::Packets,
             backface: true,
+            width: 2,
         }
     );
     assert!(MftConfig::from_params(&Params::new().with("cr", "maybe")).is_err());
+    for width in [0, 1, 3, 16] {
+        let params = Params::new().with("width", width);
+        assert!(MftConfig::from_params(&params).is_err(), "width {width}");
+    }
+    let width = |w: usize| MftConfig::from_params(&Params::new().with("width", w));
+    assert_eq!(width(8).unwrap().width, 8);
 }
 
 /// A value for a frustum lane, box or vertex coordinate: mostly ordinary, sometimes a signed

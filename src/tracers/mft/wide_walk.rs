@@ -1,0 +1,120 @@
+//! The multi-frusta walk over a `W`-wide BVH (`width` = 4 or 8; our addition, not the paper's):
+//! at a wide node all frusta of the mask it was entered with meet all `W` child boxes in one
+//! `Frusta::box_masks` call, where the binary walk needs `W − 1` calls of two boxes; the nearest
+//! child entered is visited next and the others are pushed far to near. The leaves are the binary
+//! tree's (`WideBvh::collapse`), so the leaf stage is unchanged.
+//!
+//! A walk position is a child slot, `1 + W · node + slot` (its box and reference are in the parent
+//! node's lanes, and a leaf's box is needed by the leaf stage), or 0 for the root node.
+
+use glam::Vec3;
+
+use crate::accel::{WideBvh, WideChild};
+use crate::geometry::Aabb;
+use crate::stats::{Event, Stats};
+use crate::tracers::mft::descend::{FrustumTree, Leaf, Step};
+use crate::tracers::mft::frusta::{Frusta, Margins};
+
+/// The walk position of `node`'s child slot `slot`.
+#[inline(always)]
+fn position<const W: usize>(node: u32, slot: usize) -> u32 {
+    1 + node * W as u32 + slot as u32
+}
+
+impl<const W: usize> FrustumTree for WideBvh<W> {
+    const ROOT: u32 = 0;
+
+    #[inline(always)]
+    fn open<S: Stats>(&self, at: u32) -> Step {
+        let depth = |node: usize| {
+            if S::ENABLED {
+                self.depth[node] as usize
+            } else {
+                0
+            }
+        };
+        if at == Self::ROOT {
+            return Step::Inner {
+                node: 0,
+                depth: depth(0),
+            };
+        }
+        let (parent, slot) = ((at - 1) as usize / W, (at - 1) as usize % W);
+        let node = &self.nodes[parent];
+        match node.child(slot) {
+            WideChild::Node(child) => Step::Inner {
+                node: child,
+                depth: depth(child as usize),
+            },
+            WideChild::Leaf { first, count } => {
+                let (lo, hi) = node.child_box(slot);
+                Step::Leaf(Leaf {
+                    first,
+                    count,
+                    bounds: Aabb {
+                        min: lo.into(),
+                        max: hi.into(),
+                    },
+                    depth: depth(parent) + S::ENABLED as usize,
+                })
+            }
+            WideChild::Empty => unreachable!("an empty slot is never entered"),
+        }
+    }
+
+    #[inline(always)]
+    fn visit_children<S: Stats>(
+        &self,
+        node: u32,
+        mask: u64,
+        frusta: &Frusta,
+        margins: &Margins,
+        towards: Vec3,
+        stack: &mut Vec<(u32, u64)>,
+        stats: &mut S,
+    ) -> Option<(u32, u64)> {
+        let wide = &self.nodes[node as usize];
+        let boxes: [Aabb; W] = std::array::from_fn(|c| {
+            let (lo, hi) = wide.child_box(c);
+            Aabb {
+                min: lo.into(),
+                max: hi.into(),
+            }
+        });
+        let masks = frusta.box_masks(boxes.each_ref(), mask, margins);
+        let used = wide.used();
+        // The children entered, nearest first along `towards` (by twice their centres; ties in
+        // slot order, as the binary walk takes its first child on a tie).
+        let mut entered = [(0.0f32, 0u32, 0u64); W];
+        let mut len = 0;
+        for (c, &child_mask) in masks.iter().enumerate() {
+            // An unused slot's empty box is never entered; the mask says so whatever the
+            // arithmetic on its infinities gave.
+            if used & 1 << c == 0 || child_mask == 0 {
+                continue;
+            }
+            let key = (boxes[c].min + boxes[c].max).dot(towards);
+            let mut i = len;
+            while i > 0 && entered[i - 1].0 > key {
+                entered[i] = entered[i - 1];
+                i -= 1;
+            }
+            entered[i] = (key, position::<W>(node, c), child_mask);
+            len += 1;
+        }
+        if S::ENABLED {
+            let children = used.count_ones() as u64;
+            stats.event(Event::FrustumBoxTests, children);
+            stats.event(Event::FrustaAtNodes, mask.count_ones() as u64);
+            stats.event(Event::BoxesCulled, children - len as u64);
+            let depth = self.depth[node as usize] as usize + 1;
+            for _ in 0..mask.count_ones() as u64 * children {
+                stats.aabb_test(depth);
+            }
+        }
+        let (&(_, nearest, nearest_mask), others) = entered[..len].split_first()?;
+        // The nearest is visited next without the stack; the others wait on it, nearer on top.
+        stack.extend(others.iter().rev().map(|&(_, at, m)| (at, m)));
+        Some((nearest, nearest_mask))
+    }
+}
