@@ -95,16 +95,9 @@ impl FrustumTree for Bvh {
         let (box_a, box_b) = (&child_a.bounds, &child_b.bounds);
         let [mask_a, mask_b] = frusta.box_masks([box_a, box_b], mask, margins);
         if S::ENABLED {
-            stats.event(Event::FrustumBoxTests, 2);
-            stats.event(Event::FrustaAtNodes, mask.count_ones() as u64);
-            stats.event(
-                Event::BoxesCulled,
-                (mask_a == 0) as u64 + (mask_b == 0) as u64,
-            );
-            for _ in 0..mask.count_ones() {
-                stats.aabb_test(self.depth[a as usize] as usize);
-                stats.aabb_test(self.depth[b as usize] as usize);
-            }
+            let entered = (mask_a != 0) as u64 + (mask_b != 0) as u64;
+            // Siblings share a depth.
+            count_child_tests(stats, mask, 2, entered, self.depth[a as usize] as usize);
         }
         let a_first = (box_a.min + box_a.max - box_b.min - box_b.max).dot(towards) <= 0.0;
         let (near, far) = if a_first {
@@ -122,6 +115,24 @@ impl FrustumTree for Bvh {
             (false, true) => Some(far),
             (false, false) => None,
         }
+    }
+}
+
+/// Counts one node's child tests: `children` boxes at `depth`, each met by the frusta of `mask`,
+/// `entered` of them entered by some frustum.
+#[inline(always)]
+pub fn count_child_tests<S: Stats>(
+    stats: &mut S,
+    mask: u64,
+    children: u64,
+    entered: u64,
+    depth: usize,
+) {
+    stats.event(Event::FrustumBoxTests, children);
+    stats.event(Event::FrustaAtNodes, mask.count_ones() as u64);
+    stats.event(Event::BoxesCulled, children - entered);
+    for _ in 0..mask.count_ones() as u64 * children {
+        stats.aabb_test(depth);
     }
 }
 

@@ -11,8 +11,8 @@ use glam::Vec3;
 
 use crate::accel::{WideBvh, WideChild};
 use crate::geometry::Aabb;
-use crate::stats::{Event, Stats};
-use crate::tracers::mft::descend::{FrustumTree, Leaf, Step};
+use crate::stats::Stats;
+use crate::tracers::mft::descend::{count_child_tests, FrustumTree, Leaf, Step};
 use crate::tracers::mft::frusta::{Frusta, Margins};
 
 /// The walk position of `node`'s child slot `slot`.
@@ -116,14 +116,8 @@ impl<const W: usize> FrustumTree for WideBvh<W> {
             len += 1;
         }
         if S::ENABLED {
-            let children = used.count_ones() as u64;
-            stats.event(Event::FrustumBoxTests, children);
-            stats.event(Event::FrustaAtNodes, mask.count_ones() as u64);
-            stats.event(Event::BoxesCulled, children - len as u64);
             let depth = self.depth[node as usize] as usize + 1;
-            for _ in 0..mask.count_ones() as u64 * children {
-                stats.aabb_test(depth);
-            }
+            count_child_tests(stats, mask, used.count_ones() as u64, len as u64, depth);
         }
         let (&(_, nearest, nearest_mask), others) = entered[..len].split_first()?;
         // The nearest is visited next without the stack; the others wait on it, nearer on top.
