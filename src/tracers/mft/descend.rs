@@ -60,7 +60,7 @@ impl FrustumTree for Bvh {
     #[inline(always)]
     fn open<S: Stats>(&self, at: u32) -> Step {
         let node = &self.nodes[at as usize];
-        let depth = depth::<S>(self, at);
+        let depth = depth::<S>(&self.depth, at);
         if node.is_leaf() {
             Step::Leaf(Leaf {
                 first: node.first,
@@ -222,11 +222,12 @@ pub fn keep_counted<S: Stats>(
     keep
 }
 
-/// Node `i`'s depth for the per-depth counters (0 when nothing is counted).
+/// Node `i`'s depth (of a tree's per-node `depths`) for the per-depth counters (0 when nothing
+/// is counted).
 #[inline(always)]
-fn depth<S: Stats>(bvh: &Bvh, i: u32) -> usize {
+pub fn depth<S: Stats>(depths: &[u8], i: u32) -> usize {
     if S::ENABLED {
-        bvh.depth[i as usize] as usize
+        depths[i as usize] as usize
     } else {
         0
     }

@@ -26,10 +26,11 @@
 //! - **Wide trees** (`width` = 4 or 8; ours, not the paper's; 2, the binary tree, is the
 //!   default): the same walk (`descend::FrustumTree`) over the wide BVH collapsed from the binary
 //!   one (`wide_walk`), all frusta tested against a node's children at once; the leaves are the
-//!   binary tree's, so the leaf stage and the answers are the same. In a same-run sanity A/B
-//!   (1024², 1 thread, loaded machine) width 4 was 1.5–6 % faster than the binary walk on
-//!   conference and sibenik, width 8 about as fast on conference and 9 % slower on sibenik: it
-//!   tests more boxes per frustum (its children are culled only at the wide node).
+//!   binary tree's, so the leaf stage and the answers are the same. Width 4 was 1.6–4.8 % faster
+//!   than the binary walk on conference and sibenik at 1 and 2 threads in the quiet run of
+//!   `raylab run experiments/benthin09-benchmark.toml` (results/benthin2009); width 8 tests more
+//!   boxes per frustum (a child is culled only at its wide node: sibenik 6.3 box tests per ray
+//!   against 5.1) and was slower on sibenik in a same-run A/B on a loaded machine.
 //! - **Exact answers**: the sample rays meet triangles through the reference tracer's watertight
 //!   test, and all culling is conservative with rounding margins, so the bits equal the reference
 //!   tracer's on the same rays.

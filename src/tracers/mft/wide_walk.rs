@@ -12,7 +12,7 @@ use glam::Vec3;
 use crate::accel::{WideBvh, WideChild};
 use crate::geometry::Aabb;
 use crate::stats::Stats;
-use crate::tracers::mft::descend::{count_child_tests, FrustumTree, Leaf, Step};
+use crate::tracers::mft::descend::{count_child_tests, depth, FrustumTree, Leaf, Step};
 use crate::tracers::mft::frusta::{Frusta, Margins};
 
 /// The walk position of `node`'s child slot `slot`.
@@ -26,13 +26,7 @@ impl<const W: usize> FrustumTree for WideBvh<W> {
 
     #[inline(always)]
     fn open<S: Stats>(&self, at: u32) -> Step {
-        let depth = |node: usize| {
-            if S::ENABLED {
-                self.depth[node] as usize
-            } else {
-                0
-            }
-        };
+        let depth = |node: u32| depth::<S>(&self.depth, node);
         if at == Self::ROOT {
             return Step::Inner {
                 node: 0,
@@ -44,7 +38,7 @@ impl<const W: usize> FrustumTree for WideBvh<W> {
         match node.child(slot) {
             WideChild::Node(child) => Step::Inner {
                 node: child,
-                depth: depth(child as usize),
+                depth: depth(child),
             },
             WideChild::Leaf { first, count } => {
                 let (lo, hi) = node.child_box(slot);
@@ -55,7 +49,7 @@ impl<const W: usize> FrustumTree for WideBvh<W> {
                         min: lo.into(),
                         max: hi.into(),
                     },
-                    depth: depth(parent) + S::ENABLED as usize,
+                    depth: depth(parent as u32) + S::ENABLED as usize,
                 })
             }
             WideChild::Empty => unreachable!("an empty slot is never entered"),
