@@ -579,7 +579,14 @@ fn ill_formed_rays_miss_and_never_abort() {
             for i in 0..rays.len() {
                 let variant = variants[(i / 2) % variants.len()].0;
                 if i % 2 == 0 {
-                    assert_eq!((hits[i].prim, hits[i].t), (10, 4.0), "{name}: good ray {i}");
+                    // Within a few ulps: Embree's AVX2 kernels divide by a refined reciprocal
+                    // estimate (3.9999998 on an AVX2-only EPYC), its AVX-512 ones exactly.
+                    let t_near = (hits[i].t - 4.0).abs() <= 16.0 * f32::EPSILON;
+                    assert!(
+                        hits[i].prim == 10 && t_near,
+                        "{name}: good ray {i}: {:?}",
+                        hits[i]
+                    );
                     assert!(occluded[i], "{name}: good ray {i}");
                 } else {
                     assert_eq!(hits[i], Hit::MISS, "{name}: {variant}");
