@@ -398,17 +398,30 @@ impl<const L: usize> SimdRay<L> {
         if !hit.contains(&true) {
             return 0;
         }
+        // Every lane is written: the new value where it hits, else the old one, read by a
+        // volatile load. A store under the hit mask, or of a select with an ordinary load of the
+        // same slot, compiles to a masked store (`vmaskmovps`), microcoded and slow on AMD's
+        // AVX2 cores; a volatile load cannot be folded into one.
+        // SAFETY: plain reads of the struct's own arrays.
+        let (old_prim, old_u, old_v, old_tmax) = unsafe {
+            (
+                std::ptr::read_volatile(&self.prim),
+                std::ptr::read_volatile(&self.u),
+                std::ptr::read_volatile(&self.v),
+                std::ptr::read_volatile(&self.tmax),
+            )
+        };
         let mut count = 0;
         for l in 0..L {
             let t = t_scaled[l] / abs_det[l];
-            if hit[l] && t.is_finite() {
-                let inv = 1.0 / (e[0][l] + e[1][l] + e[2][l]);
-                self.prim[l] = prim;
-                self.u[l] = e[1][l] * inv;
-                self.v[l] = e[2][l] * inv;
-                self.tmax[l] = if ANY { f32::NEG_INFINITY } else { t };
-                count += 1;
-            }
+            let take = hit[l] & t.is_finite();
+            let inv = 1.0 / (e[0][l] + e[1][l] + e[2][l]);
+            let tmax = if ANY { f32::NEG_INFINITY } else { t };
+            self.prim[l] = if take { prim } else { old_prim[l] };
+            self.u[l] = if take { e[1][l] * inv } else { old_u[l] };
+            self.v[l] = if take { e[2][l] * inv } else { old_v[l] };
+            self.tmax[l] = if take { tmax } else { old_tmax[l] };
+            count += take as u32;
         }
         count
     }

@@ -26,22 +26,27 @@ impl<const L: usize> SlabRays<'_, L> {
     /// meets the box when entry ≤ exit.
     #[inline(always)]
     fn enter_exit(&self, lo: [f32; 3], hi: [f32; 3]) -> ([f32; L], [f32; L]) {
-        let mut enter = *self.tmin;
-        let mut exit = *self.tmax;
-        for a in 0..3 {
-            let (o, inv, neg) = (&self.origin[a], &self.inv_dir[a], &self.negative[a]);
-            for l in 0..L {
-                let t_lo = (lo[a] - o[l]) * inv[l];
-                let t_hi = (hi[a] - o[l]) * inv[l];
-                let (near, far) = if neg[l] != 0 {
+        let (mut enter, mut exit) = ([0.0f32; L], [0.0f32; L]);
+        // Lanes outside, axes inside: each lane's running entry and exit are values, stored
+        // once. Updated in place axis by axis, they compiled to masked stores where the arrays
+        // stayed in memory (the stream's filter), which AMD's AVX2 cores run microcoded.
+        for l in 0..L {
+            let (mut en, mut ex) = (self.tmin[l], self.tmax[l]);
+            for a in 0..3 {
+                let (o, inv) = (self.origin[a][l], self.inv_dir[a][l]);
+                let t_lo = (lo[a] - o) * inv;
+                let t_hi = (hi[a] - o) * inv;
+                let (near, far) = if self.negative[a][l] != 0 {
                     (t_hi, t_lo)
                 } else {
                     (t_lo, t_hi)
                 };
                 let far = far * FAR_SCALE;
-                enter[l] = if near > enter[l] { near } else { enter[l] };
-                exit[l] = if far < exit[l] { far } else { exit[l] };
+                en = if near > en { near } else { en };
+                ex = if far < ex { far } else { ex };
             }
+            enter[l] = en;
+            exit[l] = ex;
         }
         (enter, exit)
     }

@@ -152,10 +152,14 @@ impl Frusta {
             if lanes == 0 {
                 continue;
             }
-            // Only the lanes of `changed` are written.
+            // Only the lanes of `changed` are written. A whole vector of them (every frustum of a
+            // new block) is stored as it is: the blend with the old lanes compiles to a masked
+            // store, which AMD's AVX2 cores run microcoded.
+            let whole = lanes == u64::MAX >> (64 - V::WIDTH);
             let mask = V::from_bits(lanes);
-            let put = |field: &mut Lanes, new: V| {
-                V::select(mask, new, V::load(field, base)).store(&mut field[base..]);
+            let put = |field: &mut Lanes, new: V| match whole {
+                true => new.store(&mut field[base..]),
+                false => V::select(mask, new, V::load(field, base)).store(&mut field[base..]),
             };
             let d: [[V; 3]; 4] =
                 std::array::from_fn(|q| std::array::from_fn(|a| V::load(&self.corner[q][a], base)));
