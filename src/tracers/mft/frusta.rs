@@ -148,14 +148,15 @@ impl Frusta {
             ]
         };
         for base in (0..MAX_FRUSTA).step_by(V::WIDTH) {
-            let lanes = changed >> base & (u64::MAX >> (64 - V::WIDTH));
+            let every = u64::MAX >> (64 - V::WIDTH);
+            let lanes = changed >> base & every;
             if lanes == 0 {
                 continue;
             }
             // Only the lanes of `changed` are written. A whole vector of them (every frustum of a
             // new block) is stored as it is: the blend with the old lanes compiles to a masked
             // store, which AMD's AVX2 cores run microcoded.
-            let whole = lanes == u64::MAX >> (64 - V::WIDTH);
+            let whole = lanes == every;
             let mask = V::from_bits(lanes);
             let put = |field: &mut Lanes, new: V| match whole {
                 true => new.store(&mut field[base..]),
@@ -417,7 +418,13 @@ mod tests {
                 frusta.set_corners(f, c);
                 corners.push(c);
             }
-            let changed = rng.next_u64();
+            // Random lanes, and masks with whole vectors of 8 and 16 changed frusta beside partial
+            // ones and none (a whole vector is stored without the blend).
+            let changed = match (round / 3) % 3 {
+                0 => rng.next_u64(),
+                1 => 0xFFFF_0000_FFFF_00F0,
+                _ => u64::MAX,
+            };
             let bounds = (round % 3 != 0).then_some(&m);
             let untouched = Frusta::default();
             let mut portable = frusta.clone();
