@@ -159,25 +159,29 @@ impl Frustum {
         // Extremes kept per lane of an L-wide accumulator (the tracer's lane width) so the loop
         // vectorizes; NaN or infinite slopes are caught by `finish`, non-positive or infinite
         // `along` by `ok`; a NaN slope is skipped (a ray with a NaN direction hits nothing).
+        // Whole vectors of rays (`lanes`), each lane updated with a constant index: a running
+        // index `i % L` compiled to masked stores, which AMD's AVX2 cores run microcoded.
         let (mut lo, mut hi) = ([[f32::INFINITY; L]; 2], [[f32::NEG_INFINITY; L]; 2]);
         let (mut near, mut along_max, mut ok) = ([f32::INFINITY; L], [0.0f32; L], [true; L]);
-        for i in 0..rays.len() {
-            let l = i % L;
-            let along = sigma * dk[i];
-            ok[l] &= along > 0.0 && along < f32::INFINITY;
-            let inv = 1.0 / along;
-            for (s, d) in [du, dv].into_iter().enumerate() {
-                let x = d[i] * inv;
-                lo[s][l] = if x < lo[s][l] { x } else { lo[s][l] };
-                hi[s][l] = if x > hi[s][l] { x } else { hi[s][l] };
+        for base in (0..rays.len()).step_by(L) {
+            let [dk, du, dv, tmin] = [dk, du, dv, rays.tmin].map(|src| lanes::<L>(src, base));
+            for l in 0..L {
+                let along = sigma * dk[l];
+                ok[l] &= (along > 0.0) & (along < f32::INFINITY);
+                let inv = 1.0 / along;
+                for (s, d) in [du[l], dv[l]].into_iter().enumerate() {
+                    let x = d * inv;
+                    lo[s][l] = if x < lo[s][l] { x } else { lo[s][l] };
+                    hi[s][l] = if x > hi[s][l] { x } else { hi[s][l] };
+                }
+                let t = tmin[l] * along;
+                near[l] = if t < near[l] { t } else { near[l] };
+                along_max[l] = if along > along_max[l] {
+                    along
+                } else {
+                    along_max[l]
+                };
             }
-            let t = rays.tmin[i] * along;
-            near[l] = if t < near[l] { t } else { near[l] };
-            along_max[l] = if along > along_max[l] {
-                along
-            } else {
-                along_max[l]
-            };
         }
         if ok.contains(&false) {
             return None;
