@@ -695,6 +695,34 @@ mod tests {
     }
 
     #[test]
+    fn the_frustum_does_not_depend_on_the_lane_width() {
+        // Packets of every length cut from the test packets, so a partial last vector of lanes
+        // (padded with copies of a ray) holds different rays: the one-lane build has no padding.
+        let mut rng = SplitMix64::new(11);
+        let scene = Aabb::new(Vec3::splat(-20.0), Vec3::splat(20.0));
+        let mut built = 0;
+        for _ in 0..20 {
+            for (_, rays) in packets(&mut rng) {
+                for n in [1, 5, 17, 37, 63] {
+                    for first in [0, 64 - n] {
+                        let b = batch(&rays[first..first + n]);
+                        let one = format!("{:?}", Frustum::build::<1>(b.view(), &scene));
+                        for wide in [
+                            format!("{:?}", Frustum::build::<4>(b.view(), &scene)),
+                            format!("{:?}", Frustum::build::<8>(b.view(), &scene)),
+                            format!("{:?}", Frustum::build::<16>(b.view(), &scene)),
+                        ] {
+                            assert_eq!(wide, one, "{n} rays from {first}");
+                        }
+                        built += one.starts_with("Some") as usize;
+                    }
+                }
+            }
+        }
+        assert!(built > 400, "only {built} frusta built");
+    }
+
+    #[test]
     fn packets_going_both_ways_get_no_frustum() {
         let rays = [
             Ray::new(Vec3::ZERO, Vec3::X, 0.0, 1.0),
