@@ -103,6 +103,11 @@ enum Command {
         /// Where to write (default: DIR/report.html, report.html for several, DIR/REPORT.md).
         #[arg(long, short)]
         output: Option<PathBuf>,
+        /// Write nothing: check every results directory under DIRS instead, and exit 1 when one
+        /// was made from a dirty tree, has no record of the source it measured, or measured code
+        /// (tracers, accel, lanes, geometry) that has changed since.
+        #[arg(long, conflicts_with_all = ["markdown", "output"])]
+        check: bool,
     },
     /// Print the summary of a results directory again (computed from its runs.csv, verify.csv and
     /// meta.json; the same table as its summary.md).
@@ -391,9 +396,25 @@ fn execute(command: Command) -> Result<bool> {
             println!("results: {}", dir.display());
         }
         Command::Report {
+            dirs, check: true, ..
+        } => {
+            let verdicts = raylab::experiment::results::staleness::check(&dirs)?;
+            let stale: Vec<_> = verdicts.iter().filter(|v| !v.reasons.is_empty()).collect();
+            for v in &stale {
+                println!("stale: {}: {}", v.dir.display(), v.reasons.join("; "));
+            }
+            println!(
+                "{} of {} results directories stale",
+                stale.len(),
+                verdicts.len()
+            );
+            return Ok(stale.is_empty());
+        }
+        Command::Report {
             dirs,
             markdown,
             output,
+            ..
         } => {
             let path =
                 raylab::experiment::results::report::write(&dirs, markdown, output.as_deref())?;

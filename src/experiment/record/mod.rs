@@ -10,6 +10,7 @@ pub mod csv_file;
 pub mod digest;
 pub mod files;
 pub mod histogram_row;
+pub mod provenance;
 pub mod results_dir;
 pub mod run_row;
 pub mod selection;

@@ -7,5 +7,6 @@ pub mod error_plot;
 pub mod figures;
 pub mod plots;
 pub mod report;
+pub mod staleness;
 pub mod summary;
 pub mod tables;

@@ -8,6 +8,7 @@ use std::process::Command;
 use serde::Serialize;
 
 use crate::experiment::record::files::META_JSON;
+use crate::experiment::record::provenance::this_source;
 use crate::experiment::record::utc::UtcTime;
 use crate::experiment::spec::overrides::RunOverrides;
 use crate::experiment::spec::plan::Plan;
@@ -20,6 +21,10 @@ pub struct Meta<'a> {
     /// Start of the run, UTC, ISO-8601.
     pub date: String,
     pub commit: Commit,
+    /// A digest per area of the source the run measured (`record::provenance`): what
+    /// `raylab report --check` compares with the source of today.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub measured_source: Option<BTreeMap<String, String>>,
     pub hostname: String,
     pub cpu: Cpu,
     pub threads: &'a [usize],
@@ -93,6 +98,7 @@ pub fn gather<'a>(
         run_id,
         date: started.iso8601(),
         commit: commit(),
+        measured_source: this_source(),
         hostname: hostname(),
         cpu: Cpu {
             model: cpu_model(),

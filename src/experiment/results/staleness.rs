@@ -1,0 +1,177 @@
+//! `raylab report --check PATH…`: which results directories under the paths are no longer
+//! evidence. A run is stale when it was made from a dirty tree (or one whose state is unknown),
+//! when it has no record of the source it measured, or when that source — the tracers,
+//! acceleration structures, lanes and geometry (`record::provenance`) — has changed since. The
+//! rule, not a person, says which runs must be re-run before their numbers are quoted.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use serde_json::Value;
+
+use crate::error::{Error, Result};
+use crate::experiment::record::files::META_JSON;
+use crate::experiment::record::provenance::{this_source, MEASURED};
+
+/// A results directory and why it is stale (empty: it is not).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Verdict {
+    pub dir: PathBuf,
+    pub reasons: Vec<String>,
+}
+
+/// Every results directory (a directory with a meta.json) at or under `path`, in path order.
+fn runs_under(path: &Path, out: &mut Vec<PathBuf>) -> Result<()> {
+    if path.join(META_JSON).is_file() {
+        out.push(path.to_path_buf());
+        return Ok(());
+    }
+    let mut entries: Vec<PathBuf> = std::fs::read_dir(path)
+        .map_err(|e| Error::io(path, e))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.is_dir())
+        .collect();
+    entries.sort();
+    entries.iter().try_for_each(|p| runs_under(p, out))
+}
+
+/// Why the run whose meta.json is `meta` is stale against the source digests `today`.
+pub fn reasons(meta: &Value, today: &BTreeMap<String, String>) -> Vec<String> {
+    let mut reasons = Vec::new();
+    let commit = meta.pointer("/commit/hash").and_then(Value::as_str);
+    match meta.pointer("/commit/dirty").and_then(Value::as_bool) {
+        Some(false) => {}
+        Some(true) => reasons.push(format!(
+            "made from a dirty tree (commit {})",
+            commit.unwrap_or("unknown")
+        )),
+        None => reasons.push("made from a tree whose state is unknown".to_string()),
+    }
+    match meta.get("measured_source").and_then(Value::as_object) {
+        None => reasons.push("no record of the source it measured".to_string()),
+        Some(then) => {
+            let changed: Vec<&str> = MEASURED
+                .iter()
+                .copied()
+                .filter(|area| {
+                    then.get(*area).and_then(Value::as_str) != today.get(*area).map(String::as_str)
+                })
+                .collect();
+            if !changed.is_empty() {
+                reasons.push(format!(
+                    "the code it measured changed since: {}",
+                    changed.join(", ")
+                ));
+            }
+        }
+    }
+    reasons
+}
+
+/// The verdict on every results directory under `paths`; a path with none is a usage error.
+pub fn check(paths: &[PathBuf]) -> Result<Vec<Verdict>> {
+    let today = this_source().ok_or_else(|| {
+        Error::runtime(format!(
+            "cannot read the source tree at {} to compare with",
+            env!("CARGO_MANIFEST_DIR")
+        ))
+    })?;
+    let mut verdicts = Vec::new();
+    for path in paths {
+        let mut runs = Vec::new();
+        runs_under(path, &mut runs)?;
+        if runs.is_empty() {
+            return Err(Error::usage(format!(
+                "{}: no results directory (no {META_JSON}) there",
+                path.display()
+            )));
+        }
+        for dir in runs {
+            let file = dir.join(META_JSON);
+            let text = std::fs::read_to_string(&file).map_err(|e| Error::io(&file, e))?;
+            let meta: Value = serde_json::from_str(&text)
+                .map_err(|e| Error::input(&file, Some(e.line()), e.to_string()))?;
+            verdicts.push(Verdict {
+                reasons: reasons(&meta, &today),
+                dir,
+            });
+        }
+    }
+    Ok(verdicts)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn today() -> BTreeMap<String, String> {
+        MEASURED
+            .iter()
+            .map(|a| (a.to_string(), format!("{a}-now")))
+            .collect()
+    }
+
+    #[test]
+    fn dirty_unknown_unrecorded_and_changed_runs_are_stale_a_clean_current_one_is_not() {
+        let now = today();
+        let current: serde_json::Map<String, Value> = now
+            .iter()
+            .map(|(k, v)| (k.clone(), Value::from(v.as_str())))
+            .collect();
+        let clean = serde_json::json!({
+            "commit": { "hash": "abc", "dirty": false },
+            "measured_source": current,
+        });
+        assert!(reasons(&clean, &now).is_empty());
+
+        let mut dirty = clean.clone();
+        dirty["commit"]["dirty"] = Value::Bool(true);
+        assert_eq!(
+            reasons(&dirty, &now),
+            ["made from a dirty tree (commit abc)"]
+        );
+
+        let mut unknown = clean.clone();
+        unknown["commit"] = serde_json::json!({ "hash": "unknown", "dirty": null });
+        assert_eq!(
+            reasons(&unknown, &now),
+            ["made from a tree whose state is unknown"]
+        );
+
+        let mut old = clean.clone();
+        old.as_object_mut().unwrap().remove("measured_source");
+        assert_eq!(reasons(&old, &now), ["no record of the source it measured"]);
+
+        let mut changed = clean.clone();
+        changed["measured_source"]["lanes"] = Value::from("lanes-then");
+        changed["measured_source"]["tracers"] = Value::from("tracers-then");
+        assert_eq!(
+            reasons(&changed, &now),
+            ["the code it measured changed since: tracers, lanes"]
+        );
+    }
+
+    #[test]
+    fn runs_are_found_under_a_tree_and_a_path_without_any_is_refused() {
+        let root = std::env::temp_dir().join(format!("raylab-staleness-{}", std::process::id()));
+        let run = root.join("paper/exp/20260101T000000Z");
+        std::fs::create_dir_all(run.join("rays")).unwrap();
+        let meta = serde_json::json!({
+            "commit": { "hash": "abc", "dirty": false },
+            "measured_source": this_source().unwrap(),
+        });
+        std::fs::write(run.join(META_JSON), meta.to_string()).unwrap();
+        let verdicts = check(&[root.clone()]).unwrap();
+        assert_eq!(
+            verdicts,
+            [Verdict {
+                dir: run.clone(),
+                reasons: Vec::new()
+            }]
+        );
+        let empty = root.join("empty");
+        std::fs::create_dir_all(&empty).unwrap();
+        assert!(matches!(check(&[empty]), Err(Error::Usage(_))));
+        std::fs::remove_dir_all(&root).unwrap();
+    }
+}
