@@ -20,7 +20,7 @@ use rayon::prelude::*;
 
 use crate::geometry::{Hit, RayBatch};
 use crate::tracers::{oracle_params, tracer_for_mesh, Params, ORACLE};
-use crate::verify::compare::{self, Agreement};
+use crate::verify::compare::{self, Agreement, Judgement};
 use crate::verify::truth::{Truth, Verdict};
 
 pub use cases::{generate, Case, CaseKind, Sweep};
@@ -303,13 +303,13 @@ fn tally(
             Verdict::Missed => o.missed += 1,
             Verdict::FalseHit => o.false_hits += 1,
         }
-        if let Agreement::Unexplained(_) = agreement {
+        if let Agreement::Unexplained(..) = agreement {
             o.unexplained += 1;
-            match (verdict.is_wrong(), oracle_verdict.is_wrong()) {
-                (false, true) => o.unexplained_tracer_right += 1,
-                (true, false) => o.unexplained_oracle_right += 1,
-                (false, false) => o.unexplained_rounding += 1,
-                (true, true) => o.unexplained_both_wrong += 1,
+            match Judgement::of(verdict, oracle_verdict) {
+                Judgement::OursRight => o.unexplained_tracer_right += 1,
+                Judgement::OursWrong => o.unexplained_oracle_right += 1,
+                Judgement::Rounding => o.unexplained_rounding += 1,
+                Judgement::Undecided => o.unexplained_both_wrong += 1,
             }
         }
     }
