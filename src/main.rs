@@ -178,13 +178,15 @@ enum Command {
         /// as closest-hit queries (row `primary`) and as occlusion queries (row `shadow`).
         #[arg(long, conflicts_with_all = ["resolution", "seed"])]
         rays: Option<PathBuf>,
-        /// Unexplained disagreements allowed per ray kind.
+        /// Disagreements no tie explains that the f64 truth calls ours wrong or cannot decide,
+        /// allowed per ray kind (ours right and both-within-rounding never fail).
         #[arg(long, default_value_t = 0)]
         max_unexplained: u64,
         /// Largest allowed 99th-percentile relative distance error.
         #[arg(long, default_value_t = 1e-4)]
         max_distance_error: f64,
-        /// Results root: summary.csv and disagreements.csv go to <out>/verify/<scene>-<tracer>
+        /// Results root: summary.csv, disagreements.csv and failing.rays.csv (the rays of the
+        /// failing disagreements, for `raylab trace --rays`) go to <out>/verify/<scene>-<tracer>
         /// (a -2, -3… suffix when that exists), written whole or not at all.
         #[arg(long, default_value = "results")]
         out: PathBuf,
@@ -585,10 +587,18 @@ fn execute(command: Command) -> Result<bool> {
             let name = format!("{scene}-{tracer}").replace(['/', '\\'], "_");
             let pending = PendingResults::create(&out, "verify", &name)?;
             verify::write_csv(pending.dir(), &scene, &tracer, &reports)?;
-            println!("CSV: {}", pending.commit()?.display());
+            let dir = pending.commit()?;
+            println!("CSV: {}", dir.display());
             let pass = reports.iter().all(|r| r.passes(&tol));
+            let failing: u64 = reports.iter().map(|r| r.failing()).sum();
+            if failing > 0 {
+                println!(
+                    "the {failing} rays the f64 truth calls ours wrong or cannot decide: {} (replay: raylab trace --rays)",
+                    dir.join(verify::report::REPLAY_RAYS).display()
+                );
+            }
             println!(
-                "{} (tolerance: ≤ {max_unexplained} unexplained disagreements per ray kind, p99 distance error ≤ {max_distance_error:e})",
+                "{} (tolerance: ≤ {max_unexplained} disagreements per ray kind that the f64 truth calls ours wrong or cannot decide, p99 distance error ≤ {max_distance_error:e})",
                 if pass { "PASS" } else { "FAIL" }
             );
             return Ok(pass);

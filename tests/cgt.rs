@@ -286,7 +286,9 @@ fn frustum_visits_exactly_the_cells_its_corner_rays_bound() {
             ..GridConfig::default()
         },
     );
-    let to_grid = |p: DVec3| (p - grid.bounds.min.as_dvec3()) * grid.inv_cell_size.as_dvec3();
+    let to_grid = |p: DVec3| {
+        (p - grid.origin.as_dvec3() - grid.bounds.min.as_dvec3()) * grid.inv_cell_size.as_dvec3()
+    };
     let res = grid.res;
     // The corner rays' (x, y) at every slice plane z = k, in f64 grid space, for a packet from
     // `origin`; None when a bound lies within 0.01 of a cell boundary (rounding may decide).

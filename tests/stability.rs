@@ -1,9 +1,9 @@
 //! The numerical stability suite on every case kind, for the from-scratch tracers (one
 //! configuration of each packet traversal, cgt, grid-dda, reference, stream): no leak, no crash, no hang,
-//! every ill-formed ray a miss — and the one known weakness, pinned so a change shows: our
-//! watertight test (Woop et al. 2013) computes the distance to needle triangles (aspect ratio
-//! ~10⁴) with up to ~2·10⁻⁵ relative error, which the f64 truth calls wrong on a handful of the
-//! sliver rays, where Embree's robust Plücker test is right.
+//! every ill-formed ray a miss, and no answer the f64 truth calls wrong — slivers and crowded
+//! needle fans included: the watertight test redoes in f64 the edge functions that lost more than
+//! 4 bits to cancellation (`geometry::triangle::needs_f64`; at 11 bits a handful of sliver rays
+//! got their distance wrong, issue 30).
 
 use std::time::Duration;
 
@@ -50,24 +50,16 @@ fn from_scratch_tracers_pass_every_stiff_case() {
     ];
     let outcomes = run(cases, &contenders, Duration::from_secs(120), &|_, _| {});
     assert!(!outcomes.is_empty());
-    let mut sliver_rays = 0;
-    let mut sliver_wrong = 0;
     for o in &outcomes {
         assert_eq!(o.status, Status::Answered, "{o:?}");
         assert_eq!(o.leaks, 0, "{o:?}");
-        if o.kind == CaseKind::Slivers {
-            sliver_rays += o.rays;
-            sliver_wrong += o.missed + o.false_hits;
-        } else {
-            assert_eq!((o.missed, o.false_hits), (0, 0), "{o:?}");
-        }
+        assert_eq!((o.missed, o.false_hits), (0, 0), "{o:?}");
         if o.kind == CaseKind::Watertight && !o.variant.contains("crushed") {
             assert!(o.must_hit > 1000, "{o:?}");
         }
     }
-    // The known needle weakness: a few in ten thousand, never more than 0.1%.
-    assert!(
-        sliver_wrong * 1000 <= sliver_rays,
-        "{sliver_wrong} of {sliver_rays}"
-    );
+    // Every case kind ran, the crowded needle fans among them.
+    for kind in CaseKind::ALL {
+        assert!(outcomes.iter().any(|o| o.kind == kind), "{kind}");
+    }
 }

@@ -15,6 +15,13 @@
 //!   prefix sum turns counts into offsets, a second pass fills one flat array (CSR).
 //! - Macrocells (§2.4): a coarser grid of M×M×M blocks of cells, each flagged non-empty when any of
 //!   its cells holds a triangle, so traversals can skip empty space M cells at a time.
+//! - Local frame: the grid lives in coordinates relative to its own `origin` (the scene box's
+//!   centre), so its cells follow the mesh, not the mesh's distance from the world origin: a mesh
+//!   at 10⁶ gets the cells it gets at 0. Translating a point (`local`) rounds once, by at most half
+//!   an ulp of the local coordinate; for triangle vertices that is 2⁻²⁴ of the local magnitude,
+//!   16× below the `margin`, and traversals translate ray origins the same way and widen their
+//!   own comparisons by a multiple of the local coordinates they use. Triangle tests stay in
+//!   world coordinates (`triangles`), so hits are bit for bit every other tracer's.
 
 use std::time::Instant;
 
@@ -70,8 +77,11 @@ impl GridConfig {
 
 #[derive(Clone, Debug)]
 pub struct Grid {
-    /// The grid's box: the scene box padded and grown to whole cubic cells, so no triangle touches
-    /// its faces.
+    /// The grid's own origin, in world coordinates: every other coordinate of the grid (`bounds`,
+    /// cell boundaries, insertion boxes, `margin`) is relative to it (module doc, local frame).
+    pub origin: Vec3,
+    /// The grid's box, relative to `origin`: the scene box padded and grown to whole cubic cells,
+    /// so no triangle touches its faces.
     pub bounds: Aabb,
     /// Cells per axis.
     pub res: [u32; 3],
@@ -89,8 +99,8 @@ pub struct Grid {
     /// Macrocell `(mx, my, mz)` holds a triangle; index `mx + macro_res[0] * (my + macro_res[1] * mz)`.
     pub macro_occupied: Vec<bool>,
     /// How far every insertion box (triangle bounds, and the cell box in the exact test) is grown:
-    /// 1/256 of a cell plus 2⁻²⁰ of the largest coordinate magnitude, far above f32 rounding in
-    /// the traversal's distance comparisons.
+    /// 1/256 of a cell plus 2⁻²⁰ of the largest local coordinate magnitude, far above f32 rounding
+    /// in the traversal's distance comparisons and in the translation to the local frame.
     pub margin: f32,
     pub config: GridConfig,
     pub build_seconds: f64,
@@ -109,16 +119,28 @@ impl Grid {
 
     pub fn build(triangles: &[Triangle], config: GridConfig) -> Grid {
         let start = Instant::now();
-        let scene = triangles
+        let world = triangles
             .iter()
             .fold(Aabb::EMPTY, |b, t| b.union(t.bounds()));
+        // Halves first: the sum of two huge coordinates must not overflow.
+        let origin = if world.is_empty() || !world.min.is_finite() || !world.max.is_finite() {
+            Vec3::ZERO
+        } else {
+            world.min * 0.5 + world.max * 0.5
+        };
+        // Translation is monotone, so the translated box is the box of the translated vertices.
+        let scene = if world.is_empty() {
+            world
+        } else {
+            Aabb::new(world.min - origin, world.max - origin)
+        };
         // Triangles much larger than a cell (slivers across the scene, a floor under a small
         // object) are inserted into every cell they span; where that would exceed
         // `max_references`, the grid gets coarser (half the cells per axis each time) instead of
         // running out of memory or overflowing the 32-bit cell offsets.
         let mut lambda = config.lambda as f64;
         let mut grid = loop {
-            let grid = Grid::empty(triangles, scene, lambda, config);
+            let grid = Grid::empty(triangles, origin, scene, lambda, config);
             let cap = Self::max_references(triangles.len());
             if grid.reference_bound() <= cap || grid.cell_count() == 1 {
                 break grid;
@@ -131,8 +153,15 @@ impl Grid {
         grid
     }
 
-    /// The grid's layout for `lambda`, with no triangle inserted yet.
-    fn empty(triangles: &[Triangle], scene: Aabb, lambda: f64, config: GridConfig) -> Grid {
+    /// The grid's layout for `lambda` around `scene` (relative to `origin`), with no triangle
+    /// inserted yet.
+    fn empty(
+        triangles: &[Triangle],
+        origin: Vec3,
+        scene: Aabb,
+        lambda: f64,
+        config: GridConfig,
+    ) -> Grid {
         let (bounds, res) = layout(scene, triangles.len(), lambda);
         let res_v = Vec3::new(res[0] as f32, res[1] as f32, res[2] as f32);
         let extent = bounds.extent();
@@ -141,6 +170,7 @@ impl Grid {
         let m = config.macro_size;
         let macro_res = res.map(|r| r.div_ceil(m));
         Grid {
+            origin,
             bounds,
             res,
             cell_size,
@@ -184,7 +214,19 @@ impl Grid {
         &self.cell_tris[self.cell_start[c] as usize..self.cell_start[c + 1] as usize]
     }
 
-    /// Coordinate of the plane between cells `i − 1` and `i` on `axis`. Every cell boundary used
+    /// A world point in the grid's frame: `p − origin`, rounded once (module doc).
+    #[inline(always)]
+    pub fn local(&self, p: Vec3) -> Vec3 {
+        p - self.origin
+    }
+
+    /// A world triangle in the grid's frame.
+    pub fn local_triangle(&self, tri: &Triangle) -> Triangle {
+        let [a, b, c] = tri.v.map(|p| self.local(p));
+        Triangle::new(a, b, c)
+    }
+
+    /// Local coordinate of the plane between cells `i − 1` and `i` on `axis`. Every cell boundary used
     /// anywhere (insertion, `cell_of`, traversal) is this very f32 expression, so they agree bit
     /// for bit.
     #[inline(always)]
@@ -192,7 +234,8 @@ impl Grid {
         self.bounds.min[axis] + i as f32 * self.cell_size[axis]
     }
 
-    /// The cell `i` on `axis` with `boundary(i) <= x < boundary(i + 1)`, clamped to the grid.
+    /// The cell `i` on `axis` with `boundary(i) <= x < boundary(i + 1)` (`x` local), clamped to
+    /// the grid.
     #[inline(always)]
     pub fn axis_cell(&self, axis: usize, x: f32) -> u32 {
         let last = self.res[axis] - 1;
@@ -208,7 +251,7 @@ impl Grid {
         i
     }
 
-    /// Cell coordinates of a point, clamped to the grid.
+    /// Cell coordinates of a local point, clamped to the grid.
     pub fn cell_of(&self, p: Vec3) -> [u32; 3] {
         [
             self.axis_cell(0, p.x),
@@ -217,7 +260,7 @@ impl Grid {
         ]
     }
 
-    /// The box of cell `(x, y, z)`, from `boundary`.
+    /// The local box of cell `(x, y, z)`, from `boundary`.
     pub fn cell_bounds(&self, x: u32, y: u32, z: u32) -> Aabb {
         Aabb::new(
             Vec3::new(
@@ -233,11 +276,14 @@ impl Grid {
         )
     }
 
-    /// The triangle's bounding box grown by `margin`: bounding-box insertion puts the triangle in
-    /// exactly the cells from `cell_of(min)` to `cell_of(max)`.
+    /// The (world) triangle's local bounding box grown by `margin`: bounding-box insertion puts
+    /// the triangle in exactly the cells from `cell_of(min)` to `cell_of(max)`.
     pub fn insertion_box(&self, tri: &Triangle) -> Aabb {
         let b = tri.bounds();
-        Aabb::new(b.min - self.margin, b.max + self.margin)
+        Aabb::new(
+            self.local(b.min) - self.margin,
+            self.local(b.max) + self.margin,
+        )
     }
 
     #[inline(always)]
@@ -269,7 +315,11 @@ impl Grid {
     /// Exact insertion's test: the triangle against the cell's box grown by `margin`.
     fn overlaps_exactly(&self, tri: &Triangle, x: u32, y: u32, z: u32) -> bool {
         let c = self.cell_bounds(x, y, z);
-        triangle_overlaps_box(tri, c.min - self.margin, c.max + self.margin)
+        triangle_overlaps_box(
+            &self.local_triangle(tri),
+            c.min - self.margin,
+            c.max + self.margin,
+        )
     }
 
     /// Two passes over the triangles into the CSR arrays: count per cell, turn counts into end
@@ -313,8 +363,8 @@ impl Grid {
     }
 }
 
-/// The grid box and resolution for `n` triangles in `scene` (§3). Works in f64 so the cell side of
-/// tiny or huge scenes does not round away.
+/// The grid box and resolution for `n` triangles in `scene` (§3), both in the grid's local frame.
+/// Works in f64 so the cell side of tiny or huge scenes does not round away.
 fn layout(scene: Aabb, n: usize, lambda: f64) -> (Aabb, [u32; 3]) {
     if scene.is_empty() {
         return (Aabb::new(Vec3::ZERO, Vec3::ONE), [1, 1, 1]);
@@ -343,11 +393,12 @@ fn layout(scene: Aabb, n: usize, lambda: f64) -> (Aabb, [u32; 3]) {
             active[a] = false;
         }
     };
-    // Far from the origin a cell must stay well above the coordinates' f32 spacing, which sets
-    // the insertion margin (2⁻²⁰ of the magnitude): with cells at 2⁻¹⁶ of it or more, the margin
-    // adds at most 1/16 cell to each side of a triangle's box. (Without this bound a 0.15-unit
-    // mesh at 10⁵ got cells smaller than the margin, and each of its triangles went into
-    // ~60,000 cells.)
+    // Far from the grid's origin a cell must stay well above the coordinates' f32 spacing, which
+    // sets the insertion margin (2⁻²⁰ of the magnitude): with cells at 2⁻¹⁶ of it or more, the
+    // margin adds at most 1/16 cell to each side of a triangle's box. In the local frame the
+    // magnitude is about half the scene's extent, so this only binds for scenes of many cells
+    // along one axis: a mesh far from the world origin no longer coarsens its grid (it did
+    // before the local frame: a 0.15-unit mesh at 10⁵ got cells ten times its size).
     let side = side.max(magnitude * f64::powi(2.0, -16));
     let res = [0, 1, 2].map(|a| ((padded[a] / side).ceil() as u32).max(1));
     let half = DVec3::new(res[0] as f64, res[1] as f64, res[2] as f64) * side * 0.5;
@@ -496,7 +547,7 @@ mod tests {
                 for i in 0..=40 {
                     for j in 0..=40 - i {
                         let p = t.point(i as f32 / 40.0, j as f32 / 40.0);
-                        let c = exact.cell_of(p);
+                        let c = exact.cell_of(exact.local(p));
                         assert!(e.contains(&c), "λ {lambda} tri {id}: {p:?} in {c:?}");
                     }
                 }
@@ -554,7 +605,8 @@ mod tests {
     fn hand_worked_two_triangle_grid() {
         // Scene box [0,2]×[0,1]×[0,1], padded by 2/4096 per side; λ·N = 8 cells:
         // side = cbrt(2.000977 · 1.000977² / 8) = 0.63048 → res = ceil(3.17, 1.59, 1.59) = [4, 2, 2].
-        // x boundaries: -0.261, 0.370, 1.001, 1.631, 2.262; y and z: -0.130, 0.5, 1.130.
+        // Local origin: the box centre (1, 0.5, 0.5). x boundaries: -0.261, 0.370, 1.001, 1.631,
+        // 2.262; y and z: -0.130, 0.5, 1.130 (world; local ones are these minus the origin).
         let a = Triangle::new(
             Vec3::ZERO,
             Vec3::new(0.3, 0.0, 0.0),
@@ -568,8 +620,9 @@ mod tests {
         let g = Grid::build(&[a, b], config(4.0, 2, false));
         assert_eq!(g.res, [4, 2, 2]);
         assert!((g.cell_size.x - 0.63048).abs() < 1e-4);
-        assert!((g.boundary(0, 0) + 0.26096).abs() < 1e-4);
-        assert!((g.boundary(1, 1) - 0.5).abs() < 1e-4);
+        assert_eq!(g.origin, Vec3::new(1.0, 0.5, 0.5));
+        assert!((g.boundary(0, 0) + 1.26096).abs() < 1e-4);
+        assert!(g.boundary(1, 1).abs() < 1e-4);
         assert_eq!(g.cell(0, 0, 0), &[0]);
         for x in 0..4 {
             assert_eq!(g.cell(x, 1, 1), &[1], "cell {x},1,1");
@@ -577,7 +630,7 @@ mod tests {
         assert_eq!(g.cell_tris.len(), 5);
         assert_eq!(g.macro_res, [2, 1, 1]);
         assert_eq!(g.macro_occupied, vec![true, true]);
-        assert_eq!(g.cell_of(Vec3::new(1.2, 0.9, 0.1)), [2, 1, 0]);
+        assert_eq!(g.cell_of(g.local(Vec3::new(1.2, 0.9, 0.1))), [2, 1, 0]);
         assert_eq!(g.cell_of(Vec3::splat(-100.0)), [0, 0, 0]);
         assert_eq!(g.cell_of(Vec3::splat(100.0)), [3, 1, 1]);
     }
@@ -600,7 +653,8 @@ mod tests {
                 "not cubic: {:?}",
                 g.cell_size
             );
-            assert!(g.bounds.min.cmplt(scene.min).all() && g.bounds.max.cmpgt(scene.max).all());
+            let (lo, hi) = (g.local(scene.min), g.local(scene.max));
+            assert!(g.bounds.min.cmplt(lo).all() && g.bounds.max.cmpgt(hi).all());
         }
     }
 
@@ -647,9 +701,10 @@ mod tests {
         let p = Vec3::new(7.0, -2.0, 1.0);
         let point = vec![Triangle::new(p, p, p); 3];
         let g = Grid::build(&point, config(5.0, 6, false));
-        let [x, y, z] = g.cell_of(p);
+        assert_eq!(g.origin, p);
+        let [x, y, z] = g.cell_of(g.local(p));
         assert_eq!(g.cell(x, y, z), &[0, 1, 2]);
-        assert!(g.bounds.min.cmplt(p).all() && g.bounds.max.cmpgt(p).all());
+        assert!(g.bounds.min.cmplt(Vec3::ZERO).all() && g.bounds.max.cmpgt(Vec3::ZERO).all());
     }
 
     #[test]
@@ -730,19 +785,40 @@ mod tests {
         }
     }
 
-    /// Regression (issue 14): the 69K-triangle, 0.15-unit bunny moved 10⁵ from the origin made
-    /// cells smaller than the insertion margin; each triangle went into ~60,000 cells, the u32
-    /// reference count wrapped and the build indexed out of bounds. Now a cell is at least 2⁻¹⁶
-    /// of the magnitude and every triangle spans a handful of cells.
+    /// Regression (issues 14 and 30): the 69K-triangle, 0.15-unit bunny moved 10⁵ from the origin
+    /// first overflowed the reference count (cells below the insertion margin), then got cells ten
+    /// times its size (at least 2⁻¹⁶ of the world magnitude), so every ray tested every triangle.
+    /// In the local frame the grid of a mesh moved by 10⁵ or 10⁶ is the grid at the origin, cell
+    /// for cell: the sphere's vertices are multiples of 1/16, which every offset keeps exact.
     #[test]
-    fn a_small_dense_mesh_far_from_the_origin_gets_cells_above_the_margin() {
+    fn a_mesh_far_from_the_origin_gets_the_cells_it_gets_at_the_origin() {
         use crate::scene::tessellate::Surface;
+        let snap = |p: Vec3| (p * 8.0 * 16.0).round() / 16.0;
+        let at = |offset: f32| {
+            let tris = Surface::uv_sphere(256, 136)
+                .triangles(|p| snap(p) + Vec3::new(offset, -offset, offset));
+            (Grid::build(&tris, GridConfig::default()), tris)
+        };
+        let (home, tris) = at(0.0);
+        assert!(tris.len() > 69_000);
+        // About λ·N cells, each holding a handful of triangles.
+        assert!(home.cell_count() >= 5 * tris.len(), "{:?}", home.res);
+        assert!(home.margin < home.cell_size.min_element() / 8.0);
+        for offset in [1e5, 1e6] {
+            let (far, far_tris) = at(offset);
+            assert_eq!(far.origin - home.origin, Vec3::new(offset, -offset, offset));
+            assert_eq!(far.res, home.res, "offset {offset}");
+            assert_eq!(far.cell_size, home.cell_size, "offset {offset}");
+            assert_eq!(far.margin, home.margin, "offset {offset}");
+            assert_eq!(far.cell_start, home.cell_start, "offset {offset}");
+            assert_eq!(far.cell_tris, home.cell_tris, "offset {offset}");
+            assert_every_triangle_is_in_its_cells(&far, &far_tris);
+        }
+        // An unsnapped mesh at 10⁵ (rounded by the offset) still gets fine cells.
         let tris =
             Surface::uv_sphere(256, 136).triangles(|p| p * 0.075 + Vec3::new(1e5, -1e5, 1e5));
-        assert!(tris.len() > 69_000);
         let g = Grid::build(&tris, GridConfig::default());
-        assert!(g.cell_size.min_element() >= 1e5 * 2f32.powi(-16) * 0.99);
-        assert!(g.margin < g.cell_size.min_element() / 8.0);
+        assert!(g.cell_count() >= 5 * tris.len(), "{:?}", g.res);
         let per_triangle = g.cell_tris.len() as f64 / tris.len() as f64;
         assert!(
             per_triangle <= 8.0,
@@ -771,7 +847,7 @@ mod tests {
     fn assert_every_triangle_is_in_its_cells(g: &Grid, tris: &[Triangle]) {
         for (id, tri) in tris.iter().enumerate() {
             for p in tri.v {
-                let [x, y, z] = g.cell_of(p);
+                let [x, y, z] = g.cell_of(g.local(p));
                 assert!(
                     g.cell(x, y, z).contains(&(id as u32)),
                     "triangle {id} at {p}"

@@ -79,13 +79,15 @@ pub fn axis_component(x: [f32; 3], k: usize) -> f32 {
 }
 
 /// Below this ratio of |U + V + W| to the magnitude of the edge functions' first products
-/// (`edge_product_scale`), a ray that passes inside every edge has lost more than 10 of f32's 24
-/// bits to cancellation: a needle-thin triangle (aspect ratio ≳ 10³) or a grazing ray. There the
-/// f32 edge functions put the hit distance off by up to 2·10⁻⁴ relative, or on the wrong side of
-/// the origin (the stability suite's slivers; an exact rational check confirmed Embree's robust
-/// answer and the f64 one), while f64 edge functions from the same sheared coordinates are
-/// accurate to ~10⁻⁸.
-const ILL_CONDITIONED: f32 = 1.0 / 2048.0;
+/// (`edge_product_scale`), a ray that passes inside every edge has lost more than 4 of f32's 24
+/// bits to cancellation: a needle-thin triangle (aspect ratio ≳ 16) or a grazing ray. There the
+/// f32 edge functions put the hit distance off by up to 2⁴ times their rounding: at 2⁻¹¹ (the
+/// bound until issue 30) a diffuse ray leaving one needle of a crowded fan for its neighbour
+/// 10⁻² away got its distance up to 10⁻⁵ (90 ULPs of the coordinates) off, where the f64 truth
+/// and Embree's robust test agree to 10⁻⁹; the stability suite's slivers were off by up to
+/// 2·10⁻⁴ relative, or on the wrong side of the origin, at 2⁻¹⁰. f64 edge functions from the
+/// same sheared coordinates are accurate to ~10⁻⁸.
+const ILL_CONDITIONED: f32 = 1.0 / 16.0;
 
 /// |cx·by| + |ax·cy| + |bx·ay|: one product of each edge function (U = cx·by − cy·bx, …). Where
 /// an edge function cancels, its two products are nearly equal, so this is half the scale of

@@ -10,6 +10,10 @@
 //! and hit points is covered by the grid's insertion `margin`: a triangle within that distance of
 //! a cell is in the cell.
 //!
+//! The walk runs in the grid's local frame (`Grid::local`): the ray's origin is translated once,
+//! rounding by at most 2⁻²⁴ of its local coordinates, far inside the slack `cell_at` leaves
+//! (2⁻²⁰ of them). Its triangle tests use the world ray, so its hits are every tracer's.
+//!
 //! Counters: the grid has no depth, so everything is counted at depth 0 — `node(0)` once per cell
 //! visited (an empty macrocell skipped at once counts as the one cell where the ray entered it),
 //! `triangle_test(0)` per triangle test actually run, `ray()` per ray; the event
@@ -47,6 +51,7 @@ struct Walk<'a> {
     /// without glam's component match (`crossing` still computes `Grid::boundary` bit for bit).
     grid_min: [f32; 3],
     cell_size: [f32; 3],
+    /// The ray's origin in the grid's local frame.
     origin: [f32; 3],
     dir: [f32; 3],
     inv_dir: [f32; 3],
@@ -209,7 +214,7 @@ impl GridDdaTracer {
         if g.cell_tris.is_empty() {
             return best;
         }
-        let origin = ray.origin.to_array();
+        let origin = g.local(ray.origin).to_array();
         let dir = ray.dir.to_array();
         let inv_dir = dir.map(|d| 1.0 / d);
         // Clip to the grid box by slabs. The near/far face is picked by the sign bit, so −0.0 acts

@@ -1,8 +1,10 @@
 //! Ray-by-ray comparison of a tracer's answer with the oracle's, and the classification of every
-//! disagreement as a tie (with its reason) or as unexplained.
+//! disagreement as a tie (with its reason) or as unexplained by the ties, which the f64 ground
+//! truth then judges (`Judgement`, asked by `verify::classify`).
 
 use crate::geometry::{Hit, Ray};
 use crate::scene::Mesh;
+use crate::verify::truth::Verdict;
 
 /// Relative distance under which two hits count as "the same distance".
 pub const SAME_DISTANCE: f32 = 1e-5;
@@ -57,11 +59,66 @@ impl Tie {
     }
 }
 
+/// Who the f64 ground truth (`verify::truth`) says is right about a disagreement the ties do not
+/// explain.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Judgement {
+    /// Ours right, Embree wrong.
+    OursRight,
+    /// Embree right, ours wrong.
+    OursWrong,
+    /// Both answers within rounding of the exact one.
+    Rounding,
+    /// The truth cannot decide: it contradicts both answers, or was not asked (the comparison
+    /// functions here leave every disagreement undecided; `verify::classify` asks the truth
+    /// within its budget).
+    Undecided,
+}
+
+impl Judgement {
+    pub const ALL: [Judgement; 4] = [
+        Judgement::OursRight,
+        Judgement::OursWrong,
+        Judgement::Rounding,
+        Judgement::Undecided,
+    ];
+
+    /// From the truth's verdicts on our answer and on Embree's.
+    pub fn of(ours: Verdict, embree: Verdict) -> Judgement {
+        match (ours.is_wrong(), embree.is_wrong()) {
+            (false, true) => Judgement::OursRight,
+            (true, false) => Judgement::OursWrong,
+            (false, false) => Judgement::Rounding,
+            (true, true) => Judgement::Undecided,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Judgement::OursRight => "ours_right",
+            Judgement::OursWrong => "ours_wrong",
+            Judgement::Rounding => "rounding",
+            Judgement::Undecided => "undecided",
+        }
+    }
+
+    /// Whether `raylab verify` fails on it: ours wrong, and undecided (nobody has explained it).
+    pub fn fails(self) -> bool {
+        matches!(self, Judgement::OursWrong | Judgement::Undecided)
+    }
+}
+
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Agreement {
     Agree,
     Tie(Mismatch, Tie),
-    Unexplained(Mismatch),
+    /// Not a tie; judged by the f64 truth.
+    Unexplained(Mismatch, Judgement),
+}
+
+/// A disagreement no tie explains, not judged yet.
+fn unexplained(m: Mismatch) -> Agreement {
+    Agreement::Unexplained(m, Judgement::Undecided)
 }
 
 fn same_distance(a: f32, b: f32) -> bool {
@@ -73,7 +130,7 @@ fn same_distance(a: f32, b: f32) -> bool {
 /// origin). This decides for very short hits — a refracted ray leaving a glass box where it stands
 /// on the floor meets box and floor 1e-5 further on — where `same_distance`'s relative test asks
 /// for more precision than the coordinates carry.
-fn indistinguishable(mesh: &Mesh, ray: &Ray, a: &Hit, b: &Hit) -> bool {
+pub fn indistinguishable(mesh: &Mesh, ray: &Ray, a: &Hit, b: &Hit) -> bool {
     let scale = [a.prim, b.prim]
         .iter()
         .flat_map(|&p| mesh.triangles[p as usize].v)
@@ -136,7 +193,7 @@ fn one_sided(mesh: &Mesh, ray: &Ray, hit: &Hit, mismatch: Mismatch) -> Agreement
     } else if at_range_end(ray, hit) {
         Agreement::Tie(mismatch, Tie::RangeBoundary)
     } else {
-        Agreement::Unexplained(mismatch)
+        unexplained(mismatch)
     }
 }
 
@@ -213,7 +270,7 @@ pub fn occlusion(
                 Some(h) if at_range_end(ray, h) => {
                     Agreement::Tie(Mismatch::Occlusion, Tie::RangeBoundary)
                 }
-                _ => Agreement::Unexplained(Mismatch::Occlusion),
+                _ => unexplained(Mismatch::Occlusion),
             }
         }
         other => other,
@@ -322,21 +379,21 @@ mod tests {
         let r = down();
         assert_eq!(
             closest(&m, &r, &Hit::MISS, &hit(1.0, 0, 0.3, 0.3)),
-            Agreement::Unexplained(Mismatch::HitMiss)
+            unexplained(Mismatch::HitMiss)
         );
         assert_eq!(
             closest(&m, &r, &hit(2.0, 3, 0.3, 0.3), &hit(1.0, 0, 0.3, 0.3)),
-            Agreement::Unexplained(Mismatch::Primitive)
+            unexplained(Mismatch::Primitive)
         );
         // Flags differ while both closest hits agree: inconsistent occlusion.
         let h = hit(1.0, 0, 0.3, 0.3);
         assert_eq!(
             occlusion(&m, &r, false, true, &h, &h),
-            Agreement::Unexplained(Mismatch::Occlusion)
+            unexplained(Mismatch::Occlusion)
         );
         assert_eq!(
             occlusion(&m, &r, false, true, &Hit::MISS, &h),
-            Agreement::Unexplained(Mismatch::Occlusion)
+            unexplained(Mismatch::Occlusion)
         );
         assert_eq!(
             occlusion(&m, &r, true, true, &Hit::MISS, &h),

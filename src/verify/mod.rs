@@ -3,7 +3,11 @@
 //! under test and by Embree in robust mode, compared ray by ray. Disagreements that are ties —
 //! shared edges or vertices, coplanar triangles at the same distance, rays grazing an edge, hits on
 //! the boundary of the ray's interval — are classified and counted, never hidden; the rest are
-//! "unexplained", and any unexplained disagreement fails verification.
+//! "unexplained" by the ties, and the f64 ground truth (`truth`: every triangle tested in double
+//! precision) judges each of them (`Judgement`): ours right (Embree wrong), ours wrong (Embree
+//! right), both within rounding, or undecided (the truth contradicts both, or the disagreement
+//! lies past `TRUTH_BUDGET`). Verification fails on "ours wrong" and on "undecided"; the
+//! undecided rays are written to a ray file to replay with `raylab trace --rays`.
 
 pub mod compare;
 pub mod report;
@@ -19,8 +23,9 @@ use crate::render::specular::specular_rays;
 use crate::scene::{Frame, Mesh, Scene};
 use crate::tracers::batch::{trace_hits, trace_occlusion};
 use crate::tracers::{oracle_params, tracer_for_frame, Params, Tracer, ORACLE};
+use crate::verify::truth::Truth;
 
-pub use compare::{Agreement, Mismatch, Tie};
+pub use compare::{Agreement, Judgement, Mismatch, Tie};
 pub use report::{format_table, write_csv, KindReport, Tolerance};
 
 /// The verification batches of one frame: camera rays, and the shadow, diffuse, reflection and
@@ -69,9 +74,51 @@ impl BatchAnswers {
     }
 }
 
+/// Ray–triangle tests the f64 truth may spend judging one batch's disagreements (each costs one
+/// test per triangle of the mesh): 2³⁰, seconds on two cores. Past it, disagreements stay
+/// undecided, so a tracer wrong on every ray of a huge scene fails in seconds, not hours.
+pub const TRUTH_BUDGET: u64 = 1 << 30;
+
 /// Classifies every ray of `batch`: `tested`'s answer against `reference`'s, by occlusion for
-/// shadow rays and by closest hit otherwise.
+/// shadow rays and by closest hit otherwise; every disagreement the ties do not explain is judged
+/// by the f64 truth (the first ones of the batch, within `TRUTH_BUDGET`).
 pub fn classify(
+    mesh: &Mesh,
+    batch: &RayBatch,
+    tested: &BatchAnswers,
+    reference: &BatchAnswers,
+) -> Vec<Agreement> {
+    let mut agreements = compare_answers(mesh, batch, tested, reference);
+    let judged = (TRUTH_BUDGET / mesh.len().max(1) as u64).max(1) as usize;
+    let to_judge: Vec<usize> = (0..batch.len())
+        .filter(|&i| matches!(agreements[i], Agreement::Unexplained(..)))
+        .take(judged)
+        .collect();
+    let judgements: Vec<Judgement> = to_judge
+        .par_iter()
+        .map(|&i| {
+            let t = Truth::of(mesh, &batch.ray(i));
+            match (&tested.occluded, &reference.occluded) {
+                (Some(ours), Some(theirs)) => {
+                    Judgement::of(t.judge_occluded(ours[i]), t.judge_occluded(theirs[i]))
+                }
+                _ => Judgement::of(
+                    t.judge_closest(&tested.hits[i]),
+                    t.judge_closest(&reference.hits[i]),
+                ),
+            }
+        })
+        .collect();
+    for (&i, judgement) in to_judge.iter().zip(judgements) {
+        if let Agreement::Unexplained(m, _) = agreements[i] {
+            agreements[i] = Agreement::Unexplained(m, judgement);
+        }
+    }
+    agreements
+}
+
+/// `classify` short of the truth: agreements, ties, and disagreements left undecided.
+fn compare_answers(
     mesh: &Mesh,
     batch: &RayBatch,
     tested: &BatchAnswers,
@@ -112,6 +159,7 @@ pub fn compare_batches(
             let reference = BatchAnswers::of(oracle, batch);
             let agreements = classify(&frame.mesh, batch, &tested, &reference);
             KindReport::from_agreements(
+                &frame.mesh,
                 batch.kind(),
                 batch,
                 &agreements,
@@ -163,4 +211,87 @@ pub fn verify_rays(
         oracle.as_ref(),
         &batches,
     ))
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::Vec3;
+
+    use super::*;
+    use crate::geometry::{Ray, Triangle};
+
+    /// A hand-made crowded-needle disagreement: a needle 2 long and 2·10⁻³ wide 10⁻⁴ above the
+    /// rays' origins (prim 0) and a large triangle beyond it (prim 1). Each ray is given a pair of
+    /// answers no tie explains, and the f64 truth's judgement is the one worked out by hand.
+    #[test]
+    fn the_truth_judges_every_disagreement_no_tie_explains() {
+        let mut mesh = Mesh::default();
+        let z = 1e-4;
+        mesh.push(
+            Triangle::new(
+                Vec3::new(-1.0, -1e-3, z),
+                Vec3::new(1.0, -1e-3, z),
+                Vec3::new(1.0, 1e-3, z),
+            ),
+            0,
+        );
+        mesh.push(
+            Triangle::new(
+                Vec3::new(-5.0, -5.0, 1.0),
+                Vec3::new(5.0, -5.0, 1.0),
+                Vec3::new(0.0, 5.0, 1.0),
+            ),
+            0,
+        );
+        let up = |x: f32, y: f32| Ray::new(Vec3::new(x, y, 0.0), Vec3::Z, 0.0, f32::INFINITY);
+        let hit = |prim: u32, t: f32| Hit {
+            t,
+            prim,
+            u: 0.3,
+            v: 0.3,
+        };
+        // (ray, ours, Embree's, judgement). (0.5, 0) is 5·10⁻⁴ inside the needle, far beyond
+        // rounding: a certain hit. (0.5, −10⁻³) lies on its long edge: rounding decides.
+        let cases = [
+            (up(0.5, 0.0), Hit::MISS, hit(0, z), Judgement::OursWrong),
+            (up(0.5, 0.0), hit(0, z), Hit::MISS, Judgement::OursRight),
+            (up(0.5, 0.0), hit(0, z), hit(1, 1.0), Judgement::OursRight),
+            (up(0.5, -1e-3), hit(0, z), hit(1, 1.0), Judgement::Rounding),
+            (up(0.5, 0.0), Hit::MISS, hit(1, 1.0), Judgement::Undecided),
+        ];
+        let mut batch = RayBatch::new(RayKind::Diffuse);
+        for (i, (ray, ..)) in cases.iter().enumerate() {
+            batch.push(*ray, i as u32);
+        }
+        let answers = |pick: fn(&(Ray, Hit, Hit, Judgement)) -> Hit| BatchAnswers {
+            hits: cases.iter().map(pick).collect(),
+            occluded: None,
+        };
+        let (ours, embree) = (answers(|c| c.1), answers(|c| c.2));
+        let agreements = classify(&mesh, &batch, &ours, &embree);
+        for (i, (a, case)) in agreements.iter().zip(&cases).enumerate() {
+            assert!(
+                matches!(a, Agreement::Unexplained(_, j) if *j == case.3),
+                "ray {i}: {a:?}, expected {:?}",
+                case.3
+            );
+        }
+        // The report counts them, and fails on ours wrong and undecided only.
+        let report = KindReport::from_agreements(
+            &mesh,
+            RayKind::Diffuse,
+            &batch,
+            &agreements,
+            &ours.hits,
+            &embree.hits,
+        );
+        assert_eq!(Judgement::ALL.map(|j| report.judged(j)), [2, 1, 1, 1]);
+        assert_eq!((report.unexplained, report.failing()), (5, 2));
+        let tolerance = Tolerance {
+            max_unexplained: 2,
+            ..Tolerance::default()
+        };
+        assert!(report.passes(&tolerance));
+        assert!(!report.passes(&Tolerance::default()));
+    }
 }

@@ -1,18 +1,27 @@
-//! Per-ray-kind verification results: disagreement counts by class, distance-error percentiles,
-//! the tolerance they are judged against, and their CSV form.
+//! Per-ray-kind verification results: disagreement counts by class (ties by reason, the others by
+//! the f64 truth's judgement), distance-error percentiles, the tolerance they are judged against,
+//! and their CSV form, with the rays of the failing disagreements as a ray file to replay.
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::Path;
 
 use crate::error::{Error, Result};
-use crate::geometry::{Hit, RayBatch, RayKind};
-use crate::verify::compare::{at_range_end, Agreement, Mismatch, Tie};
+use crate::geometry::ray_file::{write_rays, RayFileFormat};
+use crate::geometry::{Hit, Ray, RayBatch, RayKind};
+use crate::scene::Mesh;
+use crate::verify::compare::{
+    at_range_end, indistinguishable, Agreement, Judgement, Mismatch, Tie, SAME_DISTANCE,
+};
+
+/// The ray file `write_csv` leaves beside the CSVs: the rays of every disagreement that fails
+/// (ours wrong or undecided), in batch order, for `raylab trace --rays` and `verify --rays`.
+pub const REPLAY_RAYS: &str = "failing.rays.csv";
 
 /// Pass/fail rule of `raylab verify`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Tolerance {
-    /// Unexplained disagreements allowed per ray kind.
+    /// Disagreements allowed per ray kind that the f64 truth calls ours wrong or cannot decide.
     pub max_unexplained: u64,
     /// Largest allowed 99th percentile of |t − t_embree| / t_embree over rays hitting the same triangle.
     pub max_distance_error_p99: f64,
@@ -32,6 +41,7 @@ impl Default for Tolerance {
 pub struct Disagreement {
     pub index: usize,
     pub pixel: u32,
+    pub ray: Ray,
     pub agreement: Agreement,
     pub tested: Hit,
     pub reference: Hit,
@@ -43,11 +53,20 @@ pub struct KindReport {
     pub rays: usize,
     pub mismatches: BTreeMap<Mismatch, u64>,
     pub ties: BTreeMap<Tie, u64>,
+    /// Disagreements no tie explains, …
     pub unexplained: u64,
+    /// … by the f64 truth's judgement.
+    pub judgements: BTreeMap<Judgement, u64>,
     /// Relative distance error percentiles (50, 90, 99, 99.9, 100) over same-triangle hits,
-    /// except those Embree finds at an end of the ray's interval: a ray starting on the triangle
-    /// hit at t = 0 there and 1e-7 here has a relative error of 1e31 that measures nothing.
+    /// except those Embree finds at an end of the ray's interval (a ray starting on the triangle
+    /// hit at t = 0 there and 1e-7 here has a relative error of 1e31 that measures nothing) and
+    /// `short_hits`.
     pub distance_error: [f64; 5],
+    /// Same-triangle hits left out of `distance_error`: more than `SAME_DISTANCE` apart
+    /// relatively but closer than the coordinates' precision (`compare::indistinguishable`, 16
+    /// ULPs of the largest coordinate involved). A diffuse ray leaving one needle for its
+    /// neighbour 10⁻⁴ away has a relative error of 10⁻³ from rounding alone.
+    pub short_hits: u64,
     pub disagreements: Vec<Disagreement>,
 }
 
@@ -55,6 +74,7 @@ pub const PERCENTILES: [f64; 5] = [50.0, 90.0, 99.0, 99.9, 100.0];
 
 impl KindReport {
     pub fn from_agreements(
+        mesh: &Mesh,
         kind: RayKind,
         batch: &RayBatch,
         agreements: &[Agreement],
@@ -67,7 +87,9 @@ impl KindReport {
             mismatches: BTreeMap::new(),
             ties: BTreeMap::new(),
             unexplained: 0,
+            judgements: BTreeMap::new(),
             distance_error: [0.0; 5],
+            short_hits: 0,
             disagreements: vec![],
         };
         for (i, a) in agreements.iter().enumerate() {
@@ -77,8 +99,9 @@ impl KindReport {
                     *report.ties.entry(tie).or_default() += 1;
                     m
                 }
-                Agreement::Unexplained(m) => {
+                Agreement::Unexplained(m, judgement) => {
                     report.unexplained += 1;
+                    *report.judgements.entry(judgement).or_default() += 1;
                     m
                 }
             };
@@ -86,21 +109,26 @@ impl KindReport {
             report.disagreements.push(Disagreement {
                 index: i,
                 pixel: batch.pixel[i],
+                ray: batch.ray(i),
                 agreement: *a,
                 tested: tested[i],
                 reference: reference[i],
             });
         }
-        let mut errors: Vec<f64> = (0..tested.len())
-            .filter(|&i| {
-                let (a, b) = (&tested[i], &reference[i]);
-                a.is_hit() && a.prim == b.prim && !at_range_end(&batch.ray(i), b)
-            })
-            .map(|i| {
-                let (a, b) = (&tested[i], &reference[i]);
-                ((a.t - b.t).abs() / b.t.abs().max(f32::MIN_POSITIVE)) as f64
-            })
-            .collect();
+        let mut errors: Vec<f64> = Vec::new();
+        for i in 0..tested.len() {
+            let (a, b) = (&tested[i], &reference[i]);
+            let ray = batch.ray(i);
+            if !a.is_hit() || a.prim != b.prim || at_range_end(&ray, b) {
+                continue;
+            }
+            let error = (a.t - b.t).abs() / b.t.abs().max(f32::MIN_POSITIVE);
+            if error > SAME_DISTANCE && indistinguishable(mesh, &ray, a, b) {
+                report.short_hits += 1;
+            } else {
+                errors.push(error as f64);
+            }
+        }
         errors.sort_by(f64::total_cmp);
         if !errors.is_empty() {
             for (slot, p) in report.distance_error.iter_mut().zip(PERCENTILES) {
@@ -119,8 +147,21 @@ impl KindReport {
         self.ties.get(&t).copied().unwrap_or(0)
     }
 
+    pub fn judged(&self, j: Judgement) -> u64 {
+        self.judgements.get(&j).copied().unwrap_or(0)
+    }
+
+    /// Disagreements that fail verification: ours wrong, or undecided.
+    pub fn failing(&self) -> u64 {
+        Judgement::ALL
+            .iter()
+            .filter(|j| j.fails())
+            .map(|&j| self.judged(j))
+            .sum()
+    }
+
     pub fn passes(&self, tol: &Tolerance) -> bool {
-        self.unexplained <= tol.max_unexplained
+        self.failing() <= tol.max_unexplained
             && self.distance_error[2] <= tol.max_distance_error_p99
     }
 }
@@ -137,22 +178,34 @@ fn agreement_name(a: &Agreement) -> String {
     match a {
         Agreement::Agree => "agree".into(),
         Agreement::Tie(m, t) => format!("{}:tie:{}", mismatch_name(*m), t.name()),
-        Agreement::Unexplained(m) => format!("{}:unexplained", mismatch_name(*m)),
+        Agreement::Unexplained(m, j) => format!("{}:unexplained:{}", mismatch_name(*m), j.name()),
     }
 }
 
-/// Human-readable table, one line per ray kind.
+/// Human-readable table, one line per ray kind: the disagreements no tie explains split by the
+/// f64 truth's judgement (ours right / ours wrong / both within rounding / undecided), then one
+/// line per undecided ray, so it can be replayed.
 pub fn format_table(reports: &[KindReport], tol: &Tolerance) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "{:<10} {:>9} {:>9} {:>9} {:>9} {:>6} {:>11} {:>10} {:>10}  verdict",
-        "kind", "rays", "hit/miss", "prim", "occl", "ties", "unexplained", "err p50", "err p99",
+        "{:<10} {:>9} {:>9} {:>9} {:>9} {:>6} {:>11} {:>23} {:>10} {:>10}  verdict",
+        "kind",
+        "rays",
+        "hit/miss",
+        "prim",
+        "occl",
+        "ties",
+        "unexplained",
+        "right/wrong/round/undec",
+        "err p50",
+        "err p99",
     );
     for r in reports {
+        let judged = Judgement::ALL.map(|j| r.judged(j).to_string()).join("/");
         let _ = writeln!(
             s,
-            "{:<10} {:>9} {:>9} {:>9} {:>9} {:>6} {:>11} {:>10.2e} {:>10.2e}  {}",
+            "{:<10} {:>9} {:>9} {:>9} {:>9} {:>6} {:>11} {:>23} {:>10.2e} {:>10.2e}  {}",
             r.kind.name(),
             r.rays,
             r.mismatch(Mismatch::HitMiss),
@@ -160,10 +213,32 @@ pub fn format_table(reports: &[KindReport], tol: &Tolerance) -> String {
             r.mismatch(Mismatch::Occlusion),
             r.ties.values().sum::<u64>(),
             r.unexplained,
+            judged,
             r.distance_error[0],
             r.distance_error[2],
             if r.passes(tol) { "ok" } else { "FAIL" }
         );
+    }
+    for r in reports {
+        for d in &r.disagreements {
+            if let Agreement::Unexplained(_, Judgement::Undecided) = d.agreement {
+                let (o, dir) = (d.ray.origin, d.ray.dir);
+                let _ = writeln!(
+                    s,
+                    "undecided {} ray {}: origin {:?} {:?} {:?}, dir {:?} {:?} {:?}, t [{:?}, {:?}]",
+                    r.kind.name(),
+                    d.index,
+                    o.x,
+                    o.y,
+                    o.z,
+                    dir.x,
+                    dir.y,
+                    dir.z,
+                    d.ray.tmin,
+                    d.ray.tmax
+                );
+            }
+        }
     }
     s
 }
@@ -186,7 +261,9 @@ pub fn write_csv(dir: &Path, scene: &str, tracer: &str, reports: &[KindReport]) 
     .to_vec();
     header.extend(Tie::ALL.iter().map(|t| format!("tie_{}", t.name())));
     header.push("unexplained".into());
+    header.extend(Judgement::ALL.iter().map(|j| j.name().to_string()));
     header.extend(PERCENTILES.iter().map(|p| format!("distance_error_p{p}")));
+    header.push("short_hits".into());
     w.write_record(&header).map_err(|e| fail(&path, e))?;
     for r in reports {
         let mut row = vec![
@@ -200,7 +277,9 @@ pub fn write_csv(dir: &Path, scene: &str, tracer: &str, reports: &[KindReport]) 
         ];
         row.extend(Tie::ALL.iter().map(|t| r.tie(*t).to_string()));
         row.push(r.unexplained.to_string());
+        row.extend(Judgement::ALL.iter().map(|&j| r.judged(j).to_string()));
         row.extend(r.distance_error.iter().map(|e| format!("{e:e}")));
+        row.push(r.short_hits.to_string());
         w.write_record(&row).map_err(|e| fail(&path, e))?;
     }
     w.flush()
@@ -242,7 +321,17 @@ pub fn write_csv(dir: &Path, scene: &str, tracer: &str, reports: &[KindReport]) 
         }
     }
     w.flush()
-        .map_err(|e| Error::runtime(format!("{}: {e}", path.display())))
+        .map_err(|e| Error::runtime(format!("{}: {e}", path.display())))?;
+
+    let mut replay = RayBatch::new(RayKind::Primary);
+    for r in reports {
+        for d in &r.disagreements {
+            if matches!(d.agreement, Agreement::Unexplained(_, j) if j.fails()) {
+                replay.push(d.ray, d.pixel);
+            }
+        }
+    }
+    write_rays(&dir.join(REPLAY_RAYS), replay.view(), RayFileFormat::Csv)
 }
 
 #[cfg(test)]
@@ -271,7 +360,13 @@ mod tests {
         }
         let tested = [hit(1e-7), hit(2.0), hit(1e-7)];
         let reference = [hit(0.0), hit(2.5), hit(-0.0)];
+        let mut mesh = Mesh::default();
+        mesh.push(
+            crate::geometry::Triangle::new(Vec3::X, Vec3::Y, Vec3::new(-1.0, -1.0, 0.0)),
+            0,
+        );
         let report = KindReport::from_agreements(
+            &mesh,
             RayKind::Diffuse,
             &batch,
             &[Agreement::Agree; 3],
@@ -281,6 +376,7 @@ mod tests {
         // Only the middle ray's error counts.
         assert_eq!(report.distance_error, [(0.5f32 / 2.5) as f64; 5]);
         let starts = KindReport::from_agreements(
+            &mesh,
             RayKind::Diffuse,
             &batch,
             &[Agreement::Agree; 3],
@@ -289,5 +385,18 @@ mod tests {
         );
         assert_eq!(starts.distance_error, [0.0; 5]);
         assert!(starts.passes(&Tolerance::default()));
+        // Hits 10⁻⁴ away that differ by 10⁻⁶ (1%, but under 16 ULPs of the unit coordinates,
+        // 1.9·10⁻⁶) are short hits, not distance errors; 10⁻⁵ apart (10%) they are errors.
+        let short = KindReport::from_agreements(
+            &mesh,
+            RayKind::Diffuse,
+            &batch,
+            &[Agreement::Agree; 3],
+            &[hit(1.01e-4), hit(1.1e-4), hit(2.0)],
+            &[hit(1e-4), hit(1e-4), hit(2.0)],
+        );
+        assert_eq!(short.short_hits, 1);
+        let expected = (1.1e-4f32 - 1e-4f32).abs() / 1e-4f32;
+        assert_eq!(short.distance_error[4], expected as f64);
     }
 }

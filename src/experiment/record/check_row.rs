@@ -18,6 +18,10 @@ pub const VERIFY_COLUMNS: &[&str] = &[
     "checked_rays",
     "ties",
     "unexplained",
+    "ours_right",
+    "ours_wrong",
+    "rounding",
+    "undecided",
 ];
 
 #[derive(Clone, Debug, PartialEq)]
@@ -32,6 +36,12 @@ pub struct CheckRow {
     /// Disagreements explained by a tie (see `verify::compare`).
     pub ties: u64,
     pub unexplained: u64,
+    /// The unexplained ones as the f64 truth judged them (`verify::Judgement`): ours right
+    /// (Embree wrong), ours wrong, both within rounding, undecided.
+    pub ours_right: u64,
+    pub ours_wrong: u64,
+    pub rounding: u64,
+    pub undecided: u64,
 }
 
 impl CheckRow {
@@ -46,6 +56,10 @@ impl CheckRow {
             self.checked_rays.to_string(),
             self.ties.to_string(),
             self.unexplained.to_string(),
+            self.ours_right.to_string(),
+            self.ours_wrong.to_string(),
+            self.rounding.to_string(),
+            self.undecided.to_string(),
         ]
     }
 
@@ -71,6 +85,10 @@ impl CheckRow {
             checked_rays: number("checked_rays")? as usize,
             ties: number("ties")?,
             unexplained: number("unexplained")?,
+            ours_right: number("ours_right")?,
+            ours_wrong: number("ours_wrong")?,
+            rounding: number("rounding")?,
+            undecided: number("undecided")?,
         })
     }
 }

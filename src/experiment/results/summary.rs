@@ -91,6 +91,12 @@ pub struct Checks {
     pub rays: u64,
     pub ties: u64,
     pub unexplained: u64,
+    /// The unexplained ones by the f64 truth's judgement (`verify::Judgement`); a verify.csv
+    /// written before the truth judged counts them all undecided.
+    pub ours_right: u64,
+    pub ours_wrong: u64,
+    pub rounding: u64,
+    pub undecided: u64,
 }
 
 impl Checks {
@@ -98,6 +104,15 @@ impl Checks {
         self.rays += other.rays;
         self.ties += other.ties;
         self.unexplained += other.unexplained;
+        self.ours_right += other.ours_right;
+        self.ours_wrong += other.ours_wrong;
+        self.rounding += other.rounding;
+        self.undecided += other.undecided;
+    }
+
+    /// Disagreements that fail verification: ours wrong or undecided.
+    fn failing(&self) -> u64 {
+        self.ours_wrong + self.undecided
     }
 }
 
@@ -324,11 +339,15 @@ impl Summary {
         let c = self.checked;
         let _ = writeln!(
             s,
-            "\nSampled check, every tracer of the run: {} rays compared with Embree, {} ties, {} unexplained disagreement{}.",
+            "\nSampled check, every tracer of the run: {} rays compared with Embree, {} ties, {} disagreement{} no tie explains, judged by the f64 truth: {} ours right, {} ours wrong, {} both within rounding, {} undecided.",
             c.rays,
             c.ties,
             c.unexplained,
-            plural(c.unexplained as usize)
+            plural(c.unexplained as usize),
+            c.ours_right,
+            c.ours_wrong,
+            c.rounding,
+            c.undecided
         );
         s
     }
@@ -364,9 +383,13 @@ fn checked(checks: Option<Checks>) -> String {
     match checks {
         None => "not checked".into(),
         Some(c) if c.unexplained == 0 => format!("yes: {} rays, {} ties", c.rays, c.ties),
+        Some(c) if c.failing() == 0 => format!(
+            "yes: {} rays, {} ties, {} ours right, {} within rounding",
+            c.rays, c.ties, c.ours_right, c.rounding
+        ),
         Some(c) => format!(
-            "**{} unexplained** of {} rays ({} ties)",
-            c.unexplained, c.rays, c.ties
+            "**{} ours wrong, {} undecided** of {} rays ({} ties, {} ours right, {} within rounding)",
+            c.ours_wrong, c.undecided, c.rays, c.ties, c.ours_right, c.rounding
         ),
     }
 }
@@ -434,10 +457,21 @@ fn read_checks(table: &Table) -> Result<BTreeMap<(GroupKey, ConfigKey), Checks>>
             table.text(i, "tracer").to_string(),
             table.text(i, "parameters").to_string(),
         );
+        let unexplained = table.required(i, "unexplained")?;
+        let judged = |column: &str| -> Result<Option<u64>> {
+            match table.rows[i].contains_key(column) {
+                true => table.required(i, column).map(Some),
+                false => Ok(None),
+            }
+        };
         checks.entry((group, config)).or_default().add(Checks {
             rays: table.required(i, "checked_rays")?,
             ties: table.required(i, "ties")?,
-            unexplained: table.required(i, "unexplained")?,
+            unexplained,
+            ours_right: judged("ours_right")?.unwrap_or(0),
+            ours_wrong: judged("ours_wrong")?.unwrap_or(0),
+            rounding: judged("rounding")?.unwrap_or(0),
+            undecided: judged("undecided")?.unwrap_or(unexplained),
         });
     }
     Ok(checks)
@@ -724,7 +758,11 @@ mod tests {
             Some(Checks {
                 rays: 8192,
                 ties: 3,
-                unexplained: 1
+                unexplained: 1,
+                ours_right: 0,
+                ours_wrong: 0,
+                rounding: 0,
+                undecided: 1,
             })
         );
         let embree = primary.embree_best.as_ref().unwrap();
@@ -738,7 +776,11 @@ mod tests {
             Checks {
                 rays: 12288,
                 ties: 3,
-                unexplained: 1
+                unexplained: 1,
+                ours_right: 0,
+                ours_wrong: 0,
+                rounding: 0,
+                undecided: 1,
             }
         );
 
@@ -749,13 +791,14 @@ mod tests {
             "**t** run R1 (2026-11-24T12:00:00Z), commit 0123456 (dirty), CPU X (2 logical cores)"
         );
         assert!(lines.contains(
-            &"| room (864 tris) | primary | packet lanes=16;packet=8 | 50.0 | 21.0 / 2.5 | embree16 (context coherent) | 100.0 | 0.50× | 25.0 | 20.0 | **1 unexplained** of 8192 rays (3 ties) |"
+            &"| room (864 tris) | primary | packet lanes=16;packet=8 | 50.0 | 21.0 / 2.5 | embree16 (context coherent) | 100.0 | 0.50× | 25.0 | 20.0 | **0 ours wrong, 1 undecided** of 8192 rays (3 ties, 0 ours right, 0 within rounding) |"
         ), "{md}");
         // No paper tracer on shadow rays; Embree's best was another configuration each frame.
         assert!(lines.contains(
             &"| room (864 tris) | shadow | — | — | — | embree1 (context incoherent) / embree16 (context coherent) | 100.0 | — | — | 10.0 | — |"
         ), "{md}");
-        assert!(md.contains("12288 rays compared with Embree, 3 ties, 1 unexplained disagreement."));
+        // verify.csv without the truth's columns (written before it judged): undecided.
+        assert!(md.contains("12288 rays compared with Embree, 3 ties, 1 disagreement no tie explains, judged by the f64 truth: 0 ours right, 0 ours wrong, 0 both within rounding, 1 undecided."), "{md}");
 
         // The JSON carries the same numbers and the directory.
         let json: serde_json::Value = serde_json::from_str(&summary.json(&dir)).unwrap();
@@ -782,7 +825,10 @@ mod tests {
             .unwrap()
             .markdown();
         assert!(md.contains("| × Embree best | obvhs Mrays/s | checked against Embree |\n|---|---|---|---:|---:|---|---:|---:|---:|---|\n"), "{md}");
-        assert!(md.contains("| 0.50× | 25.0 | **1 unexplained**"), "{md}");
+        assert!(
+            md.contains("| 0.50× | 25.0 | **0 ours wrong, 1 undecided**"),
+            "{md}"
+        );
     }
 
     #[test]

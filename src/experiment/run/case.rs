@@ -165,6 +165,10 @@ impl Case {
             checked_rays: checked.rays,
             ties: checked.ties,
             unexplained: checked.unexplained,
+            ours_right: checked.judged[0],
+            ours_wrong: checked.judged[1],
+            rounding: checked.judged[2],
+            undecided: checked.judged[3],
         })
     }
 }

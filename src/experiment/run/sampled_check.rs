@@ -1,7 +1,8 @@
 //! The sampled check of every run: a few aligned blocks of each measured ray batch, traced by the
 //! tracer instance and by the verification oracle (Embree, robust, high quality), compared ray by
 //! ray with the verifier's classification (`verify::classify`): disagreements that are ties
-//! (shared edges, grazed edges, range ends) are counted apart from unexplained ones. Cheap enough
+//! (shared edges, grazed edges, range ends) are counted apart from unexplained ones, which the f64
+//! truth judges (ours right, ours wrong, both within rounding, undecided). Cheap enough
 //! for every run (at most `SAMPLE_RAYS` rays per scene × frame × instance × ray kind), it says in
 //! the summary whether the numbers came from right answers. Written to verify.csv, so the summary
 //! can be recomputed from the results directory alone. The soft-shadow query is checked sample ray
@@ -12,7 +13,7 @@ use crate::geometry::RayBatch;
 use crate::scene::Mesh;
 use crate::tracers::batch::trace_hits;
 use crate::tracers::{Tracer, VisibilityQuery};
-use crate::verify::{classify, BatchAnswers, KindReport};
+use crate::verify::{classify, BatchAnswers, Judgement, KindReport};
 
 /// Rays checked per batch at most.
 pub const SAMPLE_RAYS: usize = 4 * BLOCK_RAYS;
@@ -26,6 +27,20 @@ pub struct Checked {
     pub rays: usize,
     pub ties: u64,
     pub unexplained: u64,
+    /// The unexplained ones by the f64 truth's judgement, in `Judgement::ALL` order: ours right,
+    /// ours wrong, both within rounding, undecided.
+    pub judged: [u64; 4],
+}
+
+impl Checked {
+    fn add(&mut self, other: Checked) {
+        self.rays += other.rays;
+        self.ties += other.ties;
+        self.unexplained += other.unexplained;
+        for (a, b) in self.judged.iter_mut().zip(other.judged) {
+            *a += b;
+        }
+    }
 }
 
 /// The rays checked of `batch`: all of it when small, else `SAMPLE_RAYS / BLOCK_RAYS` blocks of
@@ -68,6 +83,7 @@ pub fn tally(
 ) -> Checked {
     let agreements = classify(mesh, batch, tested, reference);
     let report = KindReport::from_agreements(
+        mesh,
         batch.kind(),
         batch,
         &agreements,
@@ -78,6 +94,7 @@ pub fn tally(
         rays: batch.len(),
         ties: report.ties.values().sum(),
         unexplained: report.unexplained,
+        judged: Judgement::ALL.map(|j| report.judged(j)),
     }
 }
 
@@ -126,10 +143,7 @@ pub fn check_visibility(
                 occluded: Some(flags),
             }
         };
-        let c = tally(mesh, &batch, &answers(tracer), &answers(oracle));
-        checked.rays += c.rays;
-        checked.ties += c.ties;
-        checked.unexplained += c.unexplained;
+        checked.add(tally(mesh, &batch, &answers(tracer), &answers(oracle)));
     }
     checked
 }
@@ -178,7 +192,8 @@ mod tests {
             Checked {
                 rays: SAMPLE_RAYS,
                 ties: 0,
-                unexplained: 0
+                unexplained: 0,
+                judged: [0; 4]
             }
         );
         let interior = |h: &Hit| h.is_hit() && h.u > 0.2 && h.v > 0.2 && h.u + h.v < 0.8;
@@ -195,6 +210,13 @@ mod tests {
         assert!(!wrong.hits[planted[0]].is_hit());
         let checked = tally(&frame.mesh, &batch, &wrong, &truth);
         assert_eq!((checked.unexplained, checked.ties), (7, 0));
+        // The f64 truth sees each planted miss as a certain hit missed: ours wrong, all 7.
+        assert_eq!(checked.judged, [0, 7, 0, 0]);
+        // The other way round, Embree is the one wrong.
+        assert_eq!(
+            tally(&frame.mesh, &batch, &truth, &wrong).judged,
+            [7, 0, 0, 0]
+        );
 
         // Shadow rays are judged by their occlusion flags.
         let mut shadow = batch.clone();
@@ -207,5 +229,6 @@ mod tests {
         }
         let checked = tally(&frame.mesh, &shadow, &wrong, &truth);
         assert_eq!(checked.unexplained, 7);
+        assert_eq!(checked.judged, [0, 7, 0, 0]);
     }
 }

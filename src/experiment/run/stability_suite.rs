@@ -1,13 +1,15 @@
 //! `raylab run` of an experiment with a `[stability]` table: the numerical stability suite
 //! (`verify::stability`) for every tracer instance of the file, written as stability.csv (one row
 //! per case, tracer and query), tables.md (per case kind and tracer: the sums over its sweep, and
-//! where anything went wrong, the rows themselves) and meta.json, all or nothing.
+//! where anything went wrong, the rows themselves) and meta.json, all or nothing. A speed cliff
+//! (`verify::stability::speed_cliffs`) fails the run (exit 1) after the results are written,
+//! naming each case.
 //!
 //! ```toml
 //! name = "stability"
 //! tracers = ["reference", { name = "packet", params = { traversal = ["masked", "ranged"] } }]
 //! [stability]
-//! cases = ["watertight", "ill_formed"]  # default: all seven (verify::stability::CaseKind)
+//! cases = ["watertight", "ill_formed"]  # default: all eight (verify::stability::CaseKind)
 //! offsets = [0, 1e3, 1e5, 1e6]          # distance from the origin
 //! scales = [1e-3, 1, 1e4]               # watertight mesh sizes
 //! ratios = [1e3, 1e4, 1e5, 1e6]         # scale range: enclosure / object
@@ -25,7 +27,7 @@ use crate::experiment::record::{results_dir, utc};
 use crate::experiment::run::{meta, runner};
 use crate::experiment::spec::config::{Experiment, StabilitySettings};
 use crate::experiment::spec::overrides::RunOverrides;
-use crate::verify::stability::{self, CaseKind, Contender, Outcome, Status};
+use crate::verify::stability::{self, CaseKind, Cliff, Contender, Outcome, Status};
 
 /// Runs the suite for every tracer instance of `exp` and writes the results directory.
 pub fn run(
@@ -56,15 +58,16 @@ pub fn run(
         cases.len() * contenders.len(),
         overrides.chatter != crate::experiment::spec::overrides::Chatter::Quiet,
     );
-    let outcomes = stability::run(cases, &contenders, settings.timeout, &|case, c| {
+    let mut outcomes = stability::run(cases, &contenders, settings.timeout, &|case, c| {
         progress.set_message(format!("{} {} {}", case.kind, case.variant, c.label));
         progress.inc(1);
     });
     progress.finish_and_clear();
+    let cliffs = stability::speed_cliffs(&mut outcomes);
 
     let dir = results.dir();
     write_csv(&dir.join(STABILITY_CSV), &outcomes)?;
-    let report = tables_md(&exp.name, &outcomes);
+    let report = tables_md(&exp.name, &outcomes) + &cliffs_md(&cliffs);
     overrides.chatter.say(summary(&outcomes).trim_end());
     let path = dir.join(TABLES_MD);
     std::fs::write(&path, report).map_err(|e| Error::io(&path, e))?;
@@ -78,7 +81,38 @@ pub fn run(
         overrides,
     );
     meta::write(dir, &meta)?;
-    results.commit()
+    let dir = results.commit()?;
+    if cliffs.is_empty() {
+        return Ok(dir);
+    }
+    let named: Vec<String> = cliffs.iter().map(cliff_name).collect();
+    Err(Error::runtime(format!(
+        "stability suite: {} speed cliff{} (> {}× reference and itself nearest the origin): {}; results: {}",
+        cliffs.len(),
+        if cliffs.len() == 1 { "" } else { "s" },
+        stability::CLIFF_RATIO,
+        named.join("; "),
+        dir.display()
+    )))
+}
+
+fn cliff_name(c: &Cliff) -> String {
+    format!(
+        "{} on {} {} at {:e}: {:.3} s, {:.0}× reference, {:.0}× itself",
+        c.tracer, c.kind, c.variant, c.magnitude, c.seconds, c.vs_reference, c.vs_origin
+    )
+}
+
+/// tables.md's speed-cliff section (empty without cliffs).
+fn cliffs_md(cliffs: &[Cliff]) -> String {
+    if cliffs.is_empty() {
+        return String::new();
+    }
+    let mut md = String::from("\n## Speed cliffs (failures)\n\n");
+    for c in cliffs {
+        let _ = writeln!(md, "- {}", cliff_name(c));
+    }
+    md
 }
 
 fn status(o: &Outcome) -> (&'static str, String) {
@@ -113,6 +147,7 @@ fn write_csv(path: &Path, outcomes: &[Outcome]) -> Result<()> {
         "unexplained_rounding",
         "unexplained_both_wrong",
         "seconds",
+        "relative_time",
         "slowdown",
     ])
     .map_err(fail)?;
@@ -142,6 +177,7 @@ fn write_csv(path: &Path, outcomes: &[Outcome]) -> Result<()> {
         ];
         row.extend(counts.iter().map(|c| c.to_string()));
         row.push(format!("{:.6}", o.seconds));
+        row.push(o.relative_time.map_or(String::new(), |r| format!("{r:.3}")));
         row.push(o.slowdown.map_or(String::new(), |s| format!("{s:.3}")));
         w.write_record(&row).map_err(fail)?;
     }
@@ -165,6 +201,7 @@ struct Totals {
     hangs: usize,
     refused: usize,
     worst_slowdown: Option<f64>,
+    worst_relative_time: Option<f64>,
 }
 
 impl Totals {
@@ -187,6 +224,9 @@ impl Totals {
         }
         if let Some(s) = o.slowdown {
             self.worst_slowdown = Some(self.worst_slowdown.map_or(s, |w: f64| w.max(s)));
+        }
+        if let Some(r) = o.relative_time {
+            self.worst_relative_time = Some(self.worst_relative_time.map_or(r, |w: f64| w.max(r)));
         }
     }
 
@@ -214,8 +254,13 @@ fn tables_md(name: &str, outcomes: &[Outcome]) -> String {
          ties, split by the f64 verdict: this tracer right / the oracle right / both within \
          rounding / both wrong. Closest-hit and occlusion answers are counted together; \
          crashes, hangs and refusals count (case, query) pairs. Slowdown: ill-formed case, time \
-         of the mixed batch over its good rays alone (worst over the sweep).\n",
-        crate::tracers::ORACLE
+         of the mixed batch over its good rays alone (worst over the sweep). Time / reference: \
+         closest-hit time over `reference`'s on the same case (worst over the sweep); over {}× \
+         it and over {}× the tracer's own time nearest the origin is a speed cliff, listed at the \
+         end and failing the run.\n",
+        crate::tracers::ORACLE,
+        stability::CLIFF_RATIO,
+        stability::CLIFF_RATIO
     );
     let by = totals(outcomes);
     for kind in CaseKind::ALL {
@@ -240,15 +285,15 @@ fn tables_md(name: &str, outcomes: &[Outcome]) -> String {
         let _ = write!(
             md,
             "\n## {kind} ({}: {})\n\n\
-             | tracer | rays | must hit | leaks | wrong | of which false hits | unexplained | tracer right / oracle right / rounding / both wrong | crashes | hangs | refused | slowdown |\n\
-             |---|---:|---:|---:|---:|---:|---:|---|---:|---:|---:|---:|\n",
+             | tracer | rays | must hit | leaks | wrong | of which false hits | unexplained | tracer right / oracle right / rounding / both wrong | crashes | hangs | refused | slowdown | time / reference |\n\
+             |---|---:|---:|---:|---:|---:|---:|---|---:|---:|---:|---:|---:|\n",
             kind.magnitude_name(),
             magnitudes.join(", ")
         );
         for (tracer, t) in rows {
             let _ = writeln!(
                 md,
-                "| {tracer} | {} | {} | {} | {} | {} | {} | {} / {} / {} / {} | {} | {} | {} | {} |",
+                "| {tracer} | {} | {} | {} | {} | {} | {} | {} / {} / {} / {} | {} | {} | {} | {} | {} |",
                 t.rays,
                 t.must_hit,
                 t.leaks,
@@ -263,6 +308,7 @@ fn tables_md(name: &str, outcomes: &[Outcome]) -> String {
                 t.hangs,
                 t.refused,
                 t.worst_slowdown.map_or("".into(), |s| format!("{s:.2}")),
+                t.worst_relative_time.map_or("".into(), |r| format!("{r:.2}")),
             );
         }
     }

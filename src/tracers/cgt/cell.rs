@@ -44,9 +44,10 @@ impl<const L: usize, S: Stats, O: CellObserver, const ANY: bool> Packet<'_, L, S
     #[inline]
     fn march_vertices(&self, id: u32) -> [[f32; 3]; 3] {
         let g = self.grid;
-        g.triangles[id as usize]
-            .v
-            .map(|p| self.frame.point((p - g.bounds.min) * g.inv_cell_size))
+        g.triangles[id as usize].v.map(|p| {
+            self.frame
+                .point((g.local(p) - g.bounds.min) * g.inv_cell_size)
+        })
     }
 }
 

@@ -26,7 +26,7 @@
 //! box is the intersection of the two, and culling uses both sets of planes.
 //!
 //! Rounding: each bound is widened by `eps`, a fixed fraction (2⁻¹⁵) of the largest magnitude in
-//! the computation (grid resolution, origins, slope × distance, world coordinates × cells per unit),
+//! the computation (grid resolution, origins, slope × distance, local coordinates × cells per unit),
 //! far above the few ulps by which a computed ray position or cell can differ from the grid
 //! builder's, so the frustum never loses a cell a ray passes through and culling never drops a
 //! triangle a ray hits.

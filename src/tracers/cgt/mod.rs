@@ -158,7 +158,7 @@ const CULL_MIN_RAYS: usize = 4;
 pub struct CgtTracer {
     grid: Arc<Grid>,
     config: CgtConfig,
-    /// Rounding scale of the world → grid transform (see `frustum`).
+    /// Rounding scale of the local → grid transform (see `frustum`).
     scale: f32,
     /// Lone rays (packets split down to one ray) take the single-ray 3D-DDA.
     dda: GridDdaTracer,
@@ -166,6 +166,7 @@ pub struct CgtTracer {
 
 impl CgtTracer {
     pub fn new(grid: Arc<Grid>, config: CgtConfig) -> Self {
+        // The grid's local coordinates: the world's magnitude no longer enters (`Grid::local`).
         let b = &grid.bounds;
         let world = b.min.abs().max(b.max.abs()).max_element();
         let res = grid.res.iter().copied().max().unwrap_or(1) as f32;

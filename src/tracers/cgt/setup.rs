@@ -164,14 +164,17 @@ impl CgtTracer {
             let o = Vec3::new(rays.ox[i], rays.oy[i], rays.oz[i]);
             let d = Vec3::new(rays.dx[i], rays.dy[i], rays.dz[i]);
             let (tmin, tmax) = (rays.tmin[i], rays.tmax[i]);
-            // `Ray::is_well_formed`, written branch-free, then the grid's box.
+            // `Ray::is_well_formed`, written branch-free, then the grid's box (in its local frame;
+            // the box is padded far beyond the translation's rounding).
             *usable = o.is_finite()
                 & d.is_finite()
                 & (d != Vec3::ZERO)
                 & tmin.is_finite()
                 & (tmin >= 0.0)
                 & (tmin < tmax)
-                & RayBoxTest::new(o, d).hit(bounds, tmin, tmax).is_some();
+                & RayBoxTest::new(self.grid.local(o), d)
+                    .hit(bounds, tmin, tmax)
+                    .is_some();
         }
         ws.group.clear();
         let inside = &ws.inside;
@@ -199,6 +202,9 @@ impl CgtTracer {
         let [o_k, o_u, o_v] = axes.map(|a| &g.origin[a][..n]);
         let [d_k, d_u, d_v] = axes.map(|a| &g.dir[a][..n]);
         let [lo_k, lo_u, lo_v] = axes.map(|a| grid.bounds.min[a]);
+        // Ray origins go to the grid's local frame first (`Grid::local`): one rounding of at most
+        // 2⁻²⁴ of the local coordinate, far inside the frustum's margin.
+        let [at_k, at_u, at_v] = axes.map(|a| grid.origin[a]);
         let [inv_k, inv_u, inv_v] = axes.map(|a| grid.inv_cell_size[a]);
         let [n_k, n_u, n_v] = axes.map(|a| grid.res[a] as f32);
         let (tmin, tmax) = (&g.tmin[..n], &g.tmax[..n]);
@@ -225,9 +231,9 @@ impl CgtTracer {
                 & (o_v[p] == first[2])
                 & (tmin[p] >= 0.0);
             let (g_k, g_u, g_v) = (
-                (o_k[p] - lo_k) * inv_k,
-                (o_u[p] - lo_u) * inv_u,
-                (o_v[p] - lo_v) * inv_v,
+                ((o_k[p] - at_k) - lo_k) * inv_k,
+                ((o_u[p] - at_u) - lo_u) * inv_u,
+                ((o_v[p] - at_v) - lo_v) * inv_v,
             );
             let (e_k, e_u, e_v) = (d_k[p] * inv_k, d_u[p] * inv_u, d_v[p] * inv_v);
             let (in_k, out_k) = slab(g_k, e_k, n_k);

@@ -1,6 +1,6 @@
 //! The stiff and extreme cases of the stability suite, generated (no files): each is a mesh, one
 //! batch of rays, and which rays must hit. Every case is swept over a magnitude (an offset from
-//! the origin, a scale ratio, a bounce count). Meshes stay small (≤ 5K triangles) so the f64
+//! the origin, a scale ratio, a bounce count). Meshes stay small (≤ 20K triangles) so the f64
 //! ground truth can test every ray against every triangle.
 
 use std::fmt;
@@ -23,10 +23,11 @@ pub enum CaseKind {
     AxisParallel,
     IllFormed,
     SelfIntersection,
+    NeedleFans,
 }
 
 impl CaseKind {
-    pub const ALL: [CaseKind; 7] = [
+    pub const ALL: [CaseKind; 8] = [
         CaseKind::Watertight,
         CaseKind::ScaleRange,
         CaseKind::Slivers,
@@ -34,6 +35,7 @@ impl CaseKind {
         CaseKind::AxisParallel,
         CaseKind::IllFormed,
         CaseKind::SelfIntersection,
+        CaseKind::NeedleFans,
     ];
 
     pub fn name(self) -> &'static str {
@@ -45,6 +47,7 @@ impl CaseKind {
             CaseKind::AxisParallel => "axis_parallel",
             CaseKind::IllFormed => "ill_formed",
             CaseKind::SelfIntersection => "self_intersection",
+            CaseKind::NeedleFans => "needle_fans",
         }
     }
 
@@ -72,7 +75,8 @@ impl fmt::Display for CaseKind {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Sweep {
     pub kinds: Vec<CaseKind>,
-    /// Offsets from the origin (watertight, slivers, grazing, axis-parallel, ill-formed).
+    /// Offsets from the origin (watertight, slivers, grazing, axis-parallel, ill-formed, needle
+    /// fans).
     pub offsets: Vec<f64>,
     /// Mesh scales of the watertight case.
     pub scales: Vec<f64>,
@@ -139,6 +143,9 @@ pub fn generate(sweep: &Sweep) -> Vec<Case> {
                 for surface in [Bouncing::Sphere, Bouncing::Coplanar] {
                     cases.extend(self_intersection(surface, sweep.bounces, seed));
                 }
+            }
+            CaseKind::NeedleFans => {
+                cases.extend(sweep.offsets.iter().map(|&o| needle_fans(o, seed)))
             }
         }
     }
@@ -359,6 +366,52 @@ fn leaving(mesh: &Mesh, ray: &Ray, rng: &mut SplitMix64) -> Option<Ray> {
         dir = -dir;
     }
     Some(Ray::new(origin, dir, 0.0, f32::INFINITY))
+}
+
+/// Fans of needles in a needle-fan case, and needles per fan: 20K triangles, as in issue 30.
+pub const NEEDLE_FANS: usize = 20;
+pub const NEEDLES_PER_FAN: usize = 1000;
+
+/// Crowded needle fans (issue 30): `NEEDLE_FANS` fans of `NEEDLES_PER_FAN` needle-thin triangles,
+/// each fan's needles sharing an apex and spreading little, the fans packed into `[-1, 1]³` (plus
+/// `offset`); one needle in four is a sliver whose third vertex lies 10⁻⁶ off its long edge. The
+/// rays are the diffuse bounce of the issue's scene: from the f64 hit of a ray into the crowd,
+/// pushed off by the renderer's own offset, into the hemisphere the ray came from — rays leaving
+/// one needle among thousands a few 10⁻⁴ away.
+fn needle_fans(offset: f64, seed: u64) -> Case {
+    let mut rng = SplitMix64::new(seed ^ 0xfa25);
+    let at = placed(offset, 1.0);
+    let mut tris = Vec::with_capacity(NEEDLE_FANS * NEEDLES_PER_FAN);
+    for _ in 0..NEEDLE_FANS {
+        let apex = rng.vec3(-1.0, 1.0);
+        let axis = rng.direction();
+        for i in 0..NEEDLES_PER_FAN {
+            let dir = (axis + rng.vec3(-0.05, 0.05)).normalize();
+            let tip = apex + dir * rng.range(0.5, 1.0);
+            let across = dir.any_orthonormal_vector();
+            let width = if i % 4 == 0 { 1e-6 } else { 1e-3 };
+            let side = across * width * rng.range(0.5, 1.0);
+            tris.push(Triangle::new(at(apex), at(tip), at(tip + side)));
+        }
+    }
+    let mesh = mesh_of(tris);
+    let centre = DVec3::splat(offset);
+    let rays: Vec<Ray> = (0..2048)
+        .filter_map(|_| {
+            let o = centre + rng.direction().as_dvec3() * 3.0;
+            let primary = towards(o, centre + rng.vec3(-1.0, 1.0).as_dvec3());
+            leaving(&mesh, &primary, &mut rng)
+        })
+        .collect();
+    let n = rays.len();
+    Case {
+        kind: CaseKind::NeedleFans,
+        variant: format!("{NEEDLE_FANS} fans x {NEEDLES_PER_FAN} needles, diffuse"),
+        magnitude: offset,
+        mesh,
+        rays: batch(&rays),
+        must_hit: vec![false; n],
+    }
 }
 
 /// An 8×8 tessellated square in z = 0 (plus `offset`): rays in its plane, along its shared
@@ -660,8 +713,8 @@ mod tests {
             for case in of_kind {
                 assert_eq!(case.must_hit.len(), case.rays.len());
                 let musts = case.must_hit.iter().filter(|&&m| m).count();
-                let expect_musts =
-                    !matches!(kind, CaseKind::Slivers) && !case.variant.contains("crushed");
+                let expect_musts = !matches!(kind, CaseKind::Slivers | CaseKind::NeedleFans)
+                    && !case.variant.contains("crushed");
                 assert_eq!(musts > 0, expect_musts, "{kind} {}", case.variant);
             }
         }
