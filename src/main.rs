@@ -178,8 +178,8 @@ enum Command {
         /// as closest-hit queries (row `primary`) and as occlusion queries (row `shadow`).
         #[arg(long, conflicts_with_all = ["resolution", "seed"])]
         rays: Option<PathBuf>,
-        /// Disagreements no tie explains that the f64 truth calls ours wrong or cannot decide,
-        /// allowed per ray kind (ours right and both-within-rounding never fail).
+        /// Disagreements no tie explains that the f64 truth calls ours wrong,
+        /// allowed per ray kind (ours right, both within rounding and undecided never fail).
         #[arg(long, default_value_t = 0)]
         max_unexplained: u64,
         /// Largest allowed 99th-percentile relative distance error.

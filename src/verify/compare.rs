@@ -102,8 +102,16 @@ impl Judgement {
         }
     }
 
-    /// Whether `raylab verify` fails on it: ours wrong, and undecided (nobody has explained it).
+    /// Whether `raylab verify` fails on it: only when the truth says ours is wrong. (Of a
+    /// tracer wrong everywhere, the first disagreements the truth's budget reaches are judged
+    /// ours wrong, so a budget that runs out still fails it.)
     pub fn fails(self) -> bool {
+        self == Judgement::OursWrong
+    }
+
+    /// Whether its ray goes to the replay file: the failing ones, and the undecided ones, which
+    /// a person has to look at.
+    pub fn replayed(self) -> bool {
         matches!(self, Judgement::OursWrong | Judgement::Undecided)
     }
 }

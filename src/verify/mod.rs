@@ -6,7 +6,7 @@
 //! "unexplained" by the ties, and the f64 ground truth (`truth`: every triangle tested in double
 //! precision) judges each of them (`Judgement`): ours right (Embree wrong), ours wrong (Embree
 //! right), both within rounding, or undecided (the truth contradicts both, or the disagreement
-//! lies past `TRUTH_BUDGET`). Verification fails on "ours wrong" and on "undecided"; the
+//! lies past `TRUTH_BUDGET`). Verification fails on "ours wrong" only; the failing and the
 //! undecided rays are written to a ray file to replay with `raylab trace --rays`.
 
 pub mod compare;
@@ -276,7 +276,7 @@ mod tests {
                 case.3
             );
         }
-        // The report counts them, and fails on ours wrong and undecided only.
+        // The report counts them, and fails on ours wrong only.
         let report = KindReport::from_agreements(
             &mesh,
             RayKind::Diffuse,
@@ -286,9 +286,9 @@ mod tests {
             &embree.hits,
         );
         assert_eq!(Judgement::ALL.map(|j| report.judged(j)), [2, 1, 1, 1]);
-        assert_eq!((report.unexplained, report.failing()), (5, 2));
+        assert_eq!((report.unexplained, report.failing()), (5, 1));
         let tolerance = Tolerance {
-            max_unexplained: 2,
+            max_unexplained: 1,
             ..Tolerance::default()
         };
         assert!(report.passes(&tolerance));

@@ -151,7 +151,7 @@ impl KindReport {
         self.judgements.get(&j).copied().unwrap_or(0)
     }
 
-    /// Disagreements that fail verification: ours wrong, or undecided.
+    /// Disagreements that fail verification: ours wrong.
     pub fn failing(&self) -> u64 {
         Judgement::ALL
             .iter()
@@ -326,7 +326,7 @@ pub fn write_csv(dir: &Path, scene: &str, tracer: &str, reports: &[KindReport]) 
     let mut replay = RayBatch::new(RayKind::Primary);
     for r in reports {
         for d in &r.disagreements {
-            if matches!(d.agreement, Agreement::Unexplained(_, j) if j.fails()) {
+            if matches!(d.agreement, Agreement::Unexplained(_, j) if j.replayed()) {
                 replay.push(d.ray, d.pixel);
             }
         }
