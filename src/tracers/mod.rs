@@ -2,10 +2,10 @@
 //! the benchmarks treat them alike. Adding a tracer is adding a file and one line in `registry.rs`.
 
 pub mod batch;
-pub mod cgt;
-pub mod dda;
+pub mod coherent_grid;
 pub mod embree;
-pub mod mft;
+pub mod grid_dda;
+pub mod multi_frusta;
 pub mod obvhs;
 pub mod packet;
 pub mod reference;

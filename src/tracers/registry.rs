@@ -11,15 +11,15 @@ use crate::geometry::{Hit, Rays};
 use crate::scene::{Frame, Mesh};
 use crate::stats::Counters;
 use crate::tracers::batch::CHUNK_RAYS;
-use crate::tracers::cgt::{CgtConfig, CgtTracer};
+use crate::tracers::coherent_grid::{CgtConfig, CgtTracer};
 use crate::tracers::embree::{
     Coherence, EmbreeTracer, Packets16, Packets4, Packets8, Single, Stream, Submission,
 };
-use crate::tracers::mft::{MftConfig, MftTracer};
+use crate::tracers::multi_frusta::{MftConfig, MftTracer};
 use crate::tracers::packet::{PacketConfig, PacketTracer};
 use crate::tracers::stream::{StreamConfig, StreamTracer};
 use crate::tracers::{
-    dda::GridDdaTracer, obvhs::ObvhsTracer, reference::ReferenceTracer, wide_single, Params,
+    grid_dda::GridDdaTracer, obvhs::ObvhsTracer, reference::ReferenceTracer, wide_single, Params,
     Tracer, VisibilityQuery,
 };
 
