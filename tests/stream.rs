@@ -496,7 +496,7 @@ fn bad_parameters_are_rejected() {
     // No motion blur: a moving tree is refused.
     let tri = two_leaf_tree().triangles;
     let moving = Bvh::build_moving(&tri, &tri, BvhConfig::default());
-    assert!(StreamTracer::from_params(Arc::new(moving), &Params::new()).is_err());
+    assert!(StreamTracer::over_static(Arc::new(moving), StreamConfig::default()).is_err());
 }
 
 /// The paper's trend (Tables 2 and 4): on coherent camera rays, longer initial streams give

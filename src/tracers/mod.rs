@@ -19,7 +19,8 @@ use crate::stats::{Counters, NoStats, Stats};
 
 pub use crate::params::Params;
 pub use registry::{
-    build_tracer, oracle_params, tracer_for_frame, tracer_for_mesh, TracerInfo, ORACLE, TRACERS,
+    build_tracer, make_tracer, oracle_params, tracer_for_frame, tracer_for_mesh, Role,
+    TracerConfig, TracerInfo, ORACLE, TRACERS,
 };
 pub use visibility::VisibilityQuery;
 

@@ -178,10 +178,6 @@ impl CgtTracer {
         }
     }
 
-    pub fn from_params(grid: Arc<Grid>, params: &Params) -> Result<Self> {
-        Ok(CgtTracer::new(grid, CgtConfig::from_params(params)?))
-    }
-
     /// The cells the packets of `rays` visit, packet by packet in visiting order (the closest-hit
     /// query's walk, hits written to `hits`); lone rays (DDA) add none.
     pub fn visited_cells(&self, rays: Rays<'_>, hits: &mut [Hit]) -> Vec<[u32; 3]> {

@@ -218,10 +218,6 @@ impl MftTracer {
         }
     }
 
-    pub fn from_params(bvh: Arc<Bvh>, params: &Params) -> Result<Self> {
-        Ok(Self::new(bvh, MftConfig::from_params(params)?))
-    }
-
     /// The rounding margins for `query`: scaled by the largest coordinate of the scene, the light
     /// and the points' origins.
     fn margins(&self, query: &VisibilityQuery<'_>) -> Margins {
