@@ -7,9 +7,10 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand};
 
 use raylab::error::{Error, Result};
-use raylab::experiment::results_dir::PendingResults;
-use raylab::experiment::shard::Shard;
-use raylab::experiment::summary::{Summary, SUMMARY_MD};
+use raylab::experiment::record::files::SUMMARY_MD;
+use raylab::experiment::record::results_dir::PendingResults;
+use raylab::experiment::results::summary::Summary;
+use raylab::experiment::spec::shard::Shard;
 use raylab::experiment::{run_experiment, Chatter, RunOverrides};
 use raylab::geometry::ray_file::{hits_csv, occlusion_csv, read_rays};
 use raylab::geometry::RayKind;
@@ -435,7 +436,8 @@ fn execute(command: Command) -> Result<bool> {
             markdown,
             output,
         } => {
-            let path = raylab::experiment::report::write(&dirs, markdown, output.as_deref())?;
+            let path =
+                raylab::experiment::results::report::write(&dirs, markdown, output.as_deref())?;
             println!("report: {}", path.display());
         }
         Command::Render {

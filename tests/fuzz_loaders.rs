@@ -18,7 +18,7 @@ use std::path::{Path, PathBuf};
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
 
-use raylab::experiment::config::Experiment;
+use raylab::experiment::Experiment;
 use raylab::random::SplitMix64;
 use raylab::scene::loaders::{
     parse_aff, parse_mtl, parse_nff, parse_obj, parse_ply, Files, LoadOptions,

@@ -149,6 +149,128 @@ fn no_module_imports_from_a_layer_above_it() {
     );
 }
 
+/// The rooms of `src/experiment/`, bottom first. A room may import its own modules and the rooms
+/// below it; `run` and `results` stand side by side and import neither each other nor anything
+/// above. The files beside the rooms (`experiment/mod.rs`, `merge.rs`) join them and may import
+/// any.
+const ROOMS: &[&[&str]] = &[&["record"], &["spec"], &["run", "results"]];
+const PEERS: &[&str] = &["run", "results"];
+
+fn room_rank(room: &str) -> Option<usize> {
+    ROOMS.iter().position(|r| r.contains(&room))
+}
+
+/// May a file of room `from` import room `to`?
+fn room_allowed(from: &str, to: &str) -> bool {
+    if from == to {
+        return true;
+    }
+    if PEERS.contains(&from) && PEERS.contains(&to) {
+        return false;
+    }
+    matches!((room_rank(from), room_rank(to)), (Some(f), Some(t)) if t < f)
+}
+
+/// Every room named after `crate::experiment::` or `super::super::` in `text`, with its line.
+fn room_imports(text: &str) -> Vec<(usize, String)> {
+    let code: Vec<&str> = text.lines().map(code_of).collect();
+    let mut found = Vec::new();
+    for (i, line) in code.iter().enumerate() {
+        for prefix in ["crate::experiment::", "super::super::"] {
+            for (pos, _) in line.match_indices(prefix) {
+                let rest = &line[pos + prefix.len()..];
+                let mut names: Vec<&str> = Vec::new();
+                match rest.strip_prefix('{') {
+                    Some(group) => names.extend(group.split([',', '}']).map(str::trim)),
+                    None => names.push(rest),
+                }
+                for name in names {
+                    let room: String = name
+                        .chars()
+                        .take_while(|c| c.is_alphanumeric() || *c == '_')
+                        .collect();
+                    if room_rank(&room).is_some() {
+                        found.push((i + 1, room));
+                    }
+                }
+            }
+        }
+    }
+    found
+}
+
+fn room_violations(file: &str, room: &str, text: &str) -> Vec<String> {
+    room_imports(text)
+        .into_iter()
+        .filter(|(_, to)| !room_allowed(room, to))
+        .map(|(line, to)| format!("{file}:{line}: experiment/{room} imports experiment/{to}"))
+        .collect()
+}
+
+#[test]
+fn the_experiment_rooms_import_only_downwards() {
+    let experiment = Path::new(env!("CARGO_MANIFEST_DIR")).join("src/experiment");
+    let mut found = Vec::new();
+    let mut checked = 0;
+    for room in ROOMS.iter().flat_map(|r| r.iter()) {
+        let mut files = Vec::new();
+        rust_files(&experiment.join(room), &mut files);
+        assert!(!files.is_empty(), "experiment/{room} has no files");
+        for path in &files {
+            let text = std::fs::read_to_string(path).unwrap();
+            let relative = path
+                .strip_prefix(&experiment)
+                .unwrap()
+                .display()
+                .to_string();
+            found.extend(room_violations(&relative, room, &text));
+            checked += 1;
+        }
+    }
+    // Every file of experiment/ is in a room but the two that join them.
+    let mut all = Vec::new();
+    rust_files(&experiment, &mut all);
+    let outside: Vec<String> = all
+        .iter()
+        .map(|p| p.strip_prefix(&experiment).unwrap().display().to_string())
+        .filter(|p| !p.contains('/'))
+        .collect();
+    for file in &outside {
+        assert!(
+            ["merge.rs", "mod.rs"].contains(&file.as_str()),
+            "experiment/{file} is in no room: move it into record/, spec/, run/ or results/"
+        );
+    }
+    assert!(checked > 20, "only {checked} files checked");
+    assert!(
+        found.is_empty(),
+        "imports across the experiment rooms:\n{}",
+        found.join("\n")
+    );
+}
+
+#[test]
+fn the_room_checker_refuses_upward_and_sideways_imports() {
+    let text = "use crate::experiment::record::files::RUNS_CSV;\n\
+                use crate::experiment::{spec::plan::Plan, results::plots};\n\
+                use super::super::run::runner::Case;\n";
+    assert_eq!(
+        room_imports(text),
+        [
+            (1, "record".to_string()),
+            (2, "spec".to_string()),
+            (2, "results".to_string()),
+            (3, "run".to_string()),
+        ]
+    );
+    assert_eq!(
+        room_violations("results/x.rs", "results", text),
+        ["results/x.rs:3: experiment/results imports experiment/run"]
+    );
+    assert_eq!(room_violations("spec/x.rs", "spec", text).len(), 2);
+    assert_eq!(room_violations("record/x.rs", "record", text).len(), 3);
+}
+
 #[test]
 fn the_checker_finds_imports_in_paths_groups_and_code() {
     let text = "use crate::geometry::Ray;\n\

@@ -5,7 +5,7 @@
 
 use std::path::{Path, PathBuf};
 
-use raylab::experiment::summary::Summary;
+use raylab::experiment::results::summary::Summary;
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))

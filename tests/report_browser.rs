@@ -10,7 +10,7 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use raylab::experiment::report;
+use raylab::experiment::results::report;
 use raylab::experiment::{run_experiment, RunOverrides};
 
 const EXPERIMENT: &str = "name = \"browser\"\nscenes = [{ name = \"room\", size = 1 }]\n\

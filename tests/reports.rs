@@ -5,7 +5,7 @@
 
 use std::path::{Path, PathBuf};
 
-use raylab::experiment::report::{markdown, Results, REPORT_MD};
+use raylab::experiment::results::report::{markdown, Results, REPORT_MD};
 
 fn reports(dir: &Path, found: &mut Vec<PathBuf>) {
     for entry in std::fs::read_dir(dir).unwrap() {

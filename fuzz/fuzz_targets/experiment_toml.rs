@@ -3,7 +3,7 @@
 use std::path::Path;
 
 use libfuzzer_sys::fuzz_target;
-use raylab::experiment::config::Experiment;
+use raylab::experiment::Experiment;
 
 fuzz_target!(|data: &[u8]| {
     let _ = Experiment::parse(Path::new("fuzz.toml"), &String::from_utf8_lossy(data));

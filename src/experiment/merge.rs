@@ -1,11 +1,12 @@
 //! `raylab merge DIR…`: joins the results directories of a sharded sweep (`raylab run --shard i/n`,
 //! see `shard`) into one results directory with the rows, plots and tables an unsharded run
-//! writes. Each shard keeps its measurements as `cases.json`; the merge checks that every shard
-//! comes from the same sweep (`shard::sweep_key`) and that each of 0…n−1 is given exactly once,
-//! re-derives the plan from the experiment file recorded in meta.json, orders the cases as the
-//! unsharded runner would (scene, frame, tracer instance) and writes every output from them — so
-//! the `embree_best_*` columns compare against the fastest Embree row of the whole sweep, whichever
-//! shard measured it. Written whole or not at all, like a run.
+//! writes. Each shard keeps its measurements as rows (runs.csv, histograms.csv, verify.csv); the
+//! merge checks that every shard comes from the same sweep (`shard::sweep_key`) and that each of
+//! 0…n−1 is given exactly once, re-derives the plan from the experiment file recorded in
+//! meta.json, reads the rows back, orders them as the unsharded runner would (scene, frame, tracer
+//! instance), fills the `embree_best_*` columns again from the whole sweep's Embree rows (whichever
+//! shard measured them) and writes every output from the rows. Written whole or not at all, like
+//! a run.
 
 use std::path::{Path, PathBuf};
 
@@ -13,24 +14,19 @@ use serde_json::Value;
 
 use crate::error::{Error, Result};
 
-use super::config::Experiment;
-use super::meta::{self, MergedShard, META_JSON};
-use super::plan::{Plan, SceneLoader};
-use super::runner::{Case, Traced};
-use super::shard::{Part, Shard, ShardMeta, CASES_JSON};
-use super::{plots, results_dir, utc, write_outputs, write_summary, RunOverrides};
-
-/// Writes a shard's cases as JSON (floats written so they read back bit for bit).
-pub fn write_cases(path: &Path, cases: &[Case]) -> Result<()> {
-    let json = serde_json::to_string(cases)
-        .map_err(|e| Error::runtime(format!("{}: {e}", path.display())))?;
-    std::fs::write(path, json + "\n").map_err(|e| Error::io(path, e))
-}
-
-fn read_cases(path: &Path) -> Result<Vec<Case>> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-    serde_json::from_str(&text).map_err(|e| Error::input(path, Some(e.line()), e.to_string()))
-}
+use super::record::csv_file::read_typed;
+use super::record::files::META_JSON;
+use super::record::files::{HISTOGRAMS_CSV, RUNS_CSV, VERIFY_CSV};
+use super::record::{results_dir, utc};
+use super::record::{CheckRow, HistogramRow, Records, RunRow};
+use super::results::embree_best;
+use super::results::plots;
+use super::run::meta::{self, MergedShard};
+use super::spec::config::Experiment;
+use super::spec::overrides::RunOverrides;
+use super::spec::plan::{Plan, SceneLoader};
+use super::spec::shard::{Part, Shard, ShardMeta};
+use super::{write_outputs, write_summary};
 
 /// One shard's results directory, as read from its meta.json.
 struct ShardDir {
@@ -152,7 +148,7 @@ pub fn merge(dirs: &[PathBuf], output: Option<&Path>, load: SceneLoader) -> Resu
     plots::register_font()?;
     let started = utc::UtcTime::now();
     let plan = Plan::derive(&exp, load)?;
-    let mut cases = Vec::new();
+    let mut records = Keyed::default();
     for s in &shards {
         let expected = Part::of(
             &plan,
@@ -172,25 +168,59 @@ pub fn merge(dirs: &[PathBuf], output: Option<&Path>, load: SceneLoader) -> Resu
                 expected
             )));
         }
-        let path = s.dir.join(CASES_JSON);
-        let shard_cases = read_cases(&path)?;
-        if let Some(bad) = shard_cases
-            .iter()
-            .find(|c| !fits(c, &plan) || !s.shard.units.contains(&(c.scene, c.instance)))
-        {
-            return Err(Error::input(
-                &path,
-                None,
-                format!(
-                    "a case outside the shard's units of the plan: scene {}, instance {}, frame {}",
-                    bad.scene, bad.instance, bad.frame
-                ),
-            ));
+        let shard_records = Records {
+            runs: read_typed(&s.dir.join(RUNS_CSV), RunRow::parse)?,
+            histograms: read_typed(&s.dir.join(HISTOGRAMS_CSV), HistogramRow::parse)?,
+            checks: read_typed(&s.dir.join(VERIFY_CSV), CheckRow::parse)?,
+        };
+        let unit_of = |path: &str, scene: &str, triangles, tracer: &str, parameters: &str| {
+            let unit = plan
+                .scene_of(scene, triangles)
+                .zip(plan.instance_of(tracer, parameters));
+            unit.filter(|u| s.shard.units.contains(u)).ok_or_else(|| {
+                Error::input(
+                    s.dir.join(path),
+                    None,
+                    format!(
+                        "a row outside the shard's units of the plan: scene {scene}, \
+                         tracer {tracer} {parameters}"
+                    ),
+                )
+            })
+        };
+        for r in shard_records.runs {
+            let (scene, instance) = unit_of(
+                RUNS_CSV,
+                &r.scene,
+                Some(r.triangles),
+                &r.tracer,
+                &r.parameters,
+            )?;
+            records.runs.push(((scene, r.frame, instance), r));
         }
-        cases.extend(shard_cases);
+        for h in shard_records.histograms {
+            let (scene, instance) =
+                unit_of(HISTOGRAMS_CSV, &h.scene, None, &h.tracer, &h.parameters)?;
+            records.histograms.push(((scene, h.frame, instance), h));
+        }
+        for c in shard_records.checks {
+            let (scene, instance) = unit_of(
+                VERIFY_CSV,
+                &c.scene,
+                Some(c.triangles),
+                &c.tracer,
+                &c.parameters,
+            )?;
+            records.checks.push(((scene, c.frame, instance), c));
+        }
     }
     // The unsharded runner's order; stable, so each (scene, frame, instance) keeps its order.
-    cases.sort_by_key(|c| (c.scene, c.frame, c.instance));
+    let mut records = Records {
+        runs: in_order(records.runs),
+        histograms: in_order(records.histograms),
+        checks: in_order(records.checks),
+    };
+    embree_best::fill(&plan, &mut records.runs);
     let commits: Vec<String> = shards.iter().map(|s| s.text("/commit/hash")).collect();
     if commits.iter().any(|c| *c != commits[0]) {
         eprintln!(
@@ -200,7 +230,7 @@ pub fn merge(dirs: &[PathBuf], output: Option<&Path>, load: SceneLoader) -> Resu
     }
 
     let results = results_dir::PendingResults::create(&exp.output, &exp.name, &started.compact())?;
-    write_outputs(results.dir(), &exp, &plan, &cases)?;
+    write_outputs(results.dir(), &exp, &plan, &records)?;
     let mut meta = meta::gather(
         &plan.experiment,
         Some(&plan),
@@ -227,17 +257,21 @@ pub fn merge(dirs: &[PathBuf], output: Option<&Path>, load: SceneLoader) -> Resu
     results.commit()
 }
 
-/// Whether a case's indices exist in `plan` (a cases.json from another plan could name others).
-fn fits(case: &Case, plan: &Plan) -> bool {
-    let traced = match case.traced {
-        Traced::Batch(_) => true,
-        Traced::File(f) => f < plan.ray_files.len(),
-        Traced::Render { render, .. } | Traced::Frame { render } => render < plan.renders.len(),
-    };
-    traced
-        && case.scene < plan.scenes.len()
-        && case.instance < plan.instances.len()
-        && case.frame < plan.frames
+/// (scene, frame, tracer instance): the unsharded runner's order.
+type Key = (usize, usize, usize);
+
+/// Every shard's rows, each with its key.
+#[derive(Default)]
+struct Keyed {
+    runs: Vec<(Key, RunRow)>,
+    histograms: Vec<(Key, HistogramRow)>,
+    checks: Vec<(Key, CheckRow)>,
+}
+
+/// The rows sorted by key (stably: a case's rows keep their order).
+fn in_order<T>(mut rows: Vec<(Key, T)>) -> Vec<T> {
+    rows.sort_by_key(|(key, _)| *key);
+    rows.into_iter().map(|(_, row)| row).collect()
 }
 
 #[cfg(test)]
@@ -246,8 +280,9 @@ mod tests {
     use std::fs;
 
     use super::*;
-    use crate::experiment::plan::tests::load_quads;
-    use crate::experiment::{output, run, tables::TABLES_MD};
+    use crate::experiment::record::files::TABLES_MD;
+    use crate::experiment::run;
+    use crate::experiment::spec::plan::tests::load_quads;
 
     const TEXT: &str = "name = \"m\"\nscenes = [\"lit\", \"dark\", \"moving\"]\n\
         tracers = [\"reference\", \"obvhs\", \"embree1\", \"embree16\"]\n\
@@ -292,7 +327,7 @@ mod tests {
     }
 
     fn rows(path: &Path) -> Vec<BTreeMap<String, String>> {
-        crate::experiment::selection::read_rows(path).unwrap()
+        crate::experiment::record::selection::read_rows(path).unwrap()
     }
 
     fn files(dir: &Path) -> BTreeSet<String> {
@@ -314,15 +349,14 @@ mod tests {
                 )
             })
             .to_vec();
-        // A shard writes its cases and rows, not plots or tables of a part.
-        assert!(files(&shards[0]).contains(CASES_JSON));
+        // A shard writes its rows, not plots or tables of a part.
+        for file in [RUNS_CSV, HISTOGRAMS_CSV, VERIFY_CSV] {
+            assert!(files(&shards[0]).contains(file));
+        }
         assert!(!files(&shards[0]).contains(TABLES_MD));
         let merged = merge(&shards, Some(&out.join("merged")), &load_quads).unwrap();
 
-        let (a, b) = (
-            rows(&whole.join(output::RUNS_CSV)),
-            rows(&merged.join(output::RUNS_CSV)),
-        );
+        let (a, b) = (rows(&whole.join(RUNS_CSV)), rows(&merged.join(RUNS_CSV)));
         // 3 scenes × 2 frames × 4 tracers × 2 threads × (3, 2, 3 ray kinds).
         assert_eq!(a.len(), 2 * 4 * 2 * 8);
         assert_eq!(a.len(), b.len());
@@ -335,8 +369,8 @@ mod tests {
             assert_eq!(untimed(x), untimed(y));
         }
         assert_eq!(
-            fs::read(whole.join(output::HISTOGRAMS_CSV)).unwrap(),
-            fs::read(merged.join(output::HISTOGRAMS_CSV)).unwrap()
+            fs::read(whole.join(HISTOGRAMS_CSV)).unwrap(),
+            fs::read(merged.join(HISTOGRAMS_CSV)).unwrap()
         );
         assert_eq!(
             fs::read_to_string(whole.join(TABLES_MD)).unwrap(),
@@ -374,7 +408,7 @@ mod tests {
         assert_eq!(merged_meta["merged_from"].as_array().unwrap().len(), 3);
         assert_eq!(merged_meta["merged_from"][1]["shard"], "1/3");
         // Reports show where each part was measured.
-        let facts = crate::experiment::report::Results::read(&merged)
+        let facts = crate::experiment::results::report::Results::read(&merged)
             .unwrap()
             .facts();
         let (_, parts) = facts

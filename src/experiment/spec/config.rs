@@ -107,8 +107,8 @@ use crate::tracers::visibility::LightSamples;
 use crate::tracers::{Params, TracerInfo, TRACERS};
 use crate::verify::stability::{CaseKind, Sweep};
 
-use super::figures::FigureSpec;
-use super::tables::TableSpec;
+use super::figure_spec::FigureSpec;
+use super::table_spec::TableSpec;
 
 /// A parsed, checked experiment with its tracer grid expanded.
 #[derive(Clone, Debug)]

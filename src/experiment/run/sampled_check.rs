@@ -8,31 +8,11 @@
 //! by sample ray (`check_visibility`); render workloads are not checked here (`raylab verify`
 //! checks tracers fully).
 
-use std::path::Path;
-
-use crate::error::{Error, Result};
 use crate::geometry::RayBatch;
 use crate::scene::Mesh;
 use crate::tracers::batch::trace_hits;
 use crate::tracers::{Tracer, VisibilityQuery};
 use crate::verify::{classify, BatchAnswers, KindReport};
-
-use super::plan::Plan;
-use super::runner::Case;
-
-pub const VERIFY_CSV: &str = "verify.csv";
-
-pub const VERIFY_COLUMNS: &[&str] = &[
-    "scene",
-    "triangles",
-    "frame",
-    "tracer",
-    "parameters",
-    "ray_kind",
-    "checked_rays",
-    "ties",
-    "unexplained",
-];
 
 /// Rays checked per batch at most.
 pub const SAMPLE_RAYS: usize = 4 * BLOCK_RAYS;
@@ -41,7 +21,7 @@ pub const SAMPLE_RAYS: usize = 4 * BLOCK_RAYS;
 pub const BLOCK_RAYS: usize = 1024;
 
 /// What the check of one batch found.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Checked {
     pub rays: usize,
     pub ties: u64,
@@ -152,32 +132,6 @@ pub fn check_visibility(
         checked.unexplained += c.unexplained;
     }
     checked
-}
-
-/// verify.csv: one row per checked case.
-pub fn write_verify(path: &Path, plan: &Plan, cases: &[Case]) -> Result<()> {
-    let fail = |e: csv::Error| Error::input(path, None, e.to_string());
-    let mut w = csv::Writer::from_path(path).map_err(fail)?;
-    w.write_record(VERIFY_COLUMNS).map_err(fail)?;
-    for case in cases {
-        let Some(checked) = case.checked else {
-            continue;
-        };
-        let instance = &plan.instances[case.instance];
-        w.write_record([
-            plan.scenes[case.scene].name.clone(),
-            case.triangles.to_string(),
-            case.frame.to_string(),
-            instance.tracer.clone(),
-            instance.params.to_string(),
-            case.traced.kind_name(plan),
-            checked.rays.to_string(),
-            checked.ties.to_string(),
-            checked.unexplained.to_string(),
-        ])
-        .map_err(fail)?;
-    }
-    w.flush().map_err(|e| Error::io(path, e))
 }
 
 #[cfg(test)]

@@ -7,12 +7,11 @@ use std::process::Command;
 
 use serde::Serialize;
 
-use super::plan::Plan;
-use super::shard::ShardMeta;
-use super::utc::UtcTime;
-use super::RunOverrides;
-
-pub const META_JSON: &str = "meta.json";
+use crate::experiment::record::files::META_JSON;
+use crate::experiment::record::utc::UtcTime;
+use crate::experiment::spec::overrides::RunOverrides;
+use crate::experiment::spec::plan::Plan;
+use crate::experiment::spec::shard::ShardMeta;
 
 #[derive(Debug, Serialize)]
 pub struct Meta<'a> {
@@ -204,7 +203,7 @@ fn features_compiled() -> Vec<&'static str> {
 }
 
 /// The lock file the binary was built with: the exact versions of its dependencies.
-const CARGO_LOCK: &str = include_str!("../../Cargo.lock");
+const CARGO_LOCK: &str = include_str!("../../../Cargo.lock");
 
 /// The locked version of `package`, if it is a dependency.
 fn locked_version(lock: &str, package: &str) -> Option<String> {

@@ -13,9 +13,9 @@ use plotters::style::FontStyle;
 use crate::error::{Error, Result};
 use crate::geometry::RayKind;
 
-use super::output::mrays_per_s;
-use super::plan::Plan;
-use super::runner::{Case, Traced};
+use crate::experiment::record::run_row::mrays_per_s;
+use crate::experiment::record::{HistogramRow, RunRow};
+use crate::experiment::spec::plan::Plan;
 
 const FONT_PATH: &str = "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf";
 pub const FONT: &str = "sans-serif";
@@ -90,13 +90,18 @@ pub(super) fn scene_stem(plan: &Plan, scene: usize) -> String {
 }
 
 /// Draws every plot of the run into `dir`; returns the files written.
-pub fn write_plots(dir: &Path, plan: &Plan, cases: &[Case]) -> Result<Vec<PathBuf>> {
+pub fn write_plots(
+    dir: &Path,
+    plan: &Plan,
+    rows: &[RunRow],
+    histograms: &[HistogramRow],
+) -> Result<Vec<PathBuf>> {
     register_font()?;
     let mut written = Vec::new();
     // Plots of the ray batches; a scene with render workloads only has none.
     for scene in (0..plan.scenes.len()).filter(|&s| !plan.scenes[s].ray_kinds.is_empty()) {
         let path = dir.join(format!("throughput_{}.png", scene_stem(plan, scene)));
-        throughput(&path, plan, scene, cases).map_err(|e| plot_error(&path, e))?;
+        throughput(&path, plan, scene, rows).map_err(|e| plot_error(&path, e))?;
         written.push(path);
         for (i, instance) in plan
             .instances
@@ -109,7 +114,8 @@ pub fn write_plots(dir: &Path, plan: &Plan, cases: &[Case]) -> Result<Vec<PathBu
                 scene_stem(plan, scene),
                 file_stem(&instance.label)
             ));
-            depth_histograms(&path, plan, scene, i, cases).map_err(|e| plot_error(&path, e))?;
+            depth_histograms(&path, plan, scene, i, rows, histograms)
+                .map_err(|e| plot_error(&path, e))?;
             written.push(path);
         }
     }
@@ -133,29 +139,33 @@ pub(super) fn significant(v: f64, trim: bool) -> String {
     }
 }
 
+/// Whether `row` measured instance `instance` of `plan` on a batch of `kind` of scene `scene`
+/// (not a batch of a rendered frame).
+fn is_batch(plan: &Plan, row: &RunRow, scene: usize, instance: usize, kind: RayKind) -> bool {
+    row.render.is_none()
+        && row.ray_kind == kind.name()
+        && plan.scene_of(&row.scene, Some(row.triangles)) == Some(scene)
+        && plan.instance_of(&row.tracer, &row.parameters) == Some(instance)
+}
+
 /// Mrays/s over all frames (total rays / total fastest-pass seconds) of one instance, ray kind
 /// and thread count.
 fn throughput_over_frames(
-    cases: &[Case],
+    plan: &Plan,
+    rows: &[RunRow],
     scene: usize,
     instance: usize,
     kind: RayKind,
     threads: usize,
 ) -> Option<f64> {
-    let (rays, seconds) = cases
+    let (rays, seconds) = rows
         .iter()
-        .filter(|c| c.scene == scene && c.instance == instance && c.traced == Traced::Batch(kind))
-        .flat_map(|c| {
-            c.timings
-                .iter()
-                .filter(|t| t.threads == threads)
-                .map(move |t| (c.rays, t.seconds_min))
-        })
-        .fold((0, 0.0), |(r, s), (rays, secs)| (r + rays, s + secs));
+        .filter(|r| r.threads == threads && is_batch(plan, r, scene, instance, kind))
+        .fold((0, 0.0), |(n, s), r| (n + r.rays, s + r.seconds_min));
     mrays_per_s(rays, seconds)
 }
 
-fn throughput(path: &Path, plan: &Plan, scene: usize, cases: &[Case]) -> PlotResult {
+fn throughput(path: &Path, plan: &Plan, scene: usize, runs: &[RunRow]) -> PlotResult {
     let kinds = &plan.scenes[scene].ray_kinds;
     let group = kinds.len() + 1; // bars of one instance, then a blank row
     let rows = (plan.instances.len() * group - 1) as i32;
@@ -184,7 +194,7 @@ fn throughput(path: &Path, plan: &Plan, scene: usize, cases: &[Case]) -> PlotRes
             .flat_map(|i| {
                 kinds.iter().enumerate().map(move |(k, &kind)| {
                     let mrays =
-                        throughput_over_frames(cases, scene, i, kind, threads).unwrap_or(0.0);
+                        throughput_over_frames(plan, runs, scene, i, kind, threads).unwrap_or(0.0);
                     (y_of(i * group + k), kind, mrays)
                 })
             })
@@ -267,28 +277,30 @@ fn throughput(path: &Path, plan: &Plan, scene: usize, cases: &[Case]) -> PlotRes
 
 /// Per-depth AABB and triangle tests per ray of one instance and ray kind, over all frames.
 fn tests_per_ray_by_depth(
-    cases: &[Case],
+    plan: &Plan,
+    (rows, histograms): (&[RunRow], &[HistogramRow]),
     scene: usize,
     instance: usize,
     kind: RayKind,
 ) -> (Vec<f64>, Vec<f64>) {
-    let mut rays = 0u64;
-    let mut sums: BTreeMap<bool, Vec<u64>> = BTreeMap::new();
-    for c in cases
+    // The counting pass ran once per batch: its rays are on each thread count's row.
+    let rays: u64 = rows
         .iter()
-        .filter(|c| c.scene == scene && c.instance == instance && c.traced == Traced::Batch(kind))
-    {
-        let counters = &c.counted.counters;
-        rays += counters.rays;
-        for (is_aabb, by_depth) in [
-            (true, &counters.aabb_by_depth),
-            (false, &counters.triangle_by_depth),
-        ] {
+        .filter(|r| r.threads == plan.threads[0] && is_batch(plan, r, scene, instance, kind))
+        .map(|r| r.counted_rays)
+        .sum();
+    let mut sums: BTreeMap<bool, Vec<u64>> = BTreeMap::new();
+    for h in histograms.iter().filter(|h| {
+        h.ray_kind == kind.name()
+            && plan.scene_of(&h.scene, None) == Some(scene)
+            && plan.instance_of(&h.tracer, &h.parameters) == Some(instance)
+    }) {
+        for (is_aabb, count) in [(true, h.aabb_tests), (false, h.triangle_tests)] {
             let sum = sums.entry(is_aabb).or_default();
-            if sum.len() < by_depth.len() {
-                sum.resize(by_depth.len(), 0);
+            if sum.len() <= h.depth {
+                sum.resize(h.depth + 1, 0);
             }
-            sum.iter_mut().zip(by_depth).for_each(|(s, d)| *s += d);
+            sum[h.depth] += count;
         }
     }
     let per_ray = |v: Option<&Vec<u64>>| -> Vec<f64> {
@@ -312,7 +324,8 @@ fn depth_histograms(
     plan: &Plan,
     scene: usize,
     instance: usize,
-    cases: &[Case],
+    rows: &[RunRow],
+    histograms: &[HistogramRow],
 ) -> PlotResult {
     let kinds = &plan.scenes[scene].ray_kinds;
     let root = BitMapBackend::new(path, (1100, 300 * kinds.len() as u32)).into_drawing_area();
@@ -322,7 +335,7 @@ fn depth_histograms(
     let panels = root.split_evenly((kinds.len(), 2));
     let per_kind: Vec<(Vec<f64>, Vec<f64>)> = kinds
         .iter()
-        .map(|&kind| tests_per_ray_by_depth(cases, scene, instance, kind))
+        .map(|&kind| tests_per_ray_by_depth(plan, (rows, histograms), scene, instance, kind))
         .collect();
     // One depth axis for every panel, so the panels line up.
     let depths = per_kind

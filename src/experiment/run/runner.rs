@@ -1,11 +1,11 @@
 //! Executes a plan: per scene and frame, build the structures the plan lists (timed), generate the
 //! workloads once (primary rays, then shadow, diffuse, reflection and refraction rays and the
 //! soft-shadow light-visibility query from the reference tracer's primary hits), and measure
-//! every tracer instance on every workload at every thread count (`Measure::batch`). Every
+//! every tracer instance on every workload at every thread count (`TracerOnFrame::batch`). Every
 //! tracer gets the very same rays. Then each instance renders the frame with every render
 //! workload (Whitted or distribution), timed like the batches, and once more counting; a
 //! distribution frame's image is also compared with its cached high-sample reference
-//! (`render::convergence`) by RMSE (`Measure::render`).
+//! (`render::convergence`) by RMSE (`TracerOnFrame::render`).
 
 use std::collections::BTreeMap;
 use std::hint::black_box;
@@ -22,7 +22,6 @@ use crate::geometry::ray_file::{read_rays, write_rays, RayFileFormat};
 use crate::geometry::{RayBatch, RayKind};
 use crate::random::mix64;
 use crate::render::area_light::soft_shadow_points;
-use crate::render::assembly::BatchKind;
 use crate::render::convergence::reference_image;
 use crate::render::distribution::{render_sampled, DrtSettings, FrameGeometry};
 use crate::render::image::Image;
@@ -40,88 +39,16 @@ use crate::tracers::{
     ORACLE,
 };
 
-use super::config::{DistributionWorkload, Experiment, RenderWorkload, SceneSpec, StructureKey};
-use super::measure::{count_pass, time_passes, timing_of, Counted, Timing};
-use super::plan::{secondary_ray_structure, Plan, SceneLoader, ScenePlan, SECONDARY_RAY_TRACER};
-use super::sampled_check::{self, Checked};
-use super::shard::Part;
-
-/// What a case measured.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
-pub enum Traced {
-    /// A batch of one ray kind, traced on its own.
-    Batch(RayKind),
-    /// One batch of a rendered frame of render workload `render` (an index into `Plan::renders`).
-    Render {
-        render: usize,
-        batch: BatchKind,
-        depth: u32,
-    },
-    /// A whole rendered frame: all its batches plus sampling, shading and packet assembly.
-    Frame { render: usize },
-    /// The rays of ray file `Plan::ray_files[i]`, closest hit.
-    File(usize),
-}
-
-impl Traced {
-    /// runs.csv's `ray_kind`: the kind, batch or `frame`, or `file:<name>` for a ray file.
-    pub fn kind_name(self, plan: &Plan) -> String {
-        match self {
-            Traced::Batch(kind) => kind.name().to_string(),
-            Traced::Render { batch, .. } => batch.name().to_string(),
-            Traced::Frame { .. } => "frame".to_string(),
-            Traced::File(i) => format!("file:{}", plan.ray_files[i].name),
-        }
-    }
-
-    /// Bounce depth: camera rays 0, rays leaving their hits 1; none for a whole frame or a ray
-    /// file.
-    pub fn depth(self) -> Option<u32> {
-        match self {
-            Traced::Batch(RayKind::Primary) => Some(0),
-            Traced::Batch(_) => Some(1),
-            Traced::Render { depth, .. } => Some(depth),
-            Traced::Frame { .. } | Traced::File(_) => None,
-        }
-    }
-
-    pub fn render(self) -> Option<usize> {
-        match self {
-            Traced::Batch(_) | Traced::File(_) => None,
-            Traced::Render { render, .. } | Traced::Frame { render } => Some(render),
-        }
-    }
-}
-
-/// One tracer instance on one ray kind (or one batch of a rendered frame, or a whole frame) of one
-/// frame of one scene: its counts and its timing at every thread count. One row of runs.csv per
-/// timing. Serialized (cases.json) by a sharded run, for `raylab merge`.
-#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
-pub struct Case {
-    /// Index into `Plan::scenes`.
-    pub scene: usize,
-    pub triangles: usize,
-    pub frame: usize,
-    /// Index into `Plan::instances`.
-    pub instance: usize,
-    pub traced: Traced,
-    pub rays: usize,
-    /// From the one counting pass (the same at every thread count).
-    pub counted: Counted,
-    /// False for tracers that count rays only: their box and triangle counts are not measured.
-    pub counts_internals: bool,
-    /// Seconds to build the instance's structure for this frame; 0 when reused.
-    pub build_seconds: f64,
-    /// Whether the structure was built this frame (false: reused from frame 0 of a static scene).
-    pub built: bool,
-    pub timings: Vec<Timing>,
-    /// A distribution frame's RMSE against its reference image (frame rows only).
-    pub rmse: Option<f64>,
-    /// An interleaved-soft-shadow frame's share of pixels retraced (frame rows, with retrace).
-    pub retraced_share: Option<f64>,
-    /// The sampled check against the oracle (ray batches and ray files only).
-    pub checked: Option<Checked>,
-}
+use super::case::{Case, Traced};
+use super::sampled_check;
+use crate::experiment::run::passes::{count_pass, time_passes, timing_of, Counted, Timing};
+use crate::experiment::spec::config::{
+    DistributionWorkload, Experiment, RenderWorkload, SceneSpec, StructureKey,
+};
+use crate::experiment::spec::plan::{
+    secondary_ray_structure, Plan, SceneLoader, ScenePlan, SECONDARY_RAY_TRACER,
+};
+use crate::experiment::spec::shard::Part;
 
 /// A built structure with its build time.
 struct Built {
@@ -246,7 +173,7 @@ pub fn run_plan(
                 let Some(tracer) = tracer else {
                     continue;
                 };
-                let measure = Measure {
+                let measure = TracerOnFrame {
                     exp,
                     pools: &pools,
                     widest,
@@ -281,7 +208,7 @@ pub fn run_plan(
 
 /// Measuring one tracer instance on one frame: the batches traced on their own, then the render
 /// workloads.
-struct Measure<'a> {
+struct TracerOnFrame<'a> {
     exp: &'a Experiment,
     pools: &'a [ThreadPool],
     /// Counting and ray generation are not timed: they run in the widest pool.
@@ -299,7 +226,7 @@ struct Measure<'a> {
     built: bool,
 }
 
-impl Measure<'_> {
+impl TracerOnFrame<'_> {
     /// The progress line of one measurement at `pool`'s size.
     fn announce(&self, what: &dyn std::fmt::Display, pool: &ThreadPool) {
         self.progress.set_message(format!(

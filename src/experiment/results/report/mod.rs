@@ -22,16 +22,14 @@ use serde_json::Value;
 
 use crate::error::{Error, Result};
 
-use super::digest::digest;
-use super::meta::META_JSON;
-use super::output::RUNS_CSV;
-use super::stability::STABILITY_CSV;
-use super::tables::TABLES_MD;
+use crate::experiment::record::digest::digest;
+use crate::experiment::record::files::META_JSON;
+use crate::experiment::record::files::STABILITY_CSV;
+use crate::experiment::record::files::TABLES_MD;
+use crate::experiment::record::files::{RUNS_CSV, SUMMARY_MD};
 use blocks::Block;
 use verdicts::{Verdicts, VERDICTS_TOML};
 
-/// The end-of-run summary, when the results directory has one.
-pub const SUMMARY_MD: &str = "summary.md";
 /// The generated reproduction report of a committed results directory.
 pub const REPORT_MD: &str = "REPORT.md";
 

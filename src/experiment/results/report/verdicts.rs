@@ -137,7 +137,7 @@ fn lookup<'a>(reference: &str, tables: &[&'a Table]) -> std::result::Result<&'a 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::experiment::report::blocks::{parse, tables};
+    use crate::experiment::results::report::blocks::{parse, tables};
 
     #[test]
     fn references_are_filled_from_the_tables_and_bad_ones_name_the_line() {

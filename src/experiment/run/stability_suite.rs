@@ -19,12 +19,13 @@ use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use super::config::{Experiment, StabilitySettings};
-use super::{meta, results_dir, runner, tables, utc, RunOverrides};
 use crate::error::{Error, Result};
+use crate::experiment::record::files::{STABILITY_CSV, TABLES_MD};
+use crate::experiment::record::{results_dir, utc};
+use crate::experiment::run::{meta, runner};
+use crate::experiment::spec::config::{Experiment, StabilitySettings};
+use crate::experiment::spec::overrides::RunOverrides;
 use crate::verify::stability::{self, CaseKind, Contender, Outcome, Status};
-
-pub const STABILITY_CSV: &str = "stability.csv";
 
 /// Runs the suite for every tracer instance of `exp` and writes the results directory.
 pub fn run(
@@ -53,7 +54,7 @@ pub fn run(
     let results = results_dir::PendingResults::create(&exp.output, &exp.name, &started.compact())?;
     let progress = runner::progress_bar(
         cases.len() * contenders.len(),
-        overrides.chatter != super::Chatter::Quiet,
+        overrides.chatter != crate::experiment::spec::overrides::Chatter::Quiet,
     );
     let outcomes = stability::run(cases, &contenders, settings.timeout, &|case, c| {
         progress.set_message(format!("{} {} {}", case.kind, case.variant, c.label));
@@ -65,7 +66,7 @@ pub fn run(
     write_csv(&dir.join(STABILITY_CSV), &outcomes)?;
     let report = tables_md(&exp.name, &outcomes);
     overrides.chatter.say(summary(&outcomes).trim_end());
-    let path = dir.join(tables::TABLES_MD);
+    let path = dir.join(TABLES_MD);
     std::fs::write(&path, report).map_err(|e| Error::io(&path, e))?;
     let meta = meta::gather(
         &exp.name,

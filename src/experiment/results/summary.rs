@@ -20,12 +20,10 @@ use serde::Serialize;
 
 use crate::error::{Error, Result};
 
-use super::meta::META_JSON;
-use super::output::RUNS_CSV;
-use super::sampled_check::VERIFY_CSV;
-use super::selection::{read_rows, Row};
-
-pub const SUMMARY_MD: &str = "summary.md";
+use crate::experiment::record::files::META_JSON;
+use crate::experiment::record::files::RUNS_CSV;
+use crate::experiment::record::files::VERIFY_CSV;
+use crate::experiment::record::selection::{read_rows, Row};
 
 /// The baselines that are not Embree; every tracer on a non-Embree structure other than these is
 /// one of ours.

@@ -15,14 +15,14 @@ use plotters::prelude::*;
 
 use crate::accel::AccelKind;
 use crate::error::Result;
+use crate::experiment::record::RunRow;
 use crate::render::convergence::{write_error_csv, ErrorPoint};
 
-use super::config::{Experiment, RenderWorkload};
-use super::plan::Plan;
-use super::plots::{
+use crate::experiment::results::plots::{
     draw_legend, plot_error, register_font, scene_stem, significant, PlotResult, FONT,
 };
-use super::runner::{Case, Traced};
+use crate::experiment::spec::config::{Experiment, RenderWorkload};
+use crate::experiment::spec::plan::Plan;
 
 /// Tableau colours, one per tracer in name order.
 const PALETTE: [RGBColor; 6] = [
@@ -41,14 +41,14 @@ pub fn write_error_plots(
     dir: &Path,
     exp: &Experiment,
     plan: &Plan,
-    cases: &[Case],
+    rows: &[RunRow],
 ) -> Result<Vec<PathBuf>> {
     let threads = exp.threads.iter().copied().max().unwrap_or(1);
     let groups = spp_groups(exp);
     let mut plots = Vec::new();
     for scene in 0..plan.scenes.len() {
         for (g, group) in groups.iter().enumerate() {
-            let points = error_points(exp, plan, cases, scene, group, threads);
+            let points = error_points(exp, plan, rows, scene, group, threads);
             plots.push((scene, g, points));
         }
     }
@@ -106,45 +106,51 @@ fn spp_groups(exp: &Experiment) -> Vec<Vec<usize>> {
 fn error_points(
     exp: &Experiment,
     plan: &Plan,
-    cases: &[Case],
+    rows: &[RunRow],
     scene: usize,
     group: &[usize],
     threads: usize,
 ) -> Vec<ErrorPoint> {
-    let at = |c: &Case| {
-        c.timings
-            .iter()
-            .find(|t| t.threads == threads)
-            .map(|t| t.seconds_min)
+    let render_of = |row: &RunRow| {
+        let label = row.render.as_deref()?;
+        plan.renders.iter().position(|r| r == label)
+    };
+    // Frame 0 of `scene`, at the widest thread count.
+    let here = |row: &&RunRow| {
+        row.frame == 0
+            && row.threads == threads
+            && plan.scene_of(&row.scene, Some(row.triangles)) == Some(scene)
     };
     let mut points = Vec::new();
-    for frame in cases.iter().filter(|c| c.scene == scene && c.frame == 0) {
-        let Traced::Frame { render } = frame.traced else {
+    for frame in rows.iter().filter(here).filter(|r| r.ray_kind == "frame") {
+        let (Some(render), Some(rmse)) = (render_of(frame), frame.rmse) else {
             continue;
         };
-        let (Some(rmse), Some(seconds), true) = (frame.rmse, at(frame), group.contains(&render))
-        else {
+        let Some(instance) = plan.instance_of(&frame.tracer, &frame.parameters) else {
             continue;
         };
         let RenderWorkload::Distribution(w) = &exp.renders[render] else {
             continue;
         };
-        let trace_seconds = cases
+        if !group.contains(&render) {
+            continue;
+        }
+        let trace_seconds = rows
             .iter()
-            .filter(|c| {
-                c.scene == scene
-                    && c.frame == 0
-                    && c.instance == frame.instance
-                    && matches!(c.traced, Traced::Render { render: r, .. } if r == render)
+            .filter(here)
+            .filter(|r| {
+                r.ray_kind != "frame"
+                    && render_of(r) == Some(render)
+                    && plan.instance_of(&r.tracer, &r.parameters) == Some(instance)
             })
-            .filter_map(at)
+            .map(|r| r.seconds_min)
             .sum();
         // Interleaved soft shadows' refinements are lines of their own ("packet filtered").
         let refinement = w
             .settings
             .soft_shadows
             .map_or(String::new(), |m| m.refinement());
-        let instance = &plan.instances[frame.instance];
+        let instance = &plan.instances[instance];
         let embree = instance.structure.kind == AccelKind::Embree;
         let point = ErrorPoint {
             tracer: match embree {
@@ -152,7 +158,7 @@ fn error_points(
                 false => format!("{}{refinement}", instance.label),
             },
             spp: w.settings.spp,
-            seconds,
+            seconds: frame.seconds_min,
             trace_seconds,
             rays: frame.rays as u64,
             rmse,

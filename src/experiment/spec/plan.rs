@@ -20,8 +20,8 @@ use crate::geometry::{RayKind, Triangle};
 use crate::scene::{Material, Mesh, Scene};
 use crate::tracers::{build_tracer, Params};
 
-use super::config::{Experiment, RenderWorkload, SceneSpec, StructureKey};
-use super::render_pruning::prune_renders;
+use crate::experiment::spec::config::{Experiment, RenderWorkload, SceneSpec, StructureKey};
+use crate::experiment::spec::render_pruning::prune_renders;
 
 /// Finds a scene by its experiment entry. The run uses `scene::library::load_scene`; tests hand in
 /// scenes of their own.
@@ -141,6 +141,21 @@ impl ScenePlan {
 }
 
 impl Plan {
+    /// The instance a row names (its `tracer` and `parameters` columns).
+    pub fn instance_of(&self, tracer: &str, parameters: &str) -> Option<usize> {
+        self.instances
+            .iter()
+            .position(|i| i.tracer == tracer && i.params.to_string() == parameters)
+    }
+
+    /// The scene a row names: by name, and where one name is planned at several sizes, by its
+    /// triangle count (`None` when rows do not carry one, as histograms.csv).
+    pub fn scene_of(&self, name: &str, triangles: Option<usize>) -> Option<usize> {
+        let named = || (0..self.scenes.len()).filter(|&s| self.scenes[s].name == name);
+        let sized = triangles.and_then(|t| named().find(|&s| self.scenes[s].triangles == t));
+        sized.or_else(|| named().next())
+    }
+
     /// Loads every scene to learn what it needs, and builds every tracer instance once on a
     /// one-triangle mesh so bad parameter values fail now, not an hour into the run. Scenes are
     /// dropped again (the run reloads each in turn), so only one is ever held in memory. Ray
@@ -435,93 +450,8 @@ impl fmt::Display for Plan {
 
 #[cfg(test)]
 pub(crate) mod tests {
-    use std::path::Path;
-    use std::sync::Arc;
-
-    use glam::Vec3;
-
     use super::*;
-    use crate::scene::{Animation, Camera, Light};
-
-    /// A unit quad at z = 0 facing +z (two triangles), lit or not, static or spinning.
-    pub fn quad_scene(name: &str, lit: bool, animated: bool) -> Scene {
-        let mesh = quad_mesh(0.0);
-        Scene {
-            name: name.into(),
-            source: "test".into(),
-            mesh,
-            materials: vec![Material::default()],
-            lights: if lit {
-                vec![Light::Point {
-                    position: Vec3::new(0.0, 0.0, 3.0),
-                    intensity: Vec3::ONE,
-                }]
-            } else {
-                vec![]
-            },
-            camera: Camera {
-                position: Vec3::new(0.0, 0.0, 4.0),
-                fov_y_deg: 30.0,
-                ..Camera::default()
-            },
-            camera_path: None,
-            animation: animated.then(|| Arc::new(Sliding) as Arc<dyn Animation>),
-        }
-    }
-
-    fn quad_mesh(z: f32) -> Mesh {
-        let (a, b, c, d) = (
-            Vec3::new(-1.0, -1.0, z),
-            Vec3::new(1.0, -1.0, z),
-            Vec3::new(1.0, 1.0, z),
-            Vec3::new(-1.0, 1.0, z),
-        );
-        let mut mesh = Mesh::default();
-        mesh.push(Triangle { v: [a, b, c] }, 0);
-        mesh.push(Triangle { v: [a, c, d] }, 0);
-        mesh
-    }
-
-    /// The quad sliding back along −z, one unit per second.
-    #[derive(Debug)]
-    struct Sliding;
-    impl Animation for Sliding {
-        fn duration(&self) -> f32 {
-            2.0
-        }
-        fn mesh_at(&self, time: f32) -> Mesh {
-            quad_mesh(-time)
-        }
-    }
-
-    pub fn load_quads(spec: &SceneSpec) -> Result<Scene> {
-        match spec.name.as_str() {
-            "lit" => Ok(quad_scene("lit", true, false)),
-            "dark" => Ok(quad_scene("dark", false, false)),
-            "moving" => Ok(quad_scene("moving", true, true)),
-            // A 0.5 × 0.5 quad light 3 units in front of the quad.
-            "soft" => Ok(Scene {
-                lights: vec![Light::Quad {
-                    corner: Vec3::new(-0.25, -0.25, 3.0),
-                    edge_u: Vec3::new(0.5, 0.0, 0.0),
-                    edge_v: Vec3::new(0.0, 0.5, 0.0),
-                    emission: Vec3::ONE,
-                }],
-                ..quad_scene("soft", true, false)
-            }),
-            "glass" => {
-                let mut scene = quad_scene("glass", true, false);
-                scene.materials[0].dielectric = Some((1.5, 1.0));
-                Ok(scene)
-            }
-            other => Err(Error::usage(format!("unknown scene {other:?}"))),
-        }
-    }
-
-    pub fn experiment(body: &str) -> Experiment {
-        let text = format!("name = \"t\"\nresolution = {{ width = 8, height = 8 }}\n{body}");
-        Experiment::parse(Path::new("t.toml"), &text).unwrap()
-    }
+    pub use crate::experiment::spec::quad_scenes::{experiment, load_quads, quad_scene};
 
     #[test]
     fn a_scene_without_lights_gets_no_shadow_rays() {

@@ -7,11 +7,12 @@ use std::time::Instant;
 
 use rayon::ThreadPool;
 
+use crate::experiment::record::selection::median_of_sorted;
 use crate::render::wavefront::{answer, Answers, Work};
 use crate::stats::Counters;
 use crate::tracers::Tracer;
 
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Timing {
     pub threads: usize,
     pub seconds_min: f64,
@@ -19,7 +20,7 @@ pub struct Timing {
 }
 
 /// What one counting pass found.
-#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct Counted {
     pub counters: Counters,
     /// Rays that hit something (closest hit) or were occluded (shadow rays).
@@ -65,16 +66,6 @@ pub fn timing_of(threads: usize, mut seconds: Vec<f64>) -> Timing {
         threads,
         seconds_min: seconds[0],
         seconds_median: median_of_sorted(&seconds),
-    }
-}
-
-/// The median of an ascending slice (the mean of the middle two for an even length).
-pub(super) fn median_of_sorted(sorted: &[f64]) -> f64 {
-    let n = sorted.len();
-    if n % 2 == 1 {
-        sorted[n / 2]
-    } else {
-        (sorted[n / 2 - 1] + sorted[n / 2]) / 2.0
     }
 }
 

@@ -15,12 +15,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
 
-use super::digest::digest;
-use super::plan::Plan;
-use super::RunOverrides;
-
-/// What a sharded run writes besides runs.csv: its `runner::Case`s, read back by `raylab merge`.
-pub const CASES_JSON: &str = "cases.json";
+use crate::experiment::record::digest::digest;
+use crate::experiment::spec::overrides::RunOverrides;
+use crate::experiment::spec::plan::Plan;
 
 /// Part `index` of `count` (`index/count` on the command line, counted from 0 like
 /// `$SLURM_ARRAY_TASK_ID`).
@@ -175,7 +172,7 @@ fn unit_cost(plan: &Plan, s: usize) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::experiment::plan::tests::{experiment, load_quads};
+    use crate::experiment::spec::plan::tests::{experiment, load_quads};
 
     #[test]
     fn shard_arguments_are_checked() {

@@ -20,8 +20,8 @@ use serde::Deserialize;
 use crate::error::{Error, Result};
 use crate::tracers::registry::canonical_name;
 
-use super::measure::median_of_sorted;
-use super::output::{runs_columns, RUNS_CSV};
+use crate::experiment::record::files::RUNS_CSV;
+use crate::experiment::record::run_row::runs_columns;
 
 /// One runs.csv row: column → cell.
 pub type Row = BTreeMap<String, String>;
@@ -234,6 +234,16 @@ pub fn read_rows(path: &std::path::Path) -> Result<Vec<Row>> {
                 .collect())
         })
         .collect()
+}
+
+/// The median of an ascending slice (the mean of the middle two for an even length).
+pub fn median_of_sorted(sorted: &[f64]) -> f64 {
+    let n = sorted.len();
+    if n % 2 == 1 {
+        sorted[n / 2]
+    } else {
+        (sorted[n / 2 - 1] + sorted[n / 2]) / 2.0
+    }
 }
 
 #[cfg(test)]

@@ -1,0 +1,299 @@
+//! The record of a run: one typed row per measurement (`RunRow`, a runs.csv line) and one per
+//! BVH depth of a counted ray batch (`HistogramRow`, a histograms.csv line). A run produces these
+//! and nothing else; runs.csv, the Embree-best columns, plots, tables, figures, the summary, the
+//! reports and `raylab merge` all derive from them, in memory or read back from the files.
+//!
+//! Counts a tracer cannot measure (Embree's box and triangle tests) are `None` (empty cells, not
+//! zeros). Derived columns (`mrays_per_s`, per-ray counts, `build_plus_trace_seconds`,
+//! `counting_overhead`, `x_embree_best`…) are computed from the fields when written, never stored.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use crate::error::Result;
+use crate::stats::Event;
+
+use super::csv_file::write_csv;
+use super::selection::Row;
+
+pub const RUNS_COLUMNS: &[&str] = &[
+    "experiment",
+    "scene",
+    "triangles",
+    "frame",
+    "tracer",
+    "parameters",
+    "structure",
+    "render",
+    "ray_kind",
+    "bounce_depth",
+    "threads",
+    "rays",
+    "hits",
+    "seconds_min",
+    "seconds_median",
+    "mrays_per_s",
+    "build_seconds",
+    "build",
+    "build_mtris_per_s",
+    "build_plus_trace_seconds",
+    "counted_rays",
+    "nodes_visited",
+    "aabb_tests",
+    "triangle_tests",
+    "nodes_per_ray",
+    "aabb_tests_per_ray",
+    "triangle_tests_per_ray",
+    "counting_seconds",
+    "counting_overhead",
+    "rmse",
+    "retraced_share",
+    "embree_best_seconds",
+    "embree_best_config",
+    "x_embree_best",
+    "embree_best_build_plus_trace_seconds",
+    "embree_best_build_plus_trace_config",
+    "x_embree_best_build_plus_trace",
+];
+
+/// runs.csv's columns: the fixed ones, then one per `Event`.
+pub fn runs_columns() -> Vec<&'static str> {
+    RUNS_COLUMNS
+        .iter()
+        .copied()
+        .chain(Event::ALL.iter().map(|e| e.name()))
+        .collect()
+}
+
+/// Millions of rays per second from the fastest pass; `None` for an empty batch.
+pub fn mrays_per_s(rays: usize, seconds: f64) -> Option<f64> {
+    (rays > 0 && seconds > 0.0).then(|| rays as f64 / seconds / 1e6)
+}
+
+/// The fastest Embree configuration on a row's work (see `results::embree_best`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Best {
+    pub seconds: f64,
+    /// `tracer parameters`, with the intersect context `auto` chose spelled out.
+    pub config: String,
+}
+
+impl Best {
+    /// `best / seconds`: how many times faster than Embree at its best (> 1 is faster).
+    pub fn ratio(best: Option<&Best>, seconds: f64) -> Option<f64> {
+        best.filter(|_| seconds > 0.0).map(|b| b.seconds / seconds)
+    }
+}
+
+/// One runs.csv row: one tracer instance on one workload (a ray kind, one batch of a rendered
+/// frame at one bounce depth, a whole frame, or a ray file) of one frame of one scene, at one
+/// thread count.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RunRow {
+    pub experiment: String,
+    pub scene: String,
+    pub triangles: usize,
+    pub frame: usize,
+    pub tracer: String,
+    /// The instance's parameters as `key=value;…` (`Params`' display).
+    pub parameters: String,
+    pub structure: String,
+    /// The render workload, for the batches and frames of a rendered frame.
+    pub render: Option<String>,
+    /// The ray kind, the batch kind of a rendered frame, `frame`, or `file:<name>`.
+    pub ray_kind: String,
+    /// Camera rays 0, rays leaving their hits 1 (and deeper in a rendered frame); none for a
+    /// whole frame or a ray file.
+    pub bounce_depth: Option<u32>,
+    pub threads: usize,
+    pub rays: usize,
+    pub hits: u64,
+    pub seconds_min: f64,
+    pub seconds_median: f64,
+    /// Seconds to build (or refit) the row's structure for this frame; 0 when reused.
+    pub build_seconds: f64,
+    /// Whether the structure was built this frame (false: reused from frame 0).
+    pub built: bool,
+    /// Rays the counting pass saw.
+    pub counted_rays: u64,
+    /// `None` for tracers that count rays only.
+    pub nodes_visited: Option<u64>,
+    pub aabb_tests: Option<u64>,
+    pub triangle_tests: Option<u64>,
+    /// The counting pass's seconds, on the row that ran at its thread count.
+    pub counting_seconds: Option<f64>,
+    pub rmse: Option<f64>,
+    pub retraced_share: Option<f64>,
+    /// One per `Event::ALL`, `None` where the tracer does not count internals.
+    pub events: Vec<Option<u64>>,
+    /// Filled from the run's Embree rows (`results::embree_best`).
+    pub embree_best: Option<Best>,
+    pub embree_best_build_plus_trace: Option<Best>,
+}
+
+fn cell<T: ToString>(value: Option<T>) -> String {
+    value.map_or(String::new(), |v| v.to_string())
+}
+
+fn per_ray(count: Option<u64>, rays: u64) -> Option<f64> {
+    count.filter(|_| rays > 0).map(|c| c as f64 / rays as f64)
+}
+
+impl RunRow {
+    /// Build (or refit) plus the fastest pass: "rebuild + render" for this work.
+    pub fn build_plus_trace_seconds(&self) -> f64 {
+        self.build_seconds + self.seconds_min
+    }
+
+    /// Build (or refit) throughput in millions of triangles per second; `None` when reused.
+    pub fn build_mtris_per_s(&self) -> Option<f64> {
+        (self.built && self.build_seconds > 0.0)
+            .then(|| self.triangles as f64 / self.build_seconds / 1e6)
+    }
+
+    /// The cells of the row, in `runs_columns()` order.
+    pub fn cells(&self) -> Vec<String> {
+        let counting = self.counting_seconds;
+        let fixed = [
+            self.experiment.clone(),
+            self.scene.clone(),
+            self.triangles.to_string(),
+            self.frame.to_string(),
+            self.tracer.clone(),
+            self.parameters.clone(),
+            self.structure.clone(),
+            cell(self.render.as_ref()),
+            self.ray_kind.clone(),
+            cell(self.bounce_depth),
+            self.threads.to_string(),
+            self.rays.to_string(),
+            self.hits.to_string(),
+            self.seconds_min.to_string(),
+            self.seconds_median.to_string(),
+            cell(mrays_per_s(self.rays, self.seconds_min)),
+            self.build_seconds.to_string(),
+            if self.built { "built" } else { "reused" }.to_string(),
+            cell(self.build_mtris_per_s()),
+            self.build_plus_trace_seconds().to_string(),
+            self.counted_rays.to_string(),
+            cell(self.nodes_visited),
+            cell(self.aabb_tests),
+            cell(self.triangle_tests),
+            cell(per_ray(self.nodes_visited, self.counted_rays)),
+            cell(per_ray(self.aabb_tests, self.counted_rays)),
+            cell(per_ray(self.triangle_tests, self.counted_rays)),
+            cell(counting),
+            cell(counting.map(|s| s / self.seconds_median)),
+            cell(self.rmse),
+            cell(self.retraced_share),
+            cell(self.embree_best.as_ref().map(|b| b.seconds)),
+            cell(self.embree_best.as_ref().map(|b| &b.config)),
+            cell(Best::ratio(self.embree_best.as_ref(), self.seconds_min)),
+            cell(
+                self.embree_best_build_plus_trace
+                    .as_ref()
+                    .map(|b| b.seconds),
+            ),
+            cell(
+                self.embree_best_build_plus_trace
+                    .as_ref()
+                    .map(|b| &b.config),
+            ),
+            cell(Best::ratio(
+                self.embree_best_build_plus_trace.as_ref(),
+                self.build_plus_trace_seconds(),
+            )),
+        ];
+        let events = self.events.iter().map(|&v| cell(v));
+        fixed.into_iter().chain(events).collect()
+    }
+
+    /// The row as a field map, as `selection` reads rows for tables and figures.
+    pub fn fields(&self) -> Row {
+        runs_columns()
+            .into_iter()
+            .map(String::from)
+            .zip(self.cells())
+            .collect()
+    }
+
+    /// A row read back from runs.csv (`fields`: column → cell). The derived columns are not read:
+    /// they are computed again from the fields.
+    pub fn parse(fields: &BTreeMap<String, String>) -> std::result::Result<RunRow, String> {
+        let text = |name: &str| -> std::result::Result<&str, String> {
+            fields
+                .get(name)
+                .map(String::as_str)
+                .ok_or_else(|| format!("no column {name:?}"))
+        };
+        fn number<T: std::str::FromStr>(name: &str, cell: &str) -> std::result::Result<T, String> {
+            cell.parse()
+                .map_err(|_| format!("{name}: {cell:?} is not a number"))
+        }
+        let optional = |name: &str| -> std::result::Result<Option<String>, String> {
+            Ok(Some(text(name)?)
+                .filter(|c| !c.is_empty())
+                .map(String::from))
+        };
+        macro_rules! required {
+            ($name:expr) => {
+                number($name, text($name)?)?
+            };
+        }
+        macro_rules! maybe {
+            ($name:expr) => {
+                optional($name)?.map(|c| number($name, &c)).transpose()?
+            };
+        }
+        let best = |seconds: &str, config: &str| -> std::result::Result<Option<Best>, String> {
+            Ok(match (maybe!(seconds), optional(config)?) {
+                (Some(seconds), Some(config)) => Some(Best { seconds, config }),
+                _ => None,
+            })
+        };
+        Ok(RunRow {
+            experiment: text("experiment")?.to_string(),
+            scene: text("scene")?.to_string(),
+            triangles: required!("triangles"),
+            frame: required!("frame"),
+            tracer: text("tracer")?.to_string(),
+            parameters: text("parameters")?.to_string(),
+            structure: text("structure")?.to_string(),
+            render: optional("render")?,
+            ray_kind: text("ray_kind")?.to_string(),
+            bounce_depth: maybe!("bounce_depth"),
+            threads: required!("threads"),
+            rays: required!("rays"),
+            hits: required!("hits"),
+            seconds_min: required!("seconds_min"),
+            seconds_median: required!("seconds_median"),
+            build_seconds: required!("build_seconds"),
+            built: match text("build")? {
+                "built" => true,
+                "reused" => false,
+                other => return Err(format!("build: {other:?} is neither built nor reused")),
+            },
+            counted_rays: required!("counted_rays"),
+            nodes_visited: maybe!("nodes_visited"),
+            aabb_tests: maybe!("aabb_tests"),
+            triangle_tests: maybe!("triangle_tests"),
+            counting_seconds: maybe!("counting_seconds"),
+            rmse: maybe!("rmse"),
+            retraced_share: maybe!("retraced_share"),
+            events: Event::ALL
+                .iter()
+                .map(|e| Ok(maybe!(e.name())))
+                .collect::<std::result::Result<_, String>>()?,
+            embree_best: best("embree_best_seconds", "embree_best_config")?,
+            embree_best_build_plus_trace: best(
+                "embree_best_build_plus_trace_seconds",
+                "embree_best_build_plus_trace_config",
+            )?,
+        })
+    }
+}
+
+/// runs.csv's rows.
+pub fn write_runs(path: &Path, rows: &[RunRow]) -> Result<()> {
+    write_csv(path, &runs_columns(), rows.iter().map(RunRow::cells))
+}
