@@ -136,12 +136,8 @@ enum Command {
         frames: usize,
         #[arg(long, short, default_value = "render.png")]
         output: PathBuf,
-        /// raycast (renderer v0: ray casting, point-light shadows, Lambert) or a renderer of
-        /// `render::renderers::RENDERERS`: whitted (Whitted ray tracing with packet assembly,
-        /// Boulos 2007 §3, Overbeck 2008 §5–6), distribution (distribution ray tracing, Boulos
-        /// 2007 §4: depth of field, glossy, soft shadows, motion blur), path (Monte Carlo path
-        /// tracing, Gribble & Ramani 2008 §4: Lambertian, dielectric and coupled glossy
-        /// materials, thin lens, next-event estimation, Russian roulette).
+        /// raycast, or a renderer of the registry (`render::renderers::RENDERERS`) with its
+        /// settings from the flags below.
         #[arg(long, default_value = RAYCAST, value_parser = renderer_names())]
         renderer: String,
         /// Whitted: deepest reflection/refraction generation (default 5; 0 = ray casting with
@@ -220,10 +216,15 @@ enum Command {
 /// point-light shadows and Lambert shading, no settings.
 const RAYCAST: &str = "raycast";
 
+/// `raycast` and the registry's renderers, each with its line about it.
 fn renderer_names() -> clap::builder::PossibleValuesParser {
-    clap::builder::PossibleValuesParser::new(
-        std::iter::once(RAYCAST).chain(RENDERERS.iter().map(|r| r.name)),
-    )
+    use clap::builder::PossibleValue;
+    let raycast = PossibleValue::new(RAYCAST)
+        .help("renderer v0: ray casting, point-light shadows, Lambert shading");
+    let registered = RENDERERS
+        .iter()
+        .map(|r| PossibleValue::new(r.name).help(r.about));
+    clap::builder::PossibleValuesParser::new(std::iter::once(raycast).chain(registered))
 }
 
 /// Whitted ray tracing options of `render --renderer whitted`.

@@ -55,7 +55,7 @@ pub const RENDERERS: &[RendererInfo] = &[
     RendererInfo {
         name: "path",
         keys: &SAMPLED_KEYS,
-        about: "Monte Carlo path tracing (Gribble & Ramani 2008 §4)",
+        about: "Monte Carlo path tracing (Gribble & Ramani 2008 §4): Lambertian, dielectric and coupled glossy materials, thin lens, next-event estimation, Russian roulette",
         parse: |params| {
             DistributionWorkload::from_params(Integrator::Path, params)
                 .map(RenderWorkload::Distribution)
