@@ -1,0 +1,205 @@
+//! `tracers = [...]` and the shared `params` grid: each tracer × the cartesian product of its
+//! parameter lists, checked against the registry, each instance at most once; `embree-best`
+//! expands to every Embree configuration.
+
+use std::collections::BTreeMap;
+use std::fmt;
+
+use serde::Deserialize;
+use toml::Spanned;
+
+use crate::accel::AccelKind;
+use crate::error::Result;
+use crate::tracers::registry::not_built;
+use crate::tracers::{Params, TracerInfo, TRACERS};
+
+use super::source::{cartesian, line_of, too_many, Source, MAX_COMBINATIONS};
+use super::{ExperimentFile, NameOr};
+
+/// One tracer with one combination of parameters: one column of every comparison.
+#[derive(Clone)]
+pub struct TracerInstance {
+    pub info: &'static TracerInfo,
+    /// The tracer's and its structure's parameters (the structure reads its own subset).
+    pub params: Params,
+    /// The line of its entry in the experiment file, where an error in its values points.
+    pub line: usize,
+}
+
+/// The structure a tracer instance traverses: instances with equal keys share one build.
+#[derive(Clone, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct StructureKey {
+    pub kind: AccelKind,
+    pub params: Params,
+}
+
+impl TracerInstance {
+    pub fn structure(&self) -> StructureKey {
+        StructureKey {
+            kind: self.info.accel,
+            params: self.params.subset(self.info.accel.params()),
+        }
+    }
+}
+
+impl fmt::Debug for TracerInstance {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        fmt::Display::fmt(self, f)
+    }
+}
+
+impl fmt::Display for TracerInstance {
+    /// `name` or `name[key=value;...]`: the label in the plan, the plots and the progress bar.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.params.0.is_empty() {
+            f.write_str(self.info.name)
+        } else {
+            write!(f, "{}[{}]", self.info.name, self.params)
+        }
+    }
+}
+
+impl fmt::Display for StructureKey {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.params.0.is_empty() {
+            f.write_str(self.kind.name())
+        } else {
+            write!(f, "{}[{}]", self.kind.name(), self.params)
+        }
+    }
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct TracerTable {
+    name: String,
+    #[serde(default)]
+    params: Option<Spanned<BTreeMap<String, toml::Value>>>,
+    /// A tracer this build may lack (Embree 4's, `accel::embree::EMBREE4_BUILT`): skipped with a
+    /// note rather than refused when it is not built.
+    #[serde(default)]
+    if_built: bool,
+}
+
+impl From<String> for TracerTable {
+    fn from(name: String) -> Self {
+        TracerTable {
+            name,
+            params: None,
+            if_built: false,
+        }
+    }
+}
+
+/// Each tracer × the cartesian product of its parameter lists: its own `params` table plus every
+/// shared-grid key it reads (its own table wins where both give a key).
+pub(super) fn expand_tracers(src: &Source, file: &ExperimentFile) -> Result<Vec<TracerInstance>> {
+    let shared = match &file.params {
+        Some(table) => src.param_axes(table)?,
+        None => BTreeMap::new(),
+    };
+    let mut used_shared = vec![false; shared.len()];
+    let mut instances: Vec<TracerInstance> = Vec::new();
+    for (entry, info, sweep) in tracer_entries(src, file)? {
+        let table = &entry.get_ref().0;
+        let accepts = info.accepts();
+        let mut axes = match &table.params {
+            Some(params) => src.param_axes(params)?,
+            None => BTreeMap::new(),
+        };
+        for &(key, values) in sweep {
+            axes.entry(key.to_string())
+                .or_insert_with(|| values.iter().map(|v| v.to_string()).collect());
+        }
+        if let Some(unknown) = axes.keys().find(|k| !accepts.contains(&k.as_str())) {
+            return Err(src.usage_error(
+                &entry.span(),
+                format!(
+                    "unknown parameter {unknown:?} for tracer {} (known: {})",
+                    info.name,
+                    accepts.join(", ")
+                ),
+            ));
+        }
+        for (i, (key, values)) in shared.iter().enumerate() {
+            if accepts.contains(&key.as_str()) {
+                used_shared[i] = true;
+                axes.entry(key.clone()).or_insert_with(|| values.clone());
+            }
+        }
+        let grid = cartesian(src, &entry.span(), &axes)?;
+        if instances.len() + grid.len() > MAX_COMBINATIONS {
+            return Err(too_many(src, &entry.span()));
+        }
+        for params in grid {
+            let instance = TracerInstance {
+                info,
+                params,
+                line: line_of(src.text, &entry.span()),
+            };
+            if instances
+                .iter()
+                .any(|i| i.info.name == info.name && i.params == instance.params)
+            {
+                return Err(src.usage_error(
+                    &entry.span(),
+                    format!("tracer instance {instance} is listed twice"),
+                ));
+            }
+            instances.push(instance);
+        }
+    }
+    if instances.is_empty() {
+        return Err(src.input_error(&file.tracers.span(), "no tracers"));
+    }
+    if let Some((key, _)) = shared.keys().zip(&used_shared).find(|(_, used)| !**used) {
+        let span = file.params.as_ref().map(|p| p.span()).unwrap_or(0..0);
+        return Err(src.usage_error(
+            &span,
+            format!("shared parameter {key:?} is read by none of the tracers"),
+        ));
+    }
+    Ok(instances)
+}
+
+/// The shorthand tracer entry for Embree at its best: every Embree entry point (1, 4, 8, 16,
+/// stream) × intersect context × build quality, so that the run measures the fastest Embree
+/// configuration on its rays. The entry's own `params` replace an axis (e.g. `quality =
+/// ["low", "refit"]` for per-frame rebuilds); the entry points share one scene per quality.
+pub const EMBREE_BEST: &str = "embree-best";
+
+/// Parameter axes given in code: (key, values).
+type Axes = &'static [(&'static str, &'static [&'static str])];
+
+/// The axes `embree-best` sweeps unless its entry gives them.
+const EMBREE_BEST_AXES: Axes = &[
+    ("context", &["coherent", "incoherent"]),
+    ("quality", &["medium", "high"]),
+];
+
+/// A tracer entry of the file, one tracer it names, and the axes it sweeps by default.
+type TracerEntry<'f> = (&'f Spanned<NameOr<TracerTable>>, &'static TracerInfo, Axes);
+
+/// Each tracer entry with the tracer it names (`embree-best` names every Embree tracer).
+fn tracer_entries<'f>(src: &Source, file: &'f ExperimentFile) -> Result<Vec<TracerEntry<'f>>> {
+    let mut entries = Vec::new();
+    for entry in file.tracers.get_ref() {
+        let name = &entry.get_ref().0.name;
+        if name == EMBREE_BEST {
+            let embree = TRACERS.iter().filter(|t| t.accel.is_embree());
+            entries.extend(embree.map(|info| (entry, info, EMBREE_BEST_AXES)));
+        } else {
+            match TracerInfo::find(name) {
+                Ok(info) => entries.push((entry, info, &[][..])),
+                Err(e) if entry.get_ref().0.if_built && not_built(name) => {
+                    eprintln!(
+                        "note: {}: skipping {name} (if_built): {e}",
+                        src.path.display()
+                    )
+                }
+                Err(e) => return Err(src.usage_error(&entry.span(), e)),
+            }
+        }
+    }
+    Ok(entries)
+}
