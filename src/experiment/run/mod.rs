@@ -4,6 +4,7 @@
 //! provenance (`meta`). It produces rows (`record`); it never reads `results`.
 
 pub mod case;
+pub mod dump;
 pub mod meta;
 pub mod passes;
 pub mod runner;

@@ -18,7 +18,7 @@ use rayon::{ThreadPool, ThreadPoolBuilder};
 
 use crate::accel::Accel;
 use crate::error::{Error, Result};
-use crate::geometry::ray_file::{read_rays, write_rays, RayFileFormat};
+use crate::geometry::ray_file::read_rays;
 use crate::geometry::{RayBatch, RayKind};
 use crate::random::mix64;
 use crate::render::area_light::soft_shadow_points;
@@ -40,10 +40,11 @@ use crate::tracers::{
 };
 
 use super::case::{Case, Traced};
+use super::dump;
 use super::sampled_check;
 use crate::experiment::run::passes::{count_pass, time_passes, timing_of, Counted, Timing};
 use crate::experiment::spec::config::{
-    DistributionWorkload, Experiment, RenderWorkload, SceneSpec, StructureKey,
+    DistributionWorkload, Experiment, RenderWorkload, StructureKey,
 };
 use crate::experiment::spec::plan::{
     secondary_ray_structure, Plan, SceneLoader, ScenePlan, SECONDARY_RAY_TRACER,
@@ -89,7 +90,7 @@ pub fn progress_bar(measurements: usize, shown: bool) -> ProgressBar {
 
 /// Runs the measurements of `plan` that belong to `part`, loading each scene with `load` when its
 /// turn comes (scenes with nothing to measure are not loaded). With `dump_rays`, every generated
-/// ray batch is also written there as a binary ray file (`dump_name`).
+/// ray batch is also written there, with the frame's triangles and soft-shadow points (`dump`).
 pub fn run_plan(
     exp: &Experiment,
     plan: &Plan,
@@ -162,10 +163,24 @@ pub fn run_plan(
             let workloads =
                 generate_workloads(exp, scene_plan, &scene, &frame, frame_tracers, widest)?;
             if let Some(dir) = dump_rays {
+                dump::write_triangles(
+                    &dir.join(dump::triangles_name(spec, f)),
+                    &frame.mesh.triangles,
+                )?;
                 for workload in &workloads {
-                    if let Workload::Rays(batch) = workload {
-                        let path = dir.join(dump_name(spec, f, batch.kind()));
-                        write_rays(&path, batch.view(), RayFileFormat::Binary)?;
+                    match workload {
+                        Workload::Rays(batch) => {
+                            let path = dir.join(dump::rays_name(spec, f, batch.kind()));
+                            dump::write_batch(&path, batch)?;
+                        }
+                        Workload::SoftShadow {
+                            points,
+                            light,
+                            samples,
+                        } => {
+                            let path = dir.join(dump::points_name(spec, f));
+                            dump::write_points(&path, points, *light, samples.per_point())?;
+                        }
                     }
                 }
             }
@@ -636,14 +651,6 @@ fn light_query<'a>(
         light,
         samples,
     }
-}
-
-/// The file a generated batch is dumped to: `<scene>[-s<size>]-f<frame>-<kind>.rays` (a scene
-/// given as a path has its separators replaced).
-pub fn dump_name(spec: &SceneSpec, frame: usize, kind: RayKind) -> String {
-    let size = spec.size.map_or(String::new(), |s| format!("-s{s}"));
-    let scene = spec.name.replace(['/', '\\'], "_");
-    format!("{scene}{size}-f{frame}-{}.rays", kind.name())
 }
 
 /// The workloads of the scene's ray kinds for one frame, in the plan's order. Secondary rays are

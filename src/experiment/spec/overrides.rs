@@ -22,7 +22,7 @@ pub struct RunOverrides {
     pub warmup: Option<usize>,
     pub repeats: Option<usize>,
     /// Not a setting: also write every generated ray batch to `rays/` in the results directory
-    /// (`runner::dump_name`), for replay with `trace`, `verify --rays` or `rays = [{ file }]`.
+    /// (`run::dump`: with the triangles and soft-shadow points), for replay with `trace`, `verify --rays` or `rays = [{ file }]`.
     pub dump_rays: bool,
     /// Measure only this part of the plan (see `shard`); `raylab merge` joins the parts.
     #[serde(default)]
