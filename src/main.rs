@@ -24,7 +24,7 @@ use raylab::render::wavefront::Tracing;
 use raylab::render::whitted::{render_whitted, WhittedSettings};
 use raylab::scene::library::{list_scenes, load_scene};
 use raylab::scene::{Frame, Scene};
-use raylab::tracers::batch::{trace_hits, trace_occlusion};
+use raylab::tracers::chunked::{trace_hits, trace_occlusion};
 use raylab::tracers::{Params, TracerInfo};
 use raylab::verify::{self, format_table, Tolerance};
 

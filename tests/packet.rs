@@ -12,7 +12,7 @@ use raylab::accel::{Bvh, BvhConfig, BvhNode};
 use raylab::geometry::{Aabb, Hit, Ray, RayBatch, RayKind, Triangle};
 use raylab::stats::{Counters, Event};
 use raylab::test_util::same_or_tie;
-use raylab::tracers::batch::{trace_hits, trace_occlusion};
+use raylab::tracers::chunked::{trace_hits, trace_occlusion};
 use raylab::tracers::packet::{PacketConfig, PacketTracer, Traversal, TreeWidth};
 use raylab::tracers::reference::ReferenceTracer;
 use raylab::tracers::{Params, Tracer, TracerInfo};

@@ -14,7 +14,7 @@ use raylab::render::rays::primary_rays;
 use raylab::scene::library::load_scene;
 use raylab::stats::{Counters, Event};
 use raylab::test_util::same_or_tie;
-use raylab::tracers::batch::{trace_hits, trace_occlusion};
+use raylab::tracers::chunked::{trace_hits, trace_occlusion};
 use raylab::tracers::packet::TreeWidth;
 use raylab::tracers::reference::ReferenceTracer;
 use raylab::tracers::stream::{StreamConfig, StreamSize, StreamTracer};

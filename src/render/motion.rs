@@ -111,7 +111,7 @@ mod tests {
     use crate::render::rays::primary_rays;
     use crate::render::sampling::uniform;
     use crate::scene::library::load_scene;
-    use crate::tracers::batch::{trace_hits, trace_occlusion};
+    use crate::tracers::chunked::{trace_hits, trace_occlusion};
     use crate::tracers::{oracle_params, tracer_for_frame};
 
     /// The deforming flag over [1.0 s, 1.25 s]: every flag vertex moves.

@@ -1,7 +1,7 @@
 //! Every tracer — from-scratch or baseline — behind one trait, so the runner, the verifier and
 //! the benchmarks treat them alike. Adding a tracer is adding a file and one line in `registry.rs`.
 
-pub mod batch;
+pub mod chunked;
 pub mod coherent_grid;
 pub mod embree;
 pub mod grid_dda;
@@ -108,7 +108,7 @@ impl<K: Kernel> Tracer for K {
         K::COUNTS_INTERNALS
     }
     fn chunk_rays(&self) -> usize {
-        batch::CHUNK_RAYS
+        chunked::CHUNK_RAYS
     }
     fn intersect(&self, rays: Rays<'_>, hits: &mut [Hit]) {
         self.intersect_with(rays, hits, &mut NoStats)

@@ -10,7 +10,7 @@ use crate::error::{Error, Result};
 use crate::geometry::{Hit, Rays};
 use crate::scene::{Frame, Mesh};
 use crate::stats::Counters;
-use crate::tracers::batch::CHUNK_RAYS;
+use crate::tracers::chunked::CHUNK_RAYS;
 use crate::tracers::coherent_grid::{CgtConfig, CgtTracer};
 use crate::tracers::embree::{
     Coherence, EmbreeTracer, Packets16, Packets4, Packets8, Single, Stream, Submission,
@@ -75,7 +75,7 @@ pub struct TracerInfo {
     /// Whether it traces moving geometry at each ray's time (motion blur); a moving structure
     /// handed to any other tracer is refused rather than answered for the wrong instant.
     pub motion_blur: bool,
-    /// Rays per work chunk (`tracers::batch`): a multiple of 1024, so no aligned n×n block of
+    /// Rays per work chunk (`tracers::chunked`): a multiple of 1024, so no aligned n×n block of
     /// camera rays (n ≤ 32) straddles two chunks. A stream tracer wants far more than a packet
     /// tracer.
     pub chunk_rays: usize,
