@@ -14,22 +14,18 @@ use raylab::experiment::spec::shard::Shard;
 use raylab::experiment::{run_experiment, Chatter, RunOverrides};
 use raylab::geometry::ray_file::{hits_csv, occlusion_csv, read_rays};
 use raylab::geometry::RayKind;
-use raylab::render::area_light::LightSampleSets;
-use raylab::render::assembly::Assembly;
-use raylab::render::distribution::{render_sampled, DrtSettings, FrameGeometry, Integrator};
+use raylab::render::distribution::{render_sampled, DrtSettings, FrameGeometry};
 use raylab::render::image::Image;
-use raylab::render::interleaved_shadows::InterleavedShadows;
 use raylab::render::motion::MovingMesh;
 use raylab::render::path::ShadeStreams;
 use raylab::render::raycast::render_raycast;
+use raylab::render::renderers::{RenderWorkload, RendererInfo, RENDERERS};
 use raylab::render::wavefront::Tracing;
-use raylab::render::whitted::{
-    parse_materials, render_whitted, WhittedSettings, DEFAULT_PRUNING_THRESHOLD,
-};
+use raylab::render::whitted::{render_whitted, WhittedSettings};
 use raylab::scene::library::{list_scenes, load_scene};
 use raylab::scene::{Frame, Scene};
-use raylab::tracers::batch::{trace_hits, trace_occlusion};
-use raylab::tracers::Params;
+use raylab::tracers::chunked::{trace_hits, trace_occlusion};
+use raylab::tracers::{Params, TracerInfo};
 use raylab::verify::{self, format_table, Tolerance};
 
 #[derive(Parser)]
@@ -145,8 +141,10 @@ enum Command {
         frames: usize,
         #[arg(long, short, default_value = "render.png")]
         output: PathBuf,
-        #[arg(long, value_enum, default_value_t = Renderer::Raycast)]
-        renderer: Renderer,
+        /// raycast, or a renderer of the registry (`render::renderers::RENDERERS`) with its
+        /// settings from the flags below.
+        #[arg(long, default_value = RAYCAST, value_parser = renderer_names())]
+        renderer: String,
         /// Whitted: deepest reflection/refraction generation (default 5; 0 = ray casting with
         /// shadows). Distribution: reflection bounces (default 2). Path: bounces (default 5).
         #[arg(long)]
@@ -221,17 +219,19 @@ enum Command {
     Scenes,
 }
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-enum Renderer {
-    /// Renderer v0: ray casting, point-light shadows, Lambert.
-    Raycast,
-    /// Whitted ray tracing with packet assembly (Boulos 2007 §3, Overbeck 2008 §5–6).
-    Whitted,
-    /// Distribution ray tracing (Boulos 2007 §4): depth of field, glossy, soft shadows, motion blur.
-    Distribution,
-    /// Monte Carlo path tracing (Gribble & Ramani 2008 §4): Lambertian, dielectric and coupled
-    /// glossy (Ashikhmin–Shirley) materials, thin lens, next-event estimation, Russian roulette.
-    Path,
+/// `render --renderer`'s default, which is not a renderer of the registry: ray casting with
+/// point-light shadows and Lambert shading, no settings.
+const RAYCAST: &str = "raycast";
+
+/// `raycast` and the registry's renderers, each with its line about it.
+fn renderer_names() -> clap::builder::PossibleValuesParser {
+    use clap::builder::PossibleValue;
+    let raycast = PossibleValue::new(RAYCAST)
+        .help("renderer v0: ray casting, point-light shadows, Lambert shading");
+    let registered = RENDERERS
+        .iter()
+        .map(|r| PossibleValue::new(r.name).help(r.about));
+    clap::builder::PossibleValuesParser::new(std::iter::once(raycast).chain(registered))
 }
 
 /// Whitted ray tracing options of `render --renderer whitted`.
@@ -252,23 +252,27 @@ struct WhittedArgs {
     /// Whitted: ray-tree attenuation threshold (default 1/256).
     #[arg(long)]
     pruning_threshold: Option<f32>,
-    /// Whitted: packet assembly of secondary rays: none, runs, groups, ray_types, blind.
-    #[arg(long, default_value = "ray_types", value_parser = parse_assembly)]
-    assembly: Assembly,
-    /// Whitted: side n of the n×n packets whose secondary rays are assembled together.
-    #[arg(long, default_value_t = 8)]
-    packet: usize,
-    /// Whitted: a preset on every material: scene (as loaded), diffuse, mirror, glossy, glass.
-    #[arg(long, default_value = "scene")]
-    materials: String,
+    /// Whitted: packet assembly of secondary rays: none, runs, groups, ray_types (default),
+    /// blind.
+    #[arg(long)]
+    assembly: Option<String>,
+    /// Whitted: side n of the n×n packets whose secondary rays are assembled together (default
+    /// 8).
+    #[arg(long)]
+    packet: Option<usize>,
+    /// Whitted: a preset on every material: scene (as loaded, the default), diffuse, mirror,
+    /// glossy, glass.
+    #[arg(long)]
+    materials: Option<String>,
 }
 
 /// Distribution ray tracing options of `render --renderer distribution`.
 #[derive(clap::Args)]
 struct DrtArgs {
     /// Distribution: samples per pixel (a perfect square). Path: samples per pixel (any ≥ 1).
-    #[arg(long, default_value_t = 16)]
-    spp: u32,
+    /// Default 16.
+    #[arg(long)]
+    spp: Option<u32>,
     /// Distribution: lens radius (default: the camera's; 0 = pinhole).
     #[arg(long)]
     aperture: Option<f32>,
@@ -284,24 +288,62 @@ struct DrtArgs {
     /// centre, the 4×4 discontinuity filter; direct light only (needs a quad light).
     #[arg(long)]
     interleaved_shadows: bool,
-    /// Interleaved shadows: the sets, jittered, hammersley or lp (powers of 4).
-    #[arg(long, default_value = "jittered", value_parser = parse_sets)]
-    sets: LightSampleSets,
+    /// Interleaved shadows: the sets, jittered (default), hammersley or lp (powers of 4).
+    #[arg(long)]
+    sets: Option<String>,
     /// Interleaved shadows: leave the discontinuity filter out.
     #[arg(long)]
     no_filter: bool,
-    /// Interleaved shadows: light samples per partly occluded pixel, asked again (0: none).
-    #[arg(long, default_value_t = 0)]
-    retrace: u32,
+    /// Interleaved shadows: light samples per partly occluded pixel, asked again (0: none, the
+    /// default).
+    #[arg(long)]
+    retrace: Option<u32>,
 }
 
-fn parse_sets(s: &str) -> std::result::Result<LightSampleSets, String> {
-    LightSampleSets::parse(s).map_err(|e| e.to_string())
-}
-
-fn parse_assembly(s: &str) -> std::result::Result<Assembly, String> {
-    Assembly::parse(s)
-        .ok_or_else(|| format!("unknown assembly {s:?} (known: {})", Assembly::names()))
+/// The renderer settings given on the command line as the keys of an experiment's `render`
+/// table, for the renderer's own parser (`RendererInfo::parse`), which reads the keys it knows
+/// (`RendererInfo::keys`): a flag another renderer reads is left out.
+fn render_params(max_depth: Option<u32>, whitted: &WhittedArgs, drt: &DrtArgs) -> Params {
+    let given: [(&str, Option<String>); 15] = [
+        ("max_depth", max_depth.map(|d| d.to_string())),
+        (
+            "max_reflection_depth",
+            whitted.max_reflection_depth.map(|d| d.to_string()),
+        ),
+        (
+            "max_refraction_depth",
+            whitted.max_refraction_depth.map(|d| d.to_string()),
+        ),
+        (
+            "shadows",
+            match (whitted.no_shadows, drt.interleaved_shadows) {
+                (true, _) => Some("false".into()),
+                (_, true) => Some("interleaved".into()),
+                _ => None,
+            },
+        ),
+        (
+            "pruning",
+            match (whitted.no_pruning, whitted.pruning_threshold) {
+                (true, _) => Some("false".into()),
+                (_, threshold) => threshold.map(|t| t.to_string()),
+            },
+        ),
+        ("assembly", whitted.assembly.clone()),
+        ("packet", whitted.packet.map(|p| p.to_string())),
+        ("materials", whitted.materials.clone()),
+        ("spp", drt.spp.map(|s| s.to_string())),
+        ("aperture", drt.aperture.map(|a| a.to_string())),
+        ("focus", drt.focus.map(|f| f.to_string())),
+        ("shutter", drt.shutter.map(|s| s.to_string())),
+        ("sets", drt.sets.clone()),
+        ("filter", drt.no_filter.then(|| "false".into())),
+        ("retrace", drt.retrace.map(|r| r.to_string())),
+    ];
+    given
+        .into_iter()
+        .filter_map(|(key, value)| Some((key, value?)))
+        .fold(Params::new(), |p, (key, value)| p.with(key, value))
 }
 
 fn parse_shard(s: &str) -> std::result::Result<Shard, String> {
@@ -449,8 +491,17 @@ fn execute(command: Command) -> Result<bool> {
                     output.display()
                 )));
             }
-            let samples = match renderer {
-                Renderer::Distribution | Renderer::Path => drt.spp as u64,
+            // The settings are checked before anything is loaded or allocated.
+            let workload = match renderer.as_str() {
+                RAYCAST => None,
+                name => {
+                    let info = RendererInfo::find(name)?;
+                    let given = render_params(max_depth, &whitted, &drt).subset(info.keys);
+                    Some((info.parse)(&given)?)
+                }
+            };
+            let samples = match &workload {
+                Some(RenderWorkload::Distribution(w)) => w.settings.spp as u64,
                 _ => 1,
             };
             let rays = width as u64 * height as u64 * samples;
@@ -461,54 +512,22 @@ fn execute(command: Command) -> Result<bool> {
             let scene = load_scene(&scene, size)?;
             let frame = scene.frame(frame, frames);
             let params = params_of(params);
-            let image = match renderer {
-                Renderer::Raycast => {
+            let image = match workload {
+                None => {
                     let tracer = raylab::tracers::tracer_for_frame(&tracer, &params, &frame)?;
                     render_raycast(&scene, &frame, tracer.as_ref(), width, height)
                 }
-                Renderer::Whitted => {
+                Some(RenderWorkload::Whitted(settings)) => {
                     let tracer = raylab::tracers::tracer_for_frame(&tracer, &params, &frame)?;
-                    let depth = max_depth.unwrap_or(WhittedSettings::default().max_depth);
-                    render_whitted_cli(
-                        &scene,
-                        &frame,
-                        tracer.as_ref(),
-                        width,
-                        height,
-                        depth,
-                        &whitted,
-                    )?
+                    render_whitted_cli(&scene, &frame, tracer.as_ref(), width, height, &settings)
                 }
-                Renderer::Distribution | Renderer::Path => {
-                    let integrator = match renderer {
-                        Renderer::Path => Integrator::Path,
-                        _ => Integrator::Distribution,
-                    };
-                    let soft_shadows = drt.interleaved_shadows.then_some(InterleavedShadows {
-                        sets: drt.sets,
-                        filter: !drt.no_filter,
-                        retrace: drt.retrace,
-                    });
-                    let default_depth = match integrator {
-                        Integrator::Path => raylab::render::path::PATH_DEFAULT_DEPTH,
-                        _ if soft_shadows.is_some() => 0,
-                        Integrator::Distribution => DrtSettings::default().max_depth,
-                    };
+                Some(RenderWorkload::Distribution(w)) => {
                     let settings = DrtSettings {
-                        integrator,
                         width,
                         height,
-                        spp: drt.spp,
-                        aperture: drt.aperture,
-                        focus_distance: drt.focus,
-                        max_depth: max_depth.unwrap_or(default_depth),
-                        soft_shadows,
-                        ..DrtSettings::default()
+                        ..w.settings
                     };
-                    if let Some(mode) = soft_shadows {
-                        mode.check(settings.spp, settings.seed)?;
-                    }
-                    render_drt(&scene, &frame, (&tracer, &params), &settings, drt.shutter)?
+                    render_drt(&scene, &frame, (&tracer, &params), &settings, w.shutter)?
                 }
             };
             image.save_png(&output)?;
@@ -653,30 +672,15 @@ fn render_whitted_cli(
     tracer: &dyn raylab::tracers::Tracer,
     width: u32,
     height: u32,
-    max_depth: u32,
-    args: &WhittedArgs,
-) -> Result<Image> {
-    let settings = WhittedSettings {
-        max_depth,
-        max_reflection_depth: args.max_reflection_depth,
-        max_refraction_depth: args.max_refraction_depth,
-        shadows: !args.no_shadows,
-        pruning: match args.no_pruning {
-            true => None,
-            false => Some(args.pruning_threshold.unwrap_or(DEFAULT_PRUNING_THRESHOLD)),
-        },
-        assembly: args.assembly,
-        packet: args.packet,
-        materials: parse_materials(&args.materials)?,
-    };
-    settings.check()?;
+    settings: &WhittedSettings,
+) -> Image {
     let out = render_whitted(
         scene,
         frame,
         tracer,
         width,
         height,
-        &settings,
+        settings,
         Tracing::Timed,
     );
     for b in &out.batches {
@@ -689,7 +693,7 @@ fn render_whitted_cli(
             b.seconds * 1e3
         );
     }
-    Ok(out.image)
+    out.image
 }
 
 /// Renders a distribution or path-traced frame with tracer `(name, params)`, over the geometry moving during
@@ -708,8 +712,9 @@ fn render_drt(
     let geometry = FrameGeometry::of(frame, moving.as_ref());
     let built = geometry.tracer(tracer, params)?;
     // Path tracing shades in the stream tracer's streams (counters only).
+    let config = TracerInfo::find(tracer)?.config(params)?;
     let settings = &DrtSettings {
-        shade: ShadeStreams::of_tracer(tracer, params, built.chunk_rays()),
+        shade: ShadeStreams::of_config(&config, built.chunk_rays()),
         ..*settings
     };
     let tracer = built;

@@ -18,7 +18,7 @@ use raylab::scene::library::load_scene;
 use raylab::scene::Camera;
 use raylab::stats::{Counters, Event};
 use raylab::test_util::Soup;
-use raylab::tracers::cgt::{CgtConfig, CgtTracer};
+use raylab::tracers::coherent_grid::{CgtConfig, CgtTracer};
 use raylab::tracers::reference::ReferenceTracer;
 use raylab::tracers::{Kernel, Params, Tracer};
 use raylab::verify::{format_table, verify_frame, Tolerance};
@@ -484,7 +484,7 @@ fn hand_worked_counts_of_a_packet_down_one_column() {
         // grid-dda down the same column: per ray, macrocell (2, 2, 0) skipped at once (side 2)
         // and counted as one cell, then cells 2..=6; the sliver tested at z = 2, mailboxed at
         // 3..=5, the large triangle hit at 6.
-        let dda = raylab::tracers::dda::GridDdaTracer::new(grid.clone());
+        let dda = raylab::tracers::grid_dda::GridDdaTracer::new(grid.clone());
         let (hits, c) = count(&dda, &batch, false);
         assert!(hits
             .iter()
@@ -589,7 +589,7 @@ fn hopelessly_incoherent_packets_take_the_dda_ray_by_ray() {
         batch.push(Ray::new(Vec3::new(4.5, 4.5, 9.0), d, 0.0, f32::INFINITY), 0);
     }
     let cgt = CgtTracer::new(grid.clone(), CgtConfig::default());
-    let dda = raylab::tracers::dda::GridDdaTracer::new(grid);
+    let dda = raylab::tracers::grid_dda::GridDdaTracer::new(grid);
     for any in [false, true] {
         let (hits, c) = count(&cgt, &batch, any);
         let (want_hits, mut want) = count(&dda, &batch, any);

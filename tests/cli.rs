@@ -331,7 +331,7 @@ fn only_run(root: &Path, name: &str) -> PathBuf {
 #[test]
 fn dumped_rays_replay_with_trace_verify_and_experiments() {
     use raylab::geometry::ray_file::{hits_csv, read_rays};
-    use raylab::tracers::batch::trace_hits;
+    use raylab::tracers::chunked::trace_hits;
 
     let dir = scratch("ray-files");
     let exp = experiment(

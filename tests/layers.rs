@@ -276,7 +276,7 @@ fn the_checker_finds_imports_in_paths_groups_and_code() {
     let text = "use crate::geometry::Ray;\n\
                 // use crate::experiment::nothing;  (a comment)\n\
                 use crate::{\n    scene::Mesh,\n    render::{a, b},\n};\n\
-                fn f() { let s = \"crate::verify\"; crate::tracers::batch::pass(); }\n";
+                fn f() { let s = \"crate::verify\"; crate::tracers::chunked::pass(); }\n";
     assert_eq!(
         crate_imports(text),
         [

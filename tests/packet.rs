@@ -12,10 +12,10 @@ use raylab::accel::{Bvh, BvhConfig, BvhNode};
 use raylab::geometry::{Aabb, Hit, Ray, RayBatch, RayKind, Triangle};
 use raylab::stats::{Counters, Event};
 use raylab::test_util::same_or_tie;
-use raylab::tracers::batch::{trace_hits, trace_occlusion};
+use raylab::tracers::chunked::{trace_hits, trace_occlusion};
 use raylab::tracers::packet::{PacketConfig, PacketTracer, Traversal, TreeWidth};
 use raylab::tracers::reference::ReferenceTracer;
-use raylab::tracers::{Params, Tracer};
+use raylab::tracers::{Params, Tracer, TracerInfo};
 
 use common::{moving_room, reference_rays, same_or_tie_moving, MovingRoom, ReferenceRays};
 
@@ -346,7 +346,6 @@ fn bad_parameters_are_rejected() {
             frustum: false
         }
     );
-    let tree = Arc::new(four_leaf_tree());
     let ranged = Params::new().with("traversal", "ranged");
     for (extra, ok) in [
         (ranged.clone().with("width", 4), true),
@@ -363,7 +362,7 @@ fn bad_parameters_are_rejected() {
             false,
         ),
     ] {
-        let made = PacketTracer::from_params(tree.clone(), &extra);
+        let made = TracerInfo::find("packet").unwrap().config(&extra);
         assert_eq!(made.is_ok(), ok, "{extra}");
     }
 }

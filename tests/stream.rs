@@ -14,7 +14,7 @@ use raylab::render::rays::primary_rays;
 use raylab::scene::library::load_scene;
 use raylab::stats::{Counters, Event};
 use raylab::test_util::same_or_tie;
-use raylab::tracers::batch::{trace_hits, trace_occlusion};
+use raylab::tracers::chunked::{trace_hits, trace_occlusion};
 use raylab::tracers::packet::TreeWidth;
 use raylab::tracers::reference::ReferenceTracer;
 use raylab::tracers::stream::{StreamConfig, StreamSize, StreamTracer};
@@ -496,7 +496,7 @@ fn bad_parameters_are_rejected() {
     // No motion blur: a moving tree is refused.
     let tri = two_leaf_tree().triangles;
     let moving = Bvh::build_moving(&tri, &tri, BvhConfig::default());
-    assert!(StreamTracer::from_params(Arc::new(moving), &Params::new()).is_err());
+    assert!(StreamTracer::over_static(Arc::new(moving), StreamConfig::default()).is_err());
 }
 
 /// The paper's trend (Tables 2 and 4): on coherent camera rays, longer initial streams give

@@ -9,7 +9,7 @@ use raylab::render::rays::primary_rays;
 use raylab::render::wavefront::{answer, Answers, Work};
 use raylab::scene::library::load_scene;
 use raylab::scene::{Light, Scene};
-use raylab::tracers::batch::trace_hits;
+use raylab::tracers::chunked::trace_hits;
 use raylab::tracers::visibility::{QuadLight, Visibility};
 use raylab::tracers::{oracle_params, tracer_for_frame, Params, VisibilityQuery};
 

@@ -13,7 +13,7 @@ use raylab::geometry::{Hit, Ray, RayBatch, RayKind, Triangle};
 use raylab::scene::Mesh;
 use raylab::stats::Counters;
 use raylab::test_util::same_or_tie;
-use raylab::tracers::batch::{trace_hits, trace_occlusion};
+use raylab::tracers::chunked::{trace_hits, trace_occlusion};
 use raylab::tracers::reference::ReferenceTracer;
 use raylab::tracers::wide_single::WideSingleTracer;
 use raylab::tracers::{build_tracer, tracer_for_mesh, Params, Tracer, TracerInfo};

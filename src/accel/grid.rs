@@ -10,7 +10,7 @@
 //!   only the cells among those that Akenine-Möller's separating-axis test cannot separate from it.
 //!   Both use boxes grown by `margin`, so a triangle lying within rounding distance of a cell also
 //!   lies in it: a traversal that compares hit distances with cell exit distances in f32 then never
-//!   loses a triangle to rounding (see `tracers::dda`).
+//!   loses a triangle to rounding (see `tracers::grid_dda`).
 //! - Memory (§3, "pooled memory"): no per-cell allocation — one pass counts triangles per cell, a
 //!   prefix sum turns counts into offsets, a second pass fills one flat array (CSR).
 //! - Macrocells (§2.4): a coarser grid of M×M×M blocks of cells, each flagged non-empty when any of

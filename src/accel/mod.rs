@@ -64,6 +64,18 @@ impl AccelKind {
         }
     }
 
+    /// Checks the structure's parameters as `build` reads them, without building anything.
+    pub fn check_params(self, params: &Params) -> Result<()> {
+        match self {
+            AccelKind::Bvh => BvhConfig::from_params(params).map(drop),
+            AccelKind::Embree => EmbreeConfig::from_params(params).map(drop),
+            #[cfg(embree4)]
+            AccelKind::Embree4 => EmbreeConfig::from_params(params).map(drop),
+            AccelKind::Obvhs => ObvhsQuality::from_params(params).map(drop),
+            AccelKind::Grid => GridConfig::from_params(params).map(drop),
+        }
+    }
+
     pub fn build(self, mesh: &Mesh, params: &Params) -> Result<Accel> {
         Ok(match self {
             AccelKind::Bvh => Accel::Bvh(Arc::new(Bvh::build(

@@ -24,7 +24,7 @@ use crate::render::motion::MovingMesh;
 use crate::render::path::ShadeStreams;
 use crate::render::wavefront::Tracing;
 use crate::scene::{Frame, Mesh, Scene};
-use crate::tracers::{Params, Tracer};
+use crate::tracers::{Params, Role, Tracer, TracerInfo};
 
 /// Samples per pixel of the reference image.
 pub const REFERENCE_SPP: u32 = 1024;
@@ -131,7 +131,7 @@ pub fn reference_image(
         return Ok((image, true));
     }
     let geometry = FrameGeometry::of(frame, motion);
-    let tracer = geometry.tracer("reference", &Params::new())?;
+    let tracer = geometry.tracer(TracerInfo::of_role(Role::Reference)?.name, &Params::new())?;
     let reference = reference_settings(settings);
     let image = render_sampled(
         scene,

@@ -44,7 +44,7 @@ use crate::stats::Counters;
 use crate::tracers::{tracer_for_mesh, Params, Tracer};
 
 /// A wave holds at least this many camera rays (whole tiles), so each traced batch spreads over
-/// many `tracers::batch` chunks and every core has work even at 1 sample per pixel.
+/// many `tracers::chunked` chunks and every core has work even at 1 sample per pixel.
 const WAVE_RAYS: usize = 1 << 16;
 
 /// Dimension pairs of the sample table: image position, lens, time (first coordinate); then

@@ -267,7 +267,7 @@ mod tests {
     use crate::render::assembly::BatchKind;
     use crate::render::rays::CameraProjection;
     use crate::scene::library::load_scene;
-    use crate::tracers::batch::trace_hits;
+    use crate::tracers::chunked::trace_hits;
     use crate::tracers::{tracer_for_frame, Params};
 
     const SIDE: u32 = 64;

@@ -16,6 +16,7 @@ pub mod path;
 pub mod qmc;
 pub mod raycast;
 pub mod rays;
+pub mod renderers;
 pub mod sampling;
 pub mod shading;
 pub mod specular;

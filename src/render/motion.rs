@@ -8,7 +8,7 @@ use crate::error::{Error, Result};
 use crate::geometry::{Hit, Ray, Triangle};
 use crate::render::rays::SurfacePoint;
 use crate::scene::{Mesh, Scene};
-use crate::tracers::{build_tracer, Params, Tracer, TracerInfo};
+use crate::tracers::{make_tracer, Params, Tracer, TracerInfo};
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct MovingMesh {
@@ -86,13 +86,14 @@ impl MovingMesh {
 
 /// Tracer `name` over `moving`: its structure built for motion (`AccelKind::build_moving`), so rays
 /// are traced at their time. Only `reference`, `packet` and the Embree tracers can; the others
-/// are refused (`AccelKind::build_moving`, `build_tracer`).
+/// are refused (`AccelKind::build_moving`, `make_tracer`).
 pub fn tracer_for_motion(
     name: &str,
     params: &Params,
     moving: &MovingMesh,
 ) -> Result<Box<dyn Tracer>> {
     let info = TracerInfo::find(name)?;
+    let config = info.config(params)?;
     let close = Mesh {
         triangles: moving.close.clone(),
         material_ids: moving.open.material_ids.clone(),
@@ -100,7 +101,7 @@ pub fn tracer_for_motion(
     let accel =
         info.accel
             .build_moving(&moving.open, &close, &params.subset(info.accel.params()))?;
-    build_tracer(info, params, &accel)
+    make_tracer(info, &config, &accel)
 }
 
 #[cfg(test)]
@@ -110,7 +111,7 @@ mod tests {
     use crate::render::rays::primary_rays;
     use crate::render::sampling::uniform;
     use crate::scene::library::load_scene;
-    use crate::tracers::batch::{trace_hits, trace_occlusion};
+    use crate::tracers::chunked::{trace_hits, trace_occlusion};
     use crate::tracers::{oracle_params, tracer_for_frame};
 
     /// The deforming flag over [1.0 s, 1.25 s]: every flag vertex moves.

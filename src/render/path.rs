@@ -55,8 +55,8 @@ use crate::render::specular::{reflect, reflection_ray, refract, refraction_ray, 
 use crate::render::wavefront::{Answers, Tracing, Work};
 use crate::scene::{Frame, Light, Material, Scene};
 use crate::stats::{Counters, Event, Stats};
-use crate::tracers::stream::{StreamConfig, StreamSize};
-use crate::tracers::{Params, Tracer};
+use crate::tracers::stream::StreamSize;
+use crate::tracers::{Tracer, TracerConfig};
 
 /// The kinds of rays a path-traced frame traces: camera rays, shadow rays (next-event
 /// estimation) and path rays (every bounce after the camera, whatever lobe sampled it).
@@ -158,11 +158,11 @@ impl Default for ShadeStreams {
 }
 
 impl ShadeStreams {
-    /// The streams and width of tracer `name` with `params` when it is the stream filtering
+    /// The streams and width of a tracer configured with `config` when it is the stream filtering
     /// tracer (a `frame` stream: its work chunk of `chunk_rays`), else the defaults.
-    pub fn of_tracer(name: &str, params: &Params, chunk_rays: usize) -> ShadeStreams {
-        match (name, StreamConfig::from_params(params)) {
-            ("stream", Ok(config)) => ShadeStreams {
+    pub fn of_config(config: &TracerConfig, chunk_rays: usize) -> ShadeStreams {
+        match config {
+            TracerConfig::Stream(config) => ShadeStreams {
                 stream: match config.stream {
                     StreamSize::Rays(n) => n,
                     StreamSize::Frame => chunk_rays,

@@ -2,14 +2,14 @@
 //! camera rays, then the shadow, reflection or refraction rays they spawn, or a light-visibility
 //! query — and gets every answer back before it shades. Whitted, distribution and the runner's
 //! ray batches all trace through `answer`, so a timed pass, a counted pass and a rendered frame
-//! split the work the same way (`tracers::batch`).
+//! split the work the same way (`tracers::chunked`).
 
 use std::time::Instant;
 
 use crate::geometry::{Hit, RayBatch};
 use crate::render::assembly::BatchKind;
 use crate::stats::Counters;
-use crate::tracers::batch::{counted_pass, pass, visibility_pass};
+use crate::tracers::chunked::{counted_pass, pass, visibility_pass};
 use crate::tracers::visibility::Visibility;
 use crate::tracers::{Tracer, VisibilityQuery};
 

@@ -3,7 +3,7 @@
 //! reflection, Fresnel-weighted refraction; `shading.rs`) and spawn the next generation's shadow,
 //! reflection and refraction batches, packet-assembled per incoming packet (`assembly.rs`,
 //! Boulos et al. 2007 §3.2), and so on until no rays are left. Each batch is traced through
-//! `tracers::batch`, so packet tracers see the assembled packets.
+//! `tracers::chunked`, so packet tracers see the assembled packets.
 //!
 //! Depth: camera rays have depth 0; every ray spawned at a hit of a depth-d ray has depth d + 1.
 //! Reflection and refraction rays go up to `max_depth` (0 = ray casting), or each up to its own

@@ -1,11 +1,11 @@
 //! Every tracer — from-scratch or baseline — behind one trait, so the runner, the verifier and
 //! the benchmarks treat them alike. Adding a tracer is adding a file and one line in `registry.rs`.
 
-pub mod batch;
-pub mod cgt;
-pub mod dda;
+pub mod chunked;
+pub mod coherent_grid;
 pub mod embree;
-pub mod mft;
+pub mod grid_dda;
+pub mod multi_frusta;
 pub mod obvhs;
 pub mod packet;
 pub mod reference;
@@ -19,7 +19,8 @@ use crate::stats::{Counters, NoStats, Stats};
 
 pub use crate::params::Params;
 pub use registry::{
-    build_tracer, oracle_params, tracer_for_frame, tracer_for_mesh, TracerInfo, ORACLE, TRACERS,
+    build_tracer, make_tracer, oracle_params, tracer_for_frame, tracer_for_mesh, Role,
+    TracerConfig, TracerInfo, ORACLE, TRACERS,
 };
 pub use visibility::VisibilityQuery;
 
@@ -107,7 +108,7 @@ impl<K: Kernel> Tracer for K {
         K::COUNTS_INTERNALS
     }
     fn chunk_rays(&self) -> usize {
-        batch::CHUNK_RAYS
+        chunked::CHUNK_RAYS
     }
     fn intersect(&self, rays: Rays<'_>, hits: &mut [Hit]) {
         self.intersect_with(rays, hits, &mut NoStats)

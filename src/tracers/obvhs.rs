@@ -195,7 +195,7 @@ mod tests {
     use crate::test_util::Soup;
     use crate::tracers::reference::ReferenceTracer;
     use crate::tracers::Kernel;
-    use crate::tracers::{build_tracer, Params, TracerInfo};
+    use crate::tracers::{make_tracer, Params, TracerInfo};
 
     fn soup(n: usize, size: f32, seed: u64) -> Vec<Triangle> {
         Soup::unit(size).triangles(n, seed)
@@ -725,7 +725,8 @@ mod tests {
         };
         assert_eq!(bvh.quality, ObvhsQuality::FastBuild);
         assert!(accel.build_seconds() > 0.0);
-        let tracer = build_tracer(info, &params, &accel).unwrap();
+        let config = info.config(&params).unwrap();
+        let tracer = make_tracer(info, &config, &accel).unwrap();
         let mut rays = RayBatch::new(RayKind::Primary);
         rays.push(
             Ray::new(Vec3::new(0.2, 0.3, 1.0), -Vec3::Z, 0.0, f32::INFINITY),
@@ -741,8 +742,8 @@ mod tests {
         );
         // The reference tracer's structure is refused.
         let bvh_accel = AccelKind::Bvh.build(&mesh, &Params::new()).unwrap();
-        assert!(build_tracer(info, &Params::new(), &bvh_accel).is_err());
-        assert!(build_tracer(info, &Params::new().with("leaf_size", 2), &accel).is_err());
+        assert!(make_tracer(info, &config, &bvh_accel).is_err());
+        assert!(info.config(&Params::new().with("leaf_size", 2)).is_err());
     }
 
     /// Seconds this thread has spent on a CPU (Linux `schedstat`): on a machine shared with other

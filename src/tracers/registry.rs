@@ -10,55 +10,117 @@ use crate::error::{Error, Result};
 use crate::geometry::{Hit, Rays};
 use crate::scene::{Frame, Mesh};
 use crate::stats::Counters;
-use crate::tracers::batch::CHUNK_RAYS;
-use crate::tracers::cgt::{CgtConfig, CgtTracer};
+use crate::tracers::chunked::CHUNK_RAYS;
+use crate::tracers::coherent_grid::{CgtConfig, CgtTracer};
 use crate::tracers::embree::{
     Coherence, EmbreeTracer, Packets16, Packets4, Packets8, Single, Stream, Submission,
 };
-use crate::tracers::mft::{MftConfig, MftTracer};
-use crate::tracers::packet::{PacketConfig, PacketTracer};
+use crate::tracers::multi_frusta::{MftConfig, MftTracer};
+use crate::tracers::packet::{PacketConfig, PacketTracer, TreeWidth};
 use crate::tracers::stream::{StreamConfig, StreamTracer};
 use crate::tracers::{
-    dda::GridDdaTracer, obvhs::ObvhsTracer, reference::ReferenceTracer, wide_single, Params,
+    grid_dda::GridDdaTracer, obvhs::ObvhsTracer, reference::ReferenceTracer, wide_single, Params,
     Tracer, VisibilityQuery,
 };
 
-/// Makes a tracer from its parameters and a structure of its `AccelKind`.
-type Make = fn(&Params, &Accel) -> Result<Box<dyn Tracer>>;
+/// What a tracer is in a comparison.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Role {
+    /// From scratch, after a paper (or our own variant of one): what the comparisons are about,
+    /// "ours" in the summary.
+    Paper,
+    /// A production library (Embree, obvhs): what ours are measured against.
+    Baseline,
+    /// Our reference: the plain single-ray tracer whose hits generate secondary rays.
+    Reference,
+}
+
+/// A tracer's parameters, parsed and checked (`TracerInfo::parse`): what `TracerInfo::make`
+/// takes, one variant per tracer family.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TracerConfig {
+    /// A tracer with no parameters of its own (reference, obvhs, grid-dda).
+    Plain,
+    WideSingle(wide_single::Width),
+    /// Every Embree entry point: the coherence hint (`context`).
+    Embree(Coherence),
+    Cgt(CgtConfig),
+    Packet {
+        config: PacketConfig,
+        width: TreeWidth,
+    },
+    Mft(MftConfig),
+    Stream(StreamConfig),
+}
+
+/// Checks a tracer's own parameters and returns its typed configuration.
+type Parse = fn(&Params) -> Result<TracerConfig>;
+
+/// Makes a tracer from its configuration and a structure of its `AccelKind`.
+type Make = fn(&TracerConfig, &Accel) -> Result<Box<dyn Tracer>>;
 
 pub struct TracerInfo {
     pub name: &'static str,
+    pub role: Role,
     pub accel: AccelKind,
     /// Parameters the tracer itself reads (the structure's own are in `AccelKind::params`).
     pub params: &'static [&'static str],
     pub about: &'static str,
+    pub parse: Parse,
+    /// Takes what `parse` returned.
     pub make: Make,
+    /// Whether it counts its own box and triangle tests (`Kernel::COUNTS_INTERNALS`; Embree
+    /// counts only rays).
+    pub counts_internals: bool,
     /// Whether it traces moving geometry at each ray's time (motion blur); a moving structure
     /// handed to any other tracer is refused rather than answered for the wrong instant.
     pub motion_blur: bool,
-    /// Rays per work chunk (`tracers::batch`): a multiple of 1024, so no aligned n×n block of
+    /// Rays per work chunk (`tracers::chunked`): a multiple of 1024, so no aligned n×n block of
     /// camera rays (n ≤ 32) straddles two chunks. A stream tracer wants far more than a packet
     /// tracer.
     pub chunk_rays: usize,
 }
 
-fn embree3<M: Submission<Embree3>>(params: &Params, accel: &Accel) -> Result<Box<dyn Tracer>> {
-    Ok(Box::new(EmbreeTracer::<Embree3, M>::from_params(
-        accel.embree()?,
-        params,
-    )?))
+/// The error of a `make` handed another family's configuration (a bug, not the user's input).
+fn other_family(config: &TracerConfig) -> Error {
+    Error::Runtime(format!(
+        "a tracer was made from another tracer's configuration {config:?}"
+    ))
+}
+
+fn plain(_: &Params) -> Result<TracerConfig> {
+    Ok(TracerConfig::Plain)
+}
+
+fn embree_config(params: &Params) -> Result<TracerConfig> {
+    Coherence::from_params(params).map(TracerConfig::Embree)
+}
+
+fn embree3<M: Submission<Embree3>>(
+    config: &TracerConfig,
+    accel: &Accel,
+) -> Result<Box<dyn Tracer>> {
+    let TracerConfig::Embree(coherence) = *config else {
+        return Err(other_family(config));
+    };
+    let scene = accel.embree()?.clone();
+    Ok(Box::new(EmbreeTracer::<Embree3, M>::new(scene, coherence)))
 }
 
 #[cfg(embree4)]
-fn embree4<M: Submission<Embree4>>(params: &Params, accel: &Accel) -> Result<Box<dyn Tracer>> {
-    Ok(Box::new(EmbreeTracer::<Embree4, M>::from_params(
-        accel.embree4()?,
-        params,
-    )?))
+fn embree4<M: Submission<Embree4>>(
+    config: &TracerConfig,
+    accel: &Accel,
+) -> Result<Box<dyn Tracer>> {
+    let TracerConfig::Embree(coherence) = *config else {
+        return Err(other_family(config));
+    };
+    let scene = accel.embree4()?.clone();
+    Ok(Box::new(EmbreeTracer::<Embree4, M>::new(scene, coherence)))
 }
 
-/// An Embree tracer's entry: every one reads the coherence hint (`context`) and traces moving
-/// geometry.
+/// An Embree tracer's entry: every one is a baseline that reads the coherence hint (`context`),
+/// counts only rays and traces moving geometry.
 const fn embree_entry(
     name: &'static str,
     accel: AccelKind,
@@ -67,10 +129,13 @@ const fn embree_entry(
 ) -> TracerInfo {
     TracerInfo {
         name,
+        role: Role::Baseline,
         accel,
         params: Coherence::PARAMS,
         about,
+        parse: embree_config,
         make,
+        counts_internals: false,
         motion_blur: true,
         chunk_rays: CHUNK_RAYS,
     }
@@ -100,26 +165,52 @@ pub fn not_built(name: &str) -> bool {
     !EMBREE4_BUILT && EMBREE4_TRACERS.contains(&name)
 }
 
+/// The role of the tracer a runs.csv row names, also of one this build lacks (Embree 4's);
+/// `None` for a name no build has.
+pub fn role_of(name: &str) -> Option<Role> {
+    match TracerInfo::find(name) {
+        Ok(info) => Some(info.role),
+        Err(_) => not_built(name).then_some(Role::Baseline),
+    }
+}
+
+/// Whether the tracer a runs.csv row names calls Embree, also one this build lacks.
+pub fn is_embree(name: &str) -> bool {
+    match TracerInfo::find(name) {
+        Ok(info) => info.accel.is_embree(),
+        Err(_) => not_built(name),
+    }
+}
+
 /// The Embree 4 tracers, which a build without Embree 4 lacks (`accel::embree::EMBREE4_HINT`).
 const EMBREE4_TRACERS: &[&str] = &["embree4-1", "embree4-4", "embree4-8", "embree4-16"];
 
 pub const TRACERS: &[TracerInfo] = &[
     TracerInfo {
         name: "reference",
+        role: Role::Reference,
         accel: AccelKind::Bvh,
         params: &[],
         about:
             "single rays, binary SAH BVH, nearer child first; watertight triangles, robust slabs",
+        parse: plain,
         make: |_, accel| Ok(Box::new(ReferenceTracer::new(accel.bvh()?.clone()))),
+        counts_internals: true,
         motion_blur: true,
         chunk_rays: CHUNK_RAYS,
     },
     TracerInfo {
         name: "wide-single",
+        role: Role::Paper,
         accel: AccelKind::Bvh,
         params: wide_single::PARAMS,
         about: "single rays, the SAH BVH collapsed to 4 or 8 children per node (width, default 8): one SIMD slab test of all children, nearest first; the reference's watertight triangles and hits",
-        make: |params, accel| wide_single::from_params(accel.bvh()?.clone(), params),
+        parse: |params| wide_single::Width::from_params(params).map(TracerConfig::WideSingle),
+        make: |config, accel| match *config {
+            TracerConfig::WideSingle(width) => Ok(width.tracer(accel.bvh()?.clone())),
+            _ => Err(other_family(config)),
+        },
+        counts_internals: true,
         motion_blur: true,
         chunk_rays: CHUNK_RAYS,
     },
@@ -183,55 +274,96 @@ pub const TRACERS: &[TracerInfo] = &[
     ),
     TracerInfo {
         name: "obvhs",
+        role: Role::Baseline,
         accel: AccelKind::Obvhs,
         params: &[],
         about: "single rays, obvhs 0.4 compressed 8-wide BVH and its own traversal; watertight triangles",
+        parse: plain,
         make: |_, accel| Ok(Box::new(ObvhsTracer::new(accel.obvhs()?.clone()))),
+        counts_internals: true,
         motion_blur: false,
         chunk_rays: CHUNK_RAYS,
     },
     TracerInfo {
         name: "grid-dda",
+        role: Role::Paper,
         accel: AccelKind::Grid,
         params: &[],
         about: "single rays, uniform grid by 3D-DDA (Amanatides & Woo 1987), empty macrocells skipped; watertight triangles",
+        parse: plain,
         make: |_, accel| Ok(Box::new(GridDdaTracer::new(accel.grid()?.clone()))),
+        counts_internals: true,
         motion_blur: false,
         chunk_rays: CHUNK_RAYS,
     },
     TracerInfo {
         name: "cgt",
+        role: Role::Paper,
         accel: AccelKind::Grid,
         params: CgtConfig::PARAMS,
         about: "coherent grid traversal (Wald et al. 2006): n×n packets walk the uniform grid slice by slice in their frustum; per-packet mailboxing, SIMD frustum culling, macrocells",
-        make: |params, accel| Ok(Box::new(CgtTracer::from_params(accel.grid()?.clone(), params)?)),
+        parse: |params| CgtConfig::from_params(params).map(TracerConfig::Cgt),
+        make: |config, accel| match *config {
+            TracerConfig::Cgt(c) => Ok(Box::new(CgtTracer::new(accel.grid()?.clone(), c))),
+            _ => Err(other_family(config)),
+        },
+        counts_internals: true,
         motion_blur: false,
         chunk_rays: CHUNK_RAYS,
     },
     TracerInfo {
         name: "packet",
+        role: Role::Paper,
         accel: AccelKind::Bvh,
         params: PacketConfig::PARAMS,
         about: "large ray packets (Overbeck et al. 2008): n×n packets (packet ∈ 2,4,8,16,32) of L-lane SIMD rays (lanes ∈ 4,8,16) through the SAH BVH by masked, ranged, partition or ia (Wald et al. 2007 first hit + interval arithmetic) traversal, front to back by direction signs; frustum culling of boxes and triangles (shared-origin, shared-end-point or general frustum, from the data); exact closest hits (watertight, robust slabs per lane)",
-        make: |params, accel| Ok(Box::new(PacketTracer::from_params(accel.bvh()?.clone(), params)?)),
+        parse: |params| {
+            let config = PacketConfig::from_params(params)?;
+            let width = config.width_from_params(params)?;
+            Ok(TracerConfig::Packet { config, width })
+        },
+        make: |config, accel| match *config {
+            TracerConfig::Packet { config, width } => Ok(Box::new(PacketTracer::with_width(
+                accel.bvh()?.clone(),
+                config,
+                width,
+            ))),
+            _ => Err(other_family(config)),
+        },
+        counts_internals: true,
         motion_blur: true,
         chunk_rays: CHUNK_RAYS,
     },
     TracerInfo {
         name: "mft",
+        role: Role::Paper,
         accel: AccelKind::Bvh,
         params: MftConfig::PARAMS,
         about: "multi-frusta tracing (Benthin & Wald 2009): light-visibility queries as blocks of shadow frusta (block points, ≤ 64) through the SAH BVH together, rays generated on demand at leaves, box culling for all frusta at once, plane and corner-ray triangle culling, occlusion bits, corner-ray recomputation (cr), frustum shrinking (fs) and leaf ray–box tests (leaf_rays); with primary = frusta, pinhole camera batches as blocks of 4×4-pixel primary frusta, their rays made on demand from the camera grid; other ray batches (and camera rays by default) by 4×4 packets; exact answers (watertight)",
-        make: |params, accel| Ok(Box::new(MftTracer::from_params(accel.bvh()?.clone(), params)?)),
+        parse: |params| MftConfig::from_params(params).map(TracerConfig::Mft),
+        make: |config, accel| match *config {
+            TracerConfig::Mft(c) => Ok(Box::new(MftTracer::new(accel.bvh()?.clone(), c))),
+            _ => Err(other_family(config)),
+        },
+        counts_internals: true,
         motion_blur: false,
         chunk_rays: CHUNK_RAYS,
     },
     TracerInfo {
         name: "stream",
+        role: Role::Paper,
         accel: AccelKind::Bvh,
         params: StreamConfig::PARAMS,
         about: "stream filtering (Gribble & Ramani 2008): streams of S rays (stream = S or frame) through the SAH BVH; at each node a box filter tests N rays at a time (width ∈ 4,8,12,16,32,64) and partitions the stream in place, the rays that meet the box going on to the leaf or to both children, front to back; exact closest hits (watertight, robust slabs per lane)",
-        make: |params, accel| Ok(Box::new(StreamTracer::from_params(accel.bvh()?.clone(), params)?)),
+        parse: |params| StreamConfig::from_params(params).map(TracerConfig::Stream),
+        make: |config, accel| match *config {
+            TracerConfig::Stream(c) => Ok(Box::new(StreamTracer::over_static(
+                accel.bvh()?.clone(),
+                c,
+            )?)),
+            _ => Err(other_family(config)),
+        },
+        counts_internals: true,
         motion_blur: false,
         chunk_rays: 16 * CHUNK_RAYS,
     },
@@ -254,6 +386,22 @@ impl TracerInfo {
         )))
     }
 
+    /// The tracer of `role` (the first, for a role several have): `Role::Reference` names the
+    /// one tracer that generates secondary rays and reference images.
+    pub fn of_role(role: Role) -> Result<&'static TracerInfo> {
+        TRACERS
+            .iter()
+            .find(|t| t.role == role)
+            .ok_or_else(|| Error::Runtime(format!("no tracer of role {role:?} in this build")))
+    }
+
+    /// `params` (the tracer's and its structure's) checked: no key the tracer or its structure
+    /// does not read, and the tracer's own values parsed into its configuration.
+    pub fn config(&self, params: &Params) -> Result<TracerConfig> {
+        params.check_known(self.name, &self.accepts())?;
+        (self.parse)(params)
+    }
+
     /// Every parameter this tracer accepts: its own and its structure's.
     pub fn accepts(&self) -> Vec<&'static str> {
         self.params
@@ -266,7 +414,16 @@ impl TracerInfo {
 
 /// A tracer over `accel`, which must be of the tracer's `AccelKind` built with its parameters.
 pub fn build_tracer(info: &TracerInfo, params: &Params, accel: &Accel) -> Result<Box<dyn Tracer>> {
-    params.check_known(info.name, &info.accepts())?;
+    make_tracer(info, &info.config(params)?, accel)
+}
+
+/// A tracer over `accel`, which must be of the tracer's `AccelKind` built with its parameters;
+/// `config` is what `info.config` returned.
+pub fn make_tracer(
+    info: &TracerInfo,
+    config: &TracerConfig,
+    accel: &Accel,
+) -> Result<Box<dyn Tracer>> {
     if accel.is_moving() && !info.motion_blur {
         let movers: Vec<&str> = TRACERS
             .iter()
@@ -280,7 +437,7 @@ pub fn build_tracer(info: &TracerInfo, params: &Params, accel: &Accel) -> Result
         )));
     }
     Ok(Box::new(Registered {
-        tracer: (info.make)(params, accel)?,
+        tracer: (info.make)(config, accel)?,
         chunk_rays: info.chunk_rays,
     }))
 }
@@ -288,10 +445,11 @@ pub fn build_tracer(info: &TracerInfo, params: &Params, accel: &Accel) -> Result
 /// Builds tracer `name` with `params` over `mesh` (its own structure, built here).
 pub fn tracer_for_mesh(name: &str, params: &Params, mesh: &Mesh) -> Result<Box<dyn Tracer>> {
     let info = TracerInfo::find(name)?;
+    let config = info.config(params)?;
     let accel = info
         .accel
         .build(mesh, &params.subset(info.accel.params()))?;
-    build_tracer(info, params, &accel)
+    make_tracer(info, &config, &accel)
 }
 
 /// Builds tracer `name` with `params` over `frame`'s geometry (its own structure, built here).
@@ -382,6 +540,74 @@ mod tests {
             }
         }
         assert!(!not_built("embree3-16") && !not_built("no-such-tracer"));
+    }
+
+    fn triangle() -> Mesh {
+        let mut mesh = Mesh::default();
+        mesh.push(
+            crate::geometry::Triangle {
+                v: [glam::Vec3::ZERO, glam::Vec3::X, glam::Vec3::Y],
+            },
+            0,
+        );
+        mesh
+    }
+
+    #[test]
+    fn one_reference_and_the_entries_know_what_their_tracers_count() {
+        let reference: Vec<&str> = TRACERS
+            .iter()
+            .filter(|t| t.role == Role::Reference)
+            .map(|t| t.name)
+            .collect();
+        assert_eq!(reference, ["reference"]);
+        assert_eq!(
+            TracerInfo::of_role(Role::Reference).unwrap().name,
+            "reference"
+        );
+        for t in TRACERS {
+            let config = t.config(&Params::new()).unwrap();
+            let accel = t.accel.build(&triangle(), &Params::new()).unwrap();
+            let tracer = make_tracer(t, &config, &accel).unwrap();
+            assert_eq!(tracer.counts_internals(), t.counts_internals, "{}", t.name);
+            assert_eq!(t.accel.is_embree(), is_embree(t.name), "{}", t.name);
+            assert_eq!(role_of(t.name), Some(t.role), "{}", t.name);
+            // Baselines are the production libraries: Embree's and obvhs.
+            assert_eq!(
+                t.role == Role::Baseline,
+                t.accel.is_embree() || t.accel == AccelKind::Obvhs,
+                "{}",
+                t.name
+            );
+        }
+        assert_eq!(
+            (role_of("no-such-tracer"), is_embree("no-such-tracer")),
+            (None, false)
+        );
+    }
+
+    #[test]
+    fn a_configuration_checks_keys_and_values() {
+        let packet = TracerInfo::find("packet").unwrap();
+        let err = packet.config(&Params::new().with("depth", 2)).unwrap_err();
+        assert!(
+            err.to_string()
+                .contains("unknown parameter \"depth\" for packet"),
+            "{err}"
+        );
+        assert!(packet.config(&Params::new().with("lanes", 5)).is_err());
+        // The structure's parameters are accepted (the structure reads them), not parsed here.
+        let config = packet.config(&Params::new().with("leaf_size", 2).with("width", 4));
+        assert!(matches!(
+            config,
+            Ok(TracerConfig::Packet {
+                width: TreeWidth::Four,
+                ..
+            })
+        ));
+        let bvh = AccelKind::Bvh.build(&triangle(), &Params::new()).unwrap();
+        let wrong = make_tracer(packet, &TracerConfig::Plain, &bvh);
+        assert!(matches!(wrong, Err(Error::Runtime(_))));
     }
 
     #[test]

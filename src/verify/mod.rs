@@ -21,7 +21,7 @@ use crate::geometry::{Hit, RayBatch, RayKind};
 use crate::render::rays::{diffuse_rays, primary_rays, shadow_rays};
 use crate::render::specular::specular_rays;
 use crate::scene::{Frame, Mesh, Scene};
-use crate::tracers::batch::{trace_hits, trace_occlusion};
+use crate::tracers::chunked::{trace_hits, trace_occlusion};
 use crate::tracers::{oracle_params, tracer_for_frame, Params, Tracer, ORACLE};
 use crate::verify::truth::Truth;
 

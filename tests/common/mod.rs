@@ -12,7 +12,7 @@ use raylab::geometry::{Aabb, Hit, RayBatch, RayKind, Triangle};
 use raylab::render::rays::{diffuse_rays, primary_rays, shadow_rays};
 use raylab::scene::library::load_scene;
 use raylab::scene::Mesh;
-use raylab::tracers::batch::{trace_hits, trace_occlusion};
+use raylab::tracers::chunked::{trace_hits, trace_occlusion};
 use raylab::tracers::reference::ReferenceTracer;
 use raylab::tracers::Params;
 

@@ -13,6 +13,7 @@ use crate::experiment::record::{Best, RunRow};
 use crate::experiment::spec::plan::{InstancePlan, Plan};
 use crate::geometry::RayKind;
 use crate::tracers::embree::Coherence;
+use crate::tracers::TracerConfig;
 
 /// Same scene (and size), frame, work and thread count.
 type Group = (
@@ -84,7 +85,10 @@ fn config(instance: &InstancePlan, ray_kind: &str) -> String {
         file if file.starts_with("file:") => Some(RayKind::Primary),
         kind => RayKind::parse(kind),
     };
-    let coherence = Coherence::from_params(&instance.params).unwrap_or_default();
+    let coherence = match instance.config {
+        TracerConfig::Embree(coherence) => coherence,
+        _ => Coherence::default(),
+    };
     let mut parts = vec![instance.tracer.clone()];
     if !instance.params.0.is_empty() {
         parts.push(instance.params.to_string());

@@ -19,16 +19,13 @@ use std::path::Path;
 use serde::Serialize;
 
 use crate::error::{Error, Result};
+use crate::tracers::registry::{is_embree, role_of};
+use crate::tracers::Role;
 
 use crate::experiment::record::files::META_JSON;
 use crate::experiment::record::files::RUNS_CSV;
 use crate::experiment::record::files::VERIFY_CSV;
 use crate::experiment::record::selection::{read_rows, Row};
-
-/// The baselines that are not Embree; every tracer on a non-Embree structure other than these is
-/// one of ours.
-const REFERENCE: &str = "reference";
-const OBVHS: &str = "obvhs";
 
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Summary {
@@ -203,7 +200,6 @@ type ConfigKey = (String, String);
 
 #[derive(Default)]
 struct ConfigTotals {
-    is_embree: bool,
     rays: u64,
     seconds: f64,
     counted_rays: u64,
@@ -541,9 +537,6 @@ fn summarise(
             runs.text(i, "parameters").to_string(),
         );
         let totals = group.configs.entry(config).or_default();
-        // What the row traversed says it is Embree (`embree`, `embree[quality=high]`), as in
-        // `embree_best`; the file needs no tracer registry of this build.
-        totals.is_embree = runs.text(i, "structure").starts_with("embree");
         totals.rays += runs.required::<u64>(i, "rays")?;
         let s: f64 = runs.required(i, "seconds_min")?;
         totals.seconds += seconds(runs, i, "seconds_min", s)?;
@@ -607,7 +600,10 @@ fn summary_row(
             .min_by(|a, b| a.1.seconds.total_cmp(&b.1.seconds))
             .map(|(config, t)| contender(config, t))
     };
-    let ours = fastest(&|tracer, t| !t.is_embree && tracer != REFERENCE && tracer != OBVHS);
+    // The registry's roles (`role_of` knows the tracers this build lacks): ours are the paper
+    // tracers, and a name no build has.
+    let ours =
+        fastest(&|tracer, _| !matches!(role_of(tracer), Some(Role::Baseline | Role::Reference)));
     let rays = group.configs.values().map(|t| t.rays).max().unwrap_or(0);
     let embree_best = group
         .embree
@@ -636,8 +632,9 @@ fn summary_row(
         ours,
         embree_best,
         x_embree_best,
-        obvhs: fastest(&|tracer, _| tracer == OBVHS),
-        reference: fastest(&|tracer, _| tracer == REFERENCE),
+        // The production baseline that is not Embree.
+        obvhs: fastest(&|tracer, _| role_of(tracer) == Some(Role::Baseline) && !is_embree(tracer)),
+        reference: fastest(&|tracer, _| role_of(tracer) == Some(Role::Reference)),
     }
 }
 

@@ -32,11 +32,10 @@ use crate::render::specular::specular_rays;
 use crate::render::wavefront::{BatchRecord, Tracing, Work};
 use crate::render::whitted::render_whitted;
 use crate::scene::{Frame, Scene};
-use crate::tracers::batch::trace_hits;
+use crate::tracers::chunked::trace_hits;
 use crate::tracers::visibility::{LightSamples, QuadLight, ShadingPoints};
 use crate::tracers::{
-    build_tracer, oracle_params, tracer_for_frame, Params, Tracer, TracerInfo, VisibilityQuery,
-    ORACLE,
+    make_tracer, oracle_params, tracer_for_frame, Params, Tracer, VisibilityQuery, ORACLE,
 };
 
 use super::case::{Case, Traced};
@@ -47,7 +46,7 @@ use crate::experiment::spec::config::{
     DistributionWorkload, Experiment, RenderWorkload, StructureKey,
 };
 use crate::experiment::spec::plan::{
-    secondary_ray_structure, Plan, SceneLoader, ScenePlan, SECONDARY_RAY_TRACER,
+    secondary_ray_structure, secondary_ray_tracer, Plan, SceneLoader, ScenePlan,
 };
 use crate::experiment::spec::shard::Part;
 
@@ -367,11 +366,7 @@ impl TracerOnFrame<'_> {
             tracer: motion_tracer.as_deref().unwrap_or(self.tracer),
             exp: self.exp,
             workload,
-            shade: ShadeStreams::of_tracer(
-                instance.info.name,
-                &instance.params,
-                self.tracer.chunk_rays(),
-            ),
+            shade: ShadeStreams::of_config(&instance.config, self.tracer.chunk_rays()),
         };
         let timed = self
             .at_every_pool(&label, |pool| job.time(pool))
@@ -578,9 +573,9 @@ fn build_frame(
         .map(|(i, instance)| {
             measured(i)
                 .then(|| {
-                    build_tracer(
+                    make_tracer(
                         instance.info,
-                        &instance.params,
+                        &instance.config,
                         &structures[&instance.structure()].accel,
                     )
                 })
@@ -589,11 +584,11 @@ fn build_frame(
         .collect::<Result<Vec<_>>>()?;
     let secondary = match scene_plan.needs_secondary_rays() {
         true => {
-            let info = TracerInfo::find(SECONDARY_RAY_TRACER)?;
-            Some(build_tracer(
+            let info = secondary_ray_tracer()?;
+            Some(make_tracer(
                 info,
-                &Params::new(),
-                &structures[&secondary_ray_structure()].accel,
+                &info.config(&Params::new())?,
+                &structures[&secondary_ray_structure(info)].accel,
             )?)
         }
         false => None,

@@ -11,7 +11,7 @@
 
 use crate::geometry::RayBatch;
 use crate::scene::Mesh;
-use crate::tracers::batch::trace_hits;
+use crate::tracers::chunked::trace_hits;
 use crate::tracers::{Tracer, VisibilityQuery};
 use crate::verify::{classify, BatchAnswers, Judgement, KindReport};
 

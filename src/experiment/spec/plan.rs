@@ -6,19 +6,17 @@
 //! generated), and whether geometry changes per frame (rebuild) or not (build once,
 //! reuse). Printed before the run and stored in meta.json.
 
-use std::collections::BTreeMap;
 use std::fmt;
 use std::path::PathBuf;
 
 use serde::ser::SerializeMap;
 use serde::{Serialize, Serializer};
 
-use crate::accel::AccelKind;
 use crate::error::{Error, Result};
 use crate::geometry::ray_file::read_rays;
-use crate::geometry::{RayKind, Triangle};
-use crate::scene::{Material, Mesh, Scene};
-use crate::tracers::{build_tracer, Params};
+use crate::geometry::RayKind;
+use crate::scene::{Material, Scene};
+use crate::tracers::{Params, Role, TracerConfig, TracerInfo};
 
 use crate::experiment::spec::config::{Experiment, RenderWorkload, SceneSpec, StructureKey};
 use crate::experiment::spec::render_pruning::prune_renders;
@@ -27,8 +25,10 @@ use crate::experiment::spec::render_pruning::prune_renders;
 /// scenes of their own.
 pub type SceneLoader<'a> = &'a dyn Fn(&SceneSpec) -> Result<Scene>;
 
-/// The tracer that traces primary rays to find where secondary rays start.
-pub const SECONDARY_RAY_TRACER: &str = "reference";
+/// The tracer that traces primary rays to find where secondary rays start: our reference.
+pub fn secondary_ray_tracer() -> Result<&'static TracerInfo> {
+    TracerInfo::of_role(Role::Reference)
+}
 
 #[derive(Debug, Serialize)]
 pub struct Plan {
@@ -63,6 +63,9 @@ pub struct InstancePlan {
     pub structure: StructureKey,
     /// Whether the tracer counts its box and triangle tests (Embree counts only rays).
     pub counts_internals: bool,
+    /// The tracer's parsed parameters (`TracerInstance::config`).
+    #[serde(skip)]
+    pub config: TracerConfig,
 }
 
 #[derive(Debug, Serialize)]
@@ -121,10 +124,11 @@ impl Serialize for StructureKey {
     }
 }
 
-/// The structure secondary rays are generated with: our BVH with default parameters.
-pub fn secondary_ray_structure() -> StructureKey {
+/// The structure secondary rays are generated with: the secondary-ray tracer's, with default
+/// parameters.
+pub fn secondary_ray_structure(tracer: &TracerInfo) -> StructureKey {
     StructureKey {
-        kind: AccelKind::Bvh,
+        kind: tracer.accel,
         params: Params::new(),
     }
 }
@@ -156,12 +160,13 @@ impl Plan {
         sized.or_else(|| named().next())
     }
 
-    /// Loads every scene to learn what it needs, and builds every tracer instance once on a
-    /// one-triangle mesh so bad parameter values fail now, not an hour into the run. Scenes are
+    /// Loads every scene to learn what it needs (the tracers' parameter values were checked when
+    /// the experiment was parsed, so they fail before the run, not an hour into it). Scenes are
     /// dropped again (the run reloads each in turn), so only one is ever held in memory. Ray
     /// files are read and checked the same way, so a bad one fails before anything is measured.
     pub fn derive(exp: &Experiment, load: SceneLoader) -> Result<Plan> {
-        let instances = plan_instances(exp)?;
+        let instances = plan_instances(exp);
+        let secondary = secondary_ray_tracer()?;
         let ray_files = exp
             .ray_files
             .iter()
@@ -192,7 +197,7 @@ impl Plan {
                     spec.name
                 )));
             }
-            scenes.push(plan_scene(exp, spec, &scene));
+            scenes.push(plan_scene(exp, spec, &scene, secondary));
         }
         let mut notes = Vec::new();
         let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
@@ -229,44 +234,26 @@ impl Plan {
     }
 }
 
-fn plan_instances(exp: &Experiment) -> Result<Vec<InstancePlan>> {
-    let mut probe = Mesh::default();
-    probe.push(
-        Triangle {
-            v: [glam::Vec3::ZERO, glam::Vec3::X, glam::Vec3::Y],
-        },
-        0,
-    );
-    let mut built = BTreeMap::new();
+fn plan_instances(exp: &Experiment) -> Vec<InstancePlan> {
     exp.instances
         .iter()
-        .map(|instance| {
-            let fail = |e: Error| {
-                Error::usage(format!(
-                    "{}:{}: tracer {instance}: {e}",
-                    exp.path.display(),
-                    instance.line
-                ))
-            };
-            let key = instance.structure();
-            if !built.contains_key(&key) {
-                let accel = key.kind.build(&probe, &key.params).map_err(fail)?;
-                built.insert(key.clone(), accel);
-            }
-            let tracer =
-                build_tracer(instance.info, &instance.params, &built[&key]).map_err(fail)?;
-            Ok(InstancePlan {
-                label: instance.to_string(),
-                tracer: instance.info.name.to_string(),
-                params: instance.params.clone(),
-                structure: key,
-                counts_internals: tracer.counts_internals(),
-            })
+        .map(|instance| InstancePlan {
+            label: instance.to_string(),
+            tracer: instance.info.name.to_string(),
+            params: instance.params.clone(),
+            config: instance.config,
+            structure: instance.structure(),
+            counts_internals: instance.info.counts_internals,
         })
         .collect()
 }
 
-fn plan_scene(exp: &Experiment, spec: &SceneSpec, scene: &Scene) -> ScenePlan {
+fn plan_scene(
+    exp: &Experiment,
+    spec: &SceneSpec,
+    scene: &Scene,
+    secondary: &TracerInfo,
+) -> ScenePlan {
     let mut notes = Vec::new();
     // What the scene's triangles are made of decides which secondary rays exist.
     let mut used = vec![false; scene.materials.len()];
@@ -314,11 +301,16 @@ fn plan_scene(exp: &Experiment, spec: &SceneSpec, scene: &Scene) -> ScenePlan {
         }
     }
     if ray_kinds.iter().any(|&k| k != RayKind::Primary) {
-        let key = secondary_ray_structure();
+        let key = secondary_ray_structure(secondary);
         let shared = structures.iter().any(|s| s.key == key);
         notes.push(format!(
-            "secondary rays start at the primary hits of the {SECONDARY_RAY_TRACER} tracer on {key}{}",
-            if shared { " (shared with the tracers using it)" } else { ", built for that alone" }
+            "secondary rays start at the primary hits of the {} tracer on {key}{}",
+            secondary.name,
+            if shared {
+                " (shared with the tracers using it)"
+            } else {
+                ", built for that alone"
+            }
         ));
         match structures.iter_mut().find(|s| s.key == key) {
             Some(s) => s.generates_secondary_rays = true,
@@ -560,10 +552,9 @@ pub(crate) mod tests {
 
     #[test]
     fn bad_parameter_values_fail_before_the_run() {
-        let exp = experiment(
-            "scenes = [\"lit\"]\ntracers = [{ name = \"reference\", params = { leaf_size = 0 } }]\nrays = [\"primary\"]\n",
-        );
-        match Plan::derive(&exp, &load_quads).unwrap_err() {
+        let text = "name = \"t\"\nresolution = { width = 8, height = 8 }\nscenes = [\"lit\"]\n\
+                    tracers = [{ name = \"reference\", params = { leaf_size = 0 } }]\nrays = [\"primary\"]\n";
+        match Experiment::parse(std::path::Path::new("t.toml"), text).unwrap_err() {
             Error::Usage(m) => assert!(
                 m.starts_with("t.toml:4: tracer reference[leaf_size=0]: BVH parameters"),
                 "{m}"

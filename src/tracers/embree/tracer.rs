@@ -102,11 +102,6 @@ impl<A: EmbreeApi, M: Submission<A>> EmbreeTracer<A, M> {
         }
     }
 
-    /// A tracer over `scene` reading the tracer parameter `context`.
-    pub fn from_params(scene: &Arc<EmbreeScene<A>>, params: &Params) -> Result<Self> {
-        Ok(Self::new(scene.clone(), Coherence::from_params(params)?))
-    }
-
     /// Runs one Embree call sequence on rays of `kind` the way Embree asks: FTZ/DAZ on for its
     /// duration only, and fresh arguments (intersect context) with the kind's coherence hint.
     #[inline]

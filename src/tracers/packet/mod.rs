@@ -239,12 +239,6 @@ impl PacketTracer {
         }
     }
 
-    pub fn from_params(bvh: Arc<Bvh>, params: &Params) -> Result<Self> {
-        let config = PacketConfig::from_params(params)?;
-        let width = config.width_from_params(params)?;
-        Ok(Self::with_width(bvh, config, width))
-    }
-
     pub fn config(&self) -> PacketConfig {
         self.config
     }

@@ -164,13 +164,13 @@ impl StreamTracer {
     }
 
     /// The tracer over a static `bvh` (it has no motion blur).
-    pub fn from_params(bvh: Arc<Bvh>, params: &Params) -> Result<Self> {
+    pub fn over_static(bvh: Arc<Bvh>, config: StreamConfig) -> Result<Self> {
         if bvh.motion_end.is_some() {
             return Err(Error::usage(
                 "stream tracer: no motion blur (a moving BVH was given)",
             ));
         }
-        Ok(Self::new(bvh, StreamConfig::from_params(params)?))
+        Ok(Self::new(bvh, config))
     }
 
     pub fn config(&self) -> StreamConfig {

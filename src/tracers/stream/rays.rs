@@ -191,7 +191,7 @@ impl<const L: usize> StreamRays<L> {
             leaf: LeafRay {
                 tris: WatertightRay::from_parts(r.origin, k, f.shear),
                 tmin: r.tmin,
-                // Static geometry only (`StreamTracer::from_params` refuses a moving BVH).
+                // Static geometry only (`StreamTracer::over_static` refuses a moving BVH).
                 time: 0.0,
             },
             tmax: r.tmax,

@@ -54,14 +54,31 @@ impl<const W: usize> WideSingleTracer<W> {
 pub const WIDTHS: [usize; 2] = [4, 8];
 pub const PARAMS: &[&str] = &["width"];
 
-/// The tracer with `params` (`width` = 4 or 8, default 8) over `bvh`.
-pub fn from_params(bvh: Arc<Bvh>, params: &Params) -> Result<Box<dyn Tracer>> {
-    match params.get_or("width", 8usize)? {
-        4 => Ok(Box::new(WideSingleTracer::<4>::new(bvh))),
-        8 => Ok(Box::new(WideSingleTracer::<8>::new(bvh))),
-        width => Err(Error::usage(format!(
-            "wide-single tracer: width must be one of {WIDTHS:?} (children per BVH node; got {width})"
-        ))),
+/// Children per node of the tracer's tree (`width`): its typed configuration.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Width {
+    Four,
+    Eight,
+}
+
+impl Width {
+    /// The `width` parameter (4 or 8, default 8), checked.
+    pub fn from_params(params: &Params) -> Result<Width> {
+        match params.get_or("width", 8usize)? {
+            4 => Ok(Width::Four),
+            8 => Ok(Width::Eight),
+            width => Err(Error::usage(format!(
+                "wide-single tracer: width must be one of {WIDTHS:?} (children per BVH node; got {width})"
+            ))),
+        }
+    }
+
+    /// The tracer of this width over `bvh`.
+    pub fn tracer(self, bvh: Arc<Bvh>) -> Box<dyn Tracer> {
+        match self {
+            Width::Four => Box::new(WideSingleTracer::<4>::new(bvh)),
+            Width::Eight => Box::new(WideSingleTracer::<8>::new(bvh)),
+        }
     }
 }
 

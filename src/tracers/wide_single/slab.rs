@@ -9,7 +9,7 @@
 //! Written with intrinsics on groups of children, not as lane loops over `[f32; W]`: LLVM's SLP
 //! vectorizer split those loops' far-plane half into scalar loads and shuffles (checked in the
 //! assembly), while these compile to straight vector code, one sub/mul/max-or-min per group and
-//! plane and one movemask per group. The kernel is written once over `SlabLanes`: groups of 8
+//! plane and one movemask per group. The kernel is written once over `SlabVector`: groups of 8
 //! children in one AVX register where the build has AVX (`target-cpu=native` on the AVX2 and
 //! AVX-512 machines the project runs on), so an 8-wide node is one pass; otherwise groups of 4 in
 //! SSE (the x86-64 baseline, as `child_pairs`).
@@ -43,7 +43,7 @@ impl WideRayTest {
         WideRayTest {
             sse: BroadcastRay::from_inv(origin, inv),
             #[cfg(target_feature = "avx")]
-            avx: [origin, inv].map(|v| v.to_array().map(<__m256 as SlabLanes>::splat)),
+            avx: [origin, inv].map(|v| v.to_array().map(<__m256 as SlabVector>::splat)),
         }
     }
 
@@ -66,7 +66,7 @@ impl WideRayTest {
 
     /// `test` in groups of `V::LANES` children.
     #[inline(always)]
-    fn test_in<V: SlabLanes, const W: usize>(
+    fn test_in<V: SlabVector, const W: usize>(
         &self,
         node: &WideNode<W>,
         tmin: f32,
@@ -110,7 +110,7 @@ impl WideRayTest {
 /// and an ordered `≤` (false on NaN), as `RayBoxTest`'s scalar operations. The intrinsics are
 /// `unsafe` only for the CPU features they need; each implementation exists only when the build
 /// enables its features, so every call is sound (the `unsafe` blocks below).
-trait SlabLanes: Copy {
+trait SlabVector: Copy {
     const LANES: usize;
     /// The ray's origin and reciprocal direction lanes per axis.
     fn ray(test: &WideRayTest) -> ([Self; 3], [Self; 3]);
@@ -128,7 +128,7 @@ trait SlabLanes: Copy {
 }
 
 /// Groups of 4 children (SSE, the x86-64 baseline).
-impl SlabLanes for __m128 {
+impl SlabVector for __m128 {
     const LANES: usize = 4;
     #[inline(always)]
     fn ray(test: &WideRayTest) -> ([Self; 3], [Self; 3]) {
@@ -174,7 +174,7 @@ impl SlabLanes for __m128 {
 
 /// Groups of 8 children (AVX: one pass over an 8-wide node).
 #[cfg(target_feature = "avx")]
-impl SlabLanes for __m256 {
+impl SlabVector for __m256 {
     const LANES: usize = 8;
     #[inline(always)]
     fn ray(test: &WideRayTest) -> ([Self; 3], [Self; 3]) {

@@ -11,7 +11,7 @@ use toml::Spanned;
 use crate::accel::AccelKind;
 use crate::error::Result;
 use crate::tracers::registry::not_built;
-use crate::tracers::{Params, TracerInfo, TRACERS};
+use crate::tracers::{Params, TracerConfig, TracerInfo, TRACERS};
 
 use super::source::{cartesian, line_of, too_many, Source, MAX_COMBINATIONS};
 use super::{ExperimentFile, NameOr};
@@ -22,6 +22,9 @@ pub struct TracerInstance {
     pub info: &'static TracerInfo,
     /// The tracer's and its structure's parameters (the structure reads its own subset).
     pub params: Params,
+    /// The tracer's own parameters, parsed once (`TracerInfo::config`): what its tracers are made
+    /// from.
+    pub config: TracerConfig,
     /// The line of its entry in the experiment file, where an error in its values points.
     pub line: usize,
 }
@@ -51,11 +54,15 @@ impl fmt::Debug for TracerInstance {
 impl fmt::Display for TracerInstance {
     /// `name` or `name[key=value;...]`: the label in the plan, the plots and the progress bar.
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        if self.params.0.is_empty() {
-            f.write_str(self.info.name)
-        } else {
-            write!(f, "{}[{}]", self.info.name, self.params)
-        }
+        f.write_str(&label(self.info, &self.params))
+    }
+}
+
+/// A tracer instance's label (its `Display`).
+fn label(info: &TracerInfo, params: &Params) -> String {
+    match params.0.is_empty() {
+        true => info.name.to_string(),
+        false => format!("{}[{params}]", info.name),
     }
 }
 
@@ -132,9 +139,22 @@ pub(super) fn expand_tracers(src: &Source, file: &ExperimentFile) -> Result<Vec<
             return Err(too_many(src, &entry.span()));
         }
         for params in grid {
+            // The values are checked now, not an hour into the run: the structure's, then the
+            // tracer's, parsed into the configuration its tracers are made from.
+            let config = info
+                .accel
+                .check_params(&params.subset(info.accel.params()))
+                .and_then(|()| info.config(&params))
+                .map_err(|e| {
+                    src.usage_error(
+                        &entry.span(),
+                        format!("tracer {}: {e}", label(info, &params)),
+                    )
+                })?;
             let instance = TracerInstance {
                 info,
                 params,
+                config,
                 line: line_of(src.text, &entry.span()),
             };
             if instances

@@ -6,7 +6,7 @@
 use glam::Vec3;
 
 use super::cell::{CellObserver, Packet};
-use super::frustum::{Frustum, MarchFrame, MarchRays, SplitKey};
+use super::frustum::{MarchFrame, MarchFrustum, MarchRays, SplitKey};
 use super::gathered::GatheredRays;
 use super::lanes::LaneRays;
 use super::mailbox::Mailbox;
@@ -193,7 +193,7 @@ impl CgtTracer {
         group: &[u32],
         frame: &MarchFrame,
         ws: &mut Workspace<L>,
-    ) -> Frustum {
+    ) -> MarchFrustum {
         ws.gathered.gather(rays, group);
         let (grid, g, n) = (&*self.grid, &ws.gathered, group.len());
         // Per march axis s, u, v: the rays' world components, and the grid's origin, scale and
@@ -256,7 +256,7 @@ impl CgtTracer {
             d_s[p] = e_s;
         }
         let apex = common_origin.then(|| [s_o[0], u_o[0], v_o[0]]);
-        Frustum::new::<L>(&ws.march, apex, self.scale)
+        MarchFrustum::new::<L>(&ws.march, apex, self.scale)
     }
 
     /// Loads the rays of the packet `group` (marched by `march`) into the lanes, all active, and

@@ -1,4 +1,4 @@
-//! Coherent grid traversal (Wald, Ize, Kensler, Knoll and Parker 2006, "Ray Tracing Animated
+//! Coherent grid traversal (CGT, registry name `cgt`; Wald, Ize, Kensler, Knoll and Parker 2006, "Ray Tracing Animated
 //! Scenes using Coherent Grid Traversal"): packets of n×n rays walk a uniform grid slice by slice
 //! inside their bounding frustum (§2.2), test the triangles of every overlapped cell with mailboxing
 //! and SIMD frustum culling (§2.3), and skip empty space with macrocells (§2.4).
@@ -25,7 +25,7 @@
 //!   skipped. Sound because the packet tests a triangle against every ray still active, and a ray
 //!   only ever leaves the active set.
 //! - **Culling (§2.3).** Per packet and triangle (`cull`): the frustum's side planes, and for
-//!   common-origin packets the four corner rays' shaft test (`Frustum::culls`, one lane per
+//!   common-origin packets the four corner rays' shaft test (`MarchFrustum::culls`, one lane per
 //!   corner and triangle edge). A cull costs
 //!   about as much as testing four rays (§2.3), so packets with at most `CULL_MIN_RAYS` active
 //!   rays (split shadow and diffuse packets, ends of walks) test directly.
@@ -41,12 +41,12 @@
 //!   lie too far apart. We measure that on the frustum: a packet whose rays start more than
 //!   `MAX_ORIGIN_SPREAD` cells apart, or whose frustum widens by more than `MAX_SLOPE_SPREAD`
 //!   cells per slice (diffuse bounces), is split in two at the median of the quantity it spreads
-//!   most in (`Frustum::split_key`: its u or v slope, else where its rays cross the frustum's
+//!   most in (`MarchFrustum::split_key`: its u or v slope, else where its rays cross the frustum's
 //!   start along u or v), recursively; median halves are each narrower along that extent, where
 //!   halves in batch order need not be. Camera packets stay below both limits unless they are
 //!   very wide: a 32×32 packet of a 60° image spreads by 0.6 at 128² pixels and by 0.07 at 1024².
 //! - **Lone rays take the 3D-DDA.** A packet split down to one ray, or so incoherent that its
-//!   halves would be single rays before they are coherent (`Frustum::halvings`: the halvings
+//!   halves would be single rays before they are coherent (`MarchFrustum::halvings`: the halvings
 //!   its extents need, against the halvings its ray count allows), sends each ray through the
 //!   single-ray 3D-DDA of `grid-dda` on the same grid: a frustum around one ray still covers up
 //!   to four cells per slice, and splitting costs a march per level. Diffuse bounces mostly end
@@ -82,7 +82,7 @@ use crate::error::{Error, Result};
 use crate::geometry::{Hit, Rays};
 use crate::lanes::WIDTHS;
 use crate::stats::{NoStats, Stats};
-use crate::tracers::dda::GridDdaTracer;
+use crate::tracers::grid_dda::GridDdaTracer;
 use crate::tracers::{Kernel, Params};
 
 pub use cell::CellObserver;
@@ -177,10 +177,6 @@ impl CgtTracer {
             config,
             scale,
         }
-    }
-
-    pub fn from_params(grid: Arc<Grid>, params: &Params) -> Result<Self> {
-        Ok(CgtTracer::new(grid, CgtConfig::from_params(params)?))
     }
 
     /// The cells the packets of `rays` visit, packet by packet in visiting order (the closest-hit

@@ -2,7 +2,7 @@
 //! retires the rays whose hits lie behind the slice it enters, and tests each cell's triangles —
 //! mailboxed, frustum-culled — against its active rays, `L` at a time.
 
-use super::frustum::{Frustum, MarchFrame};
+use super::frustum::{MarchFrame, MarchFrustum};
 use super::setup::Workspace;
 use super::traversal::SliceVisitor;
 use super::{CgtConfig, CULL_MIN_RAYS};
@@ -30,7 +30,7 @@ impl CellObserver for Vec<[u32; 3]> {
 pub(super) struct Packet<'a, const L: usize, S, O, const ANY: bool> {
     pub(super) grid: &'a Grid,
     pub(super) frame: &'a MarchFrame,
-    pub(super) frustum: &'a Frustum,
+    pub(super) frustum: &'a MarchFrustum,
     pub(super) config: &'a CgtConfig,
     pub(super) group: &'a [u32],
     pub(super) ws: &'a mut Workspace<L>,

@@ -165,7 +165,7 @@ struct Apex {
 
 /// A packet's bounding frustum (module doc).
 #[derive(Clone, Copy, Debug)]
-pub struct Frustum {
+pub struct MarchFrustum {
     s_ref: f32,
     u0: [f32; 2],
     v0: [f32; 2],
@@ -221,13 +221,17 @@ fn l1(a: [f32; 3]) -> f32 {
     a[0].abs() + a[1].abs() + a[2].abs()
 }
 
-impl Frustum {
+impl MarchFrustum {
     /// The frustum bounding `rays` (at least one). `apex`: the common origin in march coordinates
     /// when every ray starts there with `tmin ≥ 0` (enables corner-ray culling). `scale`: the
     /// largest of the grid's resolution and its world coordinate magnitudes × cells per unit, the
     /// scale of the rounding of the world → grid transform.
     /// Extremes are taken `L` rays at a time (`lanes::min_max`), `L` the tracer's lane width.
-    pub fn new<const L: usize>(rays: &MarchRays, apex: Option<[f32; 3]>, scale: f32) -> Frustum {
+    pub fn new<const L: usize>(
+        rays: &MarchRays,
+        apex: Option<[f32; 3]>,
+        scale: f32,
+    ) -> MarchFrustum {
         let n = rays.len;
         let (o_s, o_u, o_v) = (&rays.o_s[..n], &rays.o_u[..n], &rays.o_v[..n]);
         let (a, b) = (&rays.a[..n], &rays.b[..n]);
@@ -320,7 +324,7 @@ impl Frustum {
                 corner_len: corners.iter().map(|c| l1(*c)).fold(0.0, f32::max),
             }
         });
-        Frustum {
+        MarchFrustum {
             s_ref,
             u0: [u0[0] - eps, u0[1] + eps],
             v0: [v0[0] - eps, v0[1] + eps],
@@ -559,7 +563,7 @@ mod tests {
     #[test]
     fn overlap_of_a_single_ray_follows_its_line() {
         let rays = one_ray_packet([0.5, 1.25, 2.5], [1.0, 0.5, -0.25], 8.0);
-        let f = Frustum::new::<16>(&rays, None, 10.0);
+        let f = MarchFrustum::new::<16>(&rays, None, 10.0);
         let e = f.eps();
         let b = f.overlap(2.0, 3.0).unwrap();
         // At s = 2 the ray is at u = 1.25 + 1.5·0.5 = 2.0, at s = 3: 2.5; v from 2.125 to 1.875.
@@ -584,7 +588,7 @@ mod tests {
             s_end: vec![8.0; 2],
             len: 2,
         };
-        let f = Frustum::new::<16>(&rays, None, 16.0);
+        let f = MarchFrustum::new::<16>(&rays, None, 16.0);
         let e = 8.0 * f.eps();
         // The last slab: the rays are within u ∈ [3.5, 4.5]; the start-anchored lines alone
         // give [−3.5, 11.5].
@@ -615,7 +619,7 @@ mod tests {
             s_end: vec![100.0; 2],
             len: 2,
         };
-        let f = Frustum::new::<16>(&rays, Some([0.0; 3]), 1.0);
+        let f = MarchFrustum::new::<16>(&rays, Some([0.0; 3]), 1.0);
         // Inside: spans the axis at s = 10.
         let inside = [[10.0, -1.0, -1.0], [10.0, 1.0, -1.0], [10.0, 0.0, 1.0]];
         assert!(!f.culls(&inside));
@@ -623,7 +627,7 @@ mod tests {
         // u + v = 3.5 separates it, but no single side plane has all three vertices beyond it.
         let beside = [[10.0, 0.5, 3.0], [10.0, 3.0, 0.5], [10.0, 3.0, 3.0]];
         assert!(f.culls(&beside));
-        let general = Frustum::new::<16>(&rays, None, 1.0);
+        let general = MarchFrustum::new::<16>(&rays, None, 1.0);
         assert!(!general.culls(&beside), "no plane separates it");
         // Wholly beyond the u_max plane: both frustum kinds cull it.
         let far = [[10.0, 3.0, 0.0], [12.0, 4.0, 0.0], [11.0, 3.5, 1.0]];

@@ -12,8 +12,8 @@ use glam::Vec3;
 use crate::accel::{WideBvh, WideChild};
 use crate::geometry::Aabb;
 use crate::stats::Stats;
-use crate::tracers::mft::descend::{count_child_tests, depth, FrustumTree, Leaf, Step};
-use crate::tracers::mft::frusta::{Frusta, Margins};
+use crate::tracers::multi_frusta::descend::{count_child_tests, depth, FrustumTree, Leaf, Step};
+use crate::tracers::multi_frusta::frusta::{Frusta, Margins};
 
 /// The walk position of `node`'s child slot `slot`.
 #[inline(always)]

@@ -1,4 +1,4 @@
-//! Multi-frusta tracing (Benthin & Wald 2009, "Efficient Ray Traced Soft Shadows using
+//! Multi-frusta tracing (MFT, registry name `mft`; Benthin & Wald 2009, "Efficient Ray Traced Soft Shadows using
 //! Multi-Frusta Tracing"), answering the light-visibility query natively.
 //!
 //! - **Blocks** (`block` = B, default 16): B consecutive shading points of the query, one shadow
@@ -180,7 +180,7 @@ impl MftConfig {
 }
 
 /// The tree the frusta walk (`MftConfig::width`); a wide one is built only when asked for.
-enum Tree {
+enum TreeOfWidth {
     Binary,
     Four(WideBvh<4>),
     Eight(WideBvh<8>),
@@ -188,7 +188,7 @@ enum Tree {
 
 pub struct MftTracer {
     bvh: Arc<Bvh>,
-    tree: Tree,
+    tree: TreeOfWidth,
     config: MftConfig,
     /// Ordinary ray batches (P-Packet, see the module doc).
     packets: PacketTracer,
@@ -206,9 +206,9 @@ impl MftTracer {
             },
         );
         let tree = match config.width {
-            4 => Tree::Four(WideBvh::collapse(&bvh)),
-            8 => Tree::Eight(WideBvh::collapse(&bvh)),
-            _ => Tree::Binary,
+            4 => TreeOfWidth::Four(WideBvh::collapse(&bvh)),
+            8 => TreeOfWidth::Eight(WideBvh::collapse(&bvh)),
+            _ => TreeOfWidth::Binary,
         };
         MftTracer {
             bvh,
@@ -216,10 +216,6 @@ impl MftTracer {
             config,
             packets,
         }
-    }
-
-    pub fn from_params(bvh: Arc<Bvh>, params: &Params) -> Result<Self> {
-        Ok(Self::new(bvh, MftConfig::from_params(params)?))
     }
 
     /// The rounding margins for `query`: scaled by the largest coordinate of the scene, the light
@@ -289,9 +285,15 @@ impl Kernel for MftTracer {
             {
                 let (bvh, config) = (&*self.bvh, &self.config);
                 match &self.tree {
-                    Tree::Binary => primary::intersect(bvh, bvh, grid, config, rays, hits, stats),
-                    Tree::Four(w) => primary::intersect(bvh, w, grid, config, rays, hits, stats),
-                    Tree::Eight(w) => primary::intersect(bvh, w, grid, config, rays, hits, stats),
+                    TreeOfWidth::Binary => {
+                        primary::intersect(bvh, bvh, grid, config, rays, hits, stats)
+                    }
+                    TreeOfWidth::Four(w) => {
+                        primary::intersect(bvh, w, grid, config, rays, hits, stats)
+                    }
+                    TreeOfWidth::Eight(w) => {
+                        primary::intersect(bvh, w, grid, config, rays, hits, stats)
+                    }
                 }
             }
             _ => self.packets.intersect_with(rays, hits, stats),
@@ -309,9 +311,9 @@ impl Kernel for MftTracer {
         stats: &mut S,
     ) {
         match &self.tree {
-            Tree::Binary => self.visibility_over(&*self.bvh, query, occluded, stats),
-            Tree::Four(w) => self.visibility_over(w, query, occluded, stats),
-            Tree::Eight(w) => self.visibility_over(w, query, occluded, stats),
+            TreeOfWidth::Binary => self.visibility_over(&*self.bvh, query, occluded, stats),
+            TreeOfWidth::Four(w) => self.visibility_over(w, query, occluded, stats),
+            TreeOfWidth::Eight(w) => self.visibility_over(w, query, occluded, stats),
         }
     }
 }

@@ -55,7 +55,7 @@ fn bvh(triangles: &[Triangle]) -> Arc<Bvh> {
 
 fn hits_of<K: Kernel>(kernel: &K, batch: &RayBatch, counters: &mut Counters) -> Vec<Hit> {
     let mut hits = vec![Hit::MISS; batch.len()];
-    // Chunks of 4096 rays, as `tracers::batch` cuts a batch.
+    // Chunks of 4096 rays, as `tracers::chunked` cuts a batch.
     for start in (0..batch.len()).step_by(4096) {
         let range = start..(start + 4096).min(batch.len());
         kernel.intersect_with(

@@ -8,8 +8,8 @@ use glam::Vec3;
 use crate::accel::Bvh;
 use crate::geometry::{Aabb, Triangle};
 use crate::stats::{Event, Stats};
-use crate::tracers::mft::cull::keep_mask;
-use crate::tracers::mft::frusta::{Frusta, Margins};
+use crate::tracers::multi_frusta::cull::keep_mask;
+use crate::tracers::multi_frusta::frusta::{Frusta, Margins};
 
 /// A leaf a walk reached: a triangle range of the binary tree's `triangles`, its box, and its
 /// depth for the per-depth counters (0 when nothing is counted).

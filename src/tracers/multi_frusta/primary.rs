@@ -37,9 +37,9 @@ use crate::accel::Bvh;
 use crate::geometry::{CameraGrid, Hit, Rays};
 use crate::lanes::SimdRay;
 use crate::stats::{Event, Stats};
-use crate::tracers::mft::descend::{keep_counted, next_leaf, start_at_root, FrustumTree};
-use crate::tracers::mft::frusta::{bits, Frusta, Margins, MAX_FRUSTA};
-use crate::tracers::mft::MftConfig;
+use crate::tracers::multi_frusta::descend::{keep_counted, next_leaf, start_at_root, FrustumTree};
+use crate::tracers::multi_frusta::frusta::{bits, Frusta, Margins, MAX_FRUSTA};
+use crate::tracers::multi_frusta::MftConfig;
 
 /// Rays per primary frustum: a 4×4 pixel block, one 16-lane SIMD ray.
 pub const FRUSTUM_RAYS: usize = 16;

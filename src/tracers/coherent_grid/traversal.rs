@@ -11,7 +11,7 @@
 use crate::accel::Grid;
 use crate::stats::Event;
 
-use super::frustum::{cell_range, Frustum, MarchFrame};
+use super::frustum::{cell_range, MarchFrame, MarchFrustum};
 
 /// What the walk drives: the packet's rays, told where the walk is.
 pub trait SliceVisitor {
@@ -27,7 +27,7 @@ pub trait SliceVisitor {
 pub fn walk(
     grid: &Grid,
     frame: &MarchFrame,
-    frustum: &Frustum,
+    frustum: &MarchFrustum,
     macrocells: bool,
     visitor: &mut impl SliceVisitor,
 ) {

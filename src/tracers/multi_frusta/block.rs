@@ -16,10 +16,10 @@ use crate::accel::Bvh;
 use crate::geometry::Ray;
 use crate::lanes::SimdRay;
 use crate::stats::{Event, Stats};
-use crate::tracers::mft::descend::{keep_counted, next_leaf, start_at_root, FrustumTree};
-use crate::tracers::mft::frusta::{bits, Frusta, Margins};
-use crate::tracers::mft::vector::{Native, Vector};
-use crate::tracers::mft::MftConfig;
+use crate::tracers::multi_frusta::descend::{keep_counted, next_leaf, start_at_root, FrustumTree};
+use crate::tracers::multi_frusta::frusta::{bits, Frusta, Margins};
+use crate::tracers::multi_frusta::vector::{Native, Vector};
+use crate::tracers::multi_frusta::MftConfig;
 use crate::tracers::visibility::{shadow_ray, ShadingPoint, VisibilityQuery};
 
 /// One worker's state, reused from block to block.
