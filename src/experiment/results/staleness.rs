@@ -161,7 +161,7 @@ mod tests {
             "measured_source": this_source().unwrap(),
         });
         std::fs::write(run.join(META_JSON), meta.to_string()).unwrap();
-        let verdicts = check(&[root.clone()]).unwrap();
+        let verdicts = check(std::slice::from_ref(&root)).unwrap();
         assert_eq!(
             verdicts,
             [Verdict {

@@ -109,7 +109,7 @@ impl Checks {
 
     /// Disagreements a reader must look at, shown in bold: ours wrong (they fail verification)
     /// and undecided (reported with their rays).
-    fn to_look_at(&self) -> u64 {
+    fn needing_a_look(&self) -> u64 {
         self.ours_wrong + self.undecided
     }
 }
@@ -380,7 +380,7 @@ fn checked(checks: Option<Checks>) -> String {
     match checks {
         None => "not checked".into(),
         Some(c) if c.unexplained == 0 => format!("yes: {} rays, {} ties", c.rays, c.ties),
-        Some(c) if c.to_look_at() == 0 => format!(
+        Some(c) if c.needing_a_look() == 0 => format!(
             "yes: {} rays, {} ties, {} ours right, {} within rounding",
             c.rays, c.ties, c.ours_right, c.rounding
         ),
