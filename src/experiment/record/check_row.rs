@@ -1,12 +1,11 @@
 //! One verify.csv row: the sampled check of one tracer instance's answers on one workload against
 //! the oracle (Embree in robust mode) on the same rays.
 
-use std::collections::BTreeMap;
 use std::path::Path;
 
 use crate::error::Result;
 
-use super::csv_file::write_csv;
+use super::csv_file::{write_csv, CellResult, Cells};
 
 pub const VERIFY_COLUMNS: &[&str] = &[
     "scene",
@@ -63,32 +62,21 @@ impl CheckRow {
         ]
     }
 
-    pub fn parse(fields: &BTreeMap<String, String>) -> std::result::Result<CheckRow, String> {
-        let text = |name: &str| {
-            fields
-                .get(name)
-                .cloned()
-                .ok_or_else(|| format!("no column {name:?}"))
-        };
-        let number = |name: &str| -> std::result::Result<u64, String> {
-            let cell = text(name)?;
-            cell.parse()
-                .map_err(|_| format!("{name}: {cell:?} is not a number"))
-        };
+    pub fn parse(cells: &Cells) -> CellResult<CheckRow> {
         Ok(CheckRow {
-            scene: text("scene")?,
-            triangles: number("triangles")? as usize,
-            frame: number("frame")? as usize,
-            tracer: text("tracer")?,
-            parameters: text("parameters")?,
-            ray_kind: text("ray_kind")?,
-            checked_rays: number("checked_rays")? as usize,
-            ties: number("ties")?,
-            unexplained: number("unexplained")?,
-            ours_right: number("ours_right")?,
-            ours_wrong: number("ours_wrong")?,
-            rounding: number("rounding")?,
-            undecided: number("undecided")?,
+            scene: cells.text("scene")?,
+            triangles: cells.number("triangles")?,
+            frame: cells.number("frame")?,
+            tracer: cells.text("tracer")?,
+            parameters: cells.text("parameters")?,
+            ray_kind: cells.text("ray_kind")?,
+            checked_rays: cells.number("checked_rays")?,
+            ties: cells.number("ties")?,
+            unexplained: cells.number("unexplained")?,
+            ours_right: cells.number("ours_right")?,
+            ours_wrong: cells.number("ours_wrong")?,
+            rounding: cells.number("rounding")?,
+            undecided: cells.number("undecided")?,
         })
     }
 }

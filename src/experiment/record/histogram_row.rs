@@ -1,12 +1,11 @@
 //! One histograms.csv row: the box and triangle tests at one BVH depth of a counted ray batch
 //! (the tracers that count them; depths past the deepest count are omitted).
 
-use std::collections::BTreeMap;
 use std::path::Path;
 
 use crate::error::Result;
 
-use super::csv_file::write_csv;
+use super::csv_file::{write_csv, CellResult, Cells};
 use super::selection::Row;
 
 pub const HISTOGRAM_COLUMNS: &[&str] = &[
@@ -59,28 +58,17 @@ impl HistogramRow {
             .collect()
     }
 
-    pub fn parse(fields: &BTreeMap<String, String>) -> std::result::Result<HistogramRow, String> {
-        let text = |name: &str| {
-            fields
-                .get(name)
-                .cloned()
-                .ok_or_else(|| format!("no column {name:?}"))
-        };
-        let number = |name: &str| -> std::result::Result<u64, String> {
-            let cell = text(name)?;
-            cell.parse()
-                .map_err(|_| format!("{name}: {cell:?} is not a number"))
-        };
+    pub fn parse(cells: &Cells) -> CellResult<HistogramRow> {
         Ok(HistogramRow {
-            experiment: text("experiment")?,
-            scene: text("scene")?,
-            frame: number("frame")? as usize,
-            tracer: text("tracer")?,
-            parameters: text("parameters")?,
-            ray_kind: text("ray_kind")?,
-            depth: number("depth")? as usize,
-            aabb_tests: number("aabb_tests")?,
-            triangle_tests: number("triangle_tests")?,
+            experiment: cells.text("experiment")?,
+            scene: cells.text("scene")?,
+            frame: cells.number("frame")?,
+            tracer: cells.text("tracer")?,
+            parameters: cells.text("parameters")?,
+            ray_kind: cells.text("ray_kind")?,
+            depth: cells.number("depth")?,
+            aabb_tests: cells.number("aabb_tests")?,
+            triangle_tests: cells.number("triangle_tests")?,
         })
     }
 }

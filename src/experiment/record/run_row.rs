@@ -7,13 +7,12 @@
 //! zeros). Derived columns (`mrays_per_s`, per-ray counts, `build_plus_trace_seconds`,
 //! `counting_overhead`, `x_embree_best`…) are computed from the fields when written, never stored.
 
-use std::collections::BTreeMap;
 use std::path::Path;
 
 use crate::error::Result;
 use crate::stats::Event;
 
-use super::csv_file::write_csv;
+use super::csv_file::{write_csv, CellResult, Cells};
 use super::selection::Row;
 
 pub const RUNS_COLUMNS: &[&str] = &[
@@ -217,73 +216,50 @@ impl RunRow {
             .collect()
     }
 
-    /// A row read back from runs.csv (`fields`: column → cell). The derived columns are not read:
-    /// they are computed again from the fields.
-    pub fn parse(fields: &BTreeMap<String, String>) -> std::result::Result<RunRow, String> {
-        let text = |name: &str| -> std::result::Result<&str, String> {
-            fields
-                .get(name)
-                .map(String::as_str)
-                .ok_or_else(|| format!("no column {name:?}"))
-        };
-        fn number<T: std::str::FromStr>(name: &str, cell: &str) -> std::result::Result<T, String> {
-            cell.parse()
-                .map_err(|_| format!("{name}: {cell:?} is not a number"))
-        }
-        let optional = |name: &str| -> std::result::Result<Option<String>, String> {
-            Ok(Some(text(name)?)
-                .filter(|c| !c.is_empty())
-                .map(String::from))
-        };
-        macro_rules! required {
-            ($name:expr) => {
-                number($name, text($name)?)?
-            };
-        }
-        macro_rules! maybe {
-            ($name:expr) => {
-                optional($name)?.map(|c| number($name, &c)).transpose()?
-            };
-        }
-        let best = |seconds: &str, config: &str| -> std::result::Result<Option<Best>, String> {
-            Ok(match (maybe!(seconds), optional(config)?) {
-                (Some(seconds), Some(config)) => Some(Best { seconds, config }),
-                _ => None,
-            })
+    /// A row read back from runs.csv. The derived columns are not read: they are computed again
+    /// from the fields.
+    pub fn parse(cells: &Cells) -> CellResult<RunRow> {
+        let best = |seconds: &str, config: &str| -> CellResult<Option<Best>> {
+            Ok(
+                match (cells.optional(seconds)?, cells.optional_text(config)?) {
+                    (Some(seconds), Some(config)) => Some(Best { seconds, config }),
+                    _ => None,
+                },
+            )
         };
         Ok(RunRow {
-            experiment: text("experiment")?.to_string(),
-            scene: text("scene")?.to_string(),
-            triangles: required!("triangles"),
-            frame: required!("frame"),
-            tracer: text("tracer")?.to_string(),
-            parameters: text("parameters")?.to_string(),
-            structure: text("structure")?.to_string(),
-            render: optional("render")?,
-            ray_kind: text("ray_kind")?.to_string(),
-            bounce_depth: maybe!("bounce_depth"),
-            threads: required!("threads"),
-            rays: required!("rays"),
-            hits: required!("hits"),
-            seconds_min: required!("seconds_min"),
-            seconds_median: required!("seconds_median"),
-            build_seconds: required!("build_seconds"),
-            built: match text("build")? {
+            experiment: cells.text("experiment")?,
+            scene: cells.text("scene")?,
+            triangles: cells.number("triangles")?,
+            frame: cells.number("frame")?,
+            tracer: cells.text("tracer")?,
+            parameters: cells.text("parameters")?,
+            structure: cells.text("structure")?,
+            render: cells.optional_text("render")?,
+            ray_kind: cells.text("ray_kind")?,
+            bounce_depth: cells.optional("bounce_depth")?,
+            threads: cells.number("threads")?,
+            rays: cells.number("rays")?,
+            hits: cells.number("hits")?,
+            seconds_min: cells.number("seconds_min")?,
+            seconds_median: cells.number("seconds_median")?,
+            build_seconds: cells.number("build_seconds")?,
+            built: match cells.text("build")?.as_str() {
                 "built" => true,
                 "reused" => false,
                 other => return Err(format!("build: {other:?} is neither built nor reused")),
             },
-            counted_rays: required!("counted_rays"),
-            nodes_visited: maybe!("nodes_visited"),
-            aabb_tests: maybe!("aabb_tests"),
-            triangle_tests: maybe!("triangle_tests"),
-            counting_seconds: maybe!("counting_seconds"),
-            rmse: maybe!("rmse"),
-            retraced_share: maybe!("retraced_share"),
+            counted_rays: cells.number("counted_rays")?,
+            nodes_visited: cells.optional("nodes_visited")?,
+            aabb_tests: cells.optional("aabb_tests")?,
+            triangle_tests: cells.optional("triangle_tests")?,
+            counting_seconds: cells.optional("counting_seconds")?,
+            rmse: cells.optional("rmse")?,
+            retraced_share: cells.optional("retraced_share")?,
             events: Event::ALL
                 .iter()
-                .map(|e| Ok(maybe!(e.name())))
-                .collect::<std::result::Result<_, String>>()?,
+                .map(|e| cells.optional(e.name()))
+                .collect::<CellResult<_>>()?,
             embree_best: best("embree_best_seconds", "embree_best_config")?,
             embree_best_build_plus_trace: best(
                 "embree_best_build_plus_trace_seconds",
@@ -296,4 +272,68 @@ impl RunRow {
 /// runs.csv's rows.
 pub fn write_runs(path: &Path, rows: &[RunRow]) -> Result<()> {
     write_csv(path, &runs_columns(), rows.iter().map(RunRow::cells))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A row with every kind of cell: empty and set options, a Best, events, fractional seconds.
+    fn row() -> RunRow {
+        RunRow {
+            experiment: "e".into(),
+            scene: "room".into(),
+            triangles: 864,
+            frame: 2,
+            tracer: "packet".into(),
+            parameters: "packet=8;traversal=ranged".into(),
+            structure: "bvh".into(),
+            render: Some("renderer=whitted;max_depth=2".into()),
+            ray_kind: "reflection".into(),
+            bounce_depth: Some(1),
+            threads: 2,
+            rays: 4096,
+            hits: 4000,
+            seconds_min: 0.1 + 0.2,
+            seconds_median: 1e-7,
+            build_seconds: 0.0,
+            built: false,
+            counted_rays: 4096,
+            nodes_visited: Some(12345),
+            aabb_tests: None,
+            triangle_tests: Some(0),
+            counting_seconds: None,
+            rmse: Some(0.015625),
+            retraced_share: None,
+            events: Event::ALL
+                .iter()
+                .enumerate()
+                .map(|(i, _)| (i % 3 != 0).then_some(i as u64 * 7))
+                .collect(),
+            embree_best: Some(Best {
+                seconds: 0.25,
+                config: "embree3-16 (context coherent)".into(),
+            }),
+            embree_best_build_plus_trace: None,
+        }
+    }
+
+    #[test]
+    fn a_row_reads_back_from_its_cells_bit_for_bit() {
+        let row = row();
+        let fields = row.fields();
+        assert_eq!(fields.len(), runs_columns().len());
+        assert_eq!(fields["x_embree_best"], (0.25 / (0.1 + 0.2)).to_string());
+        let back = RunRow::parse(&Cells(&fields)).unwrap();
+        assert_eq!(back, row);
+        assert_eq!(back.seconds_min.to_bits(), (0.1f64 + 0.2).to_bits());
+        let mut bad = fields.clone();
+        bad.insert("build".into(), "maybe".into());
+        assert!(RunRow::parse(&Cells(&bad)).unwrap_err().contains("build"));
+        bad.remove("hits");
+        assert_eq!(
+            RunRow::parse(&Cells(&bad)).unwrap_err(),
+            "no column \"hits\""
+        );
+    }
 }
