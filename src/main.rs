@@ -26,7 +26,7 @@ use raylab::scene::library::{list_scenes, load_scene};
 use raylab::scene::{Frame, Scene};
 use raylab::tracers::chunked::{trace_hits, trace_occlusion};
 use raylab::tracers::{Params, TracerInfo};
-use raylab::verify::{self, format_table, Tolerance};
+use raylab::verify::{self, format_table, Judgement, Tolerance};
 
 #[derive(Parser)]
 #[command(
@@ -609,15 +609,16 @@ fn execute(command: Command) -> Result<bool> {
             let dir = pending.commit()?;
             println!("CSV: {}", dir.display());
             let pass = reports.iter().all(|r| r.passes(&tol));
-            let failing: u64 = reports.iter().map(|r| r.failing()).sum();
-            if failing > 0 {
+            let count = |j: Judgement| -> u64 { reports.iter().map(|r| r.judged(j)).sum() };
+            let (wrong, undecided) = (count(Judgement::OursWrong), count(Judgement::Undecided));
+            if wrong + undecided > 0 {
                 println!(
-                    "the {failing} rays the f64 truth calls ours wrong or cannot decide: {} (replay: raylab trace --rays)",
+                    "the rays the f64 truth calls ours wrong ({wrong}) or cannot decide ({undecided}): {} (replay: raylab trace --rays)",
                     dir.join(verify::report::REPLAY_RAYS).display()
                 );
             }
             println!(
-                "{} (tolerance: ≤ {max_unexplained} disagreements per ray kind that the f64 truth calls ours wrong or cannot decide, p99 distance error ≤ {max_distance_error:e})",
+                "{} (tolerance: ≤ {max_unexplained} disagreements per ray kind that the f64 truth calls ours wrong, p99 distance error ≤ {max_distance_error:e})",
                 if pass { "PASS" } else { "FAIL" }
             );
             return Ok(pass);

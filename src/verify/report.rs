@@ -21,7 +21,7 @@ pub const REPLAY_RAYS: &str = "failing.rays.csv";
 /// Pass/fail rule of `raylab verify`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Tolerance {
-    /// Disagreements allowed per ray kind that the f64 truth calls ours wrong or cannot decide.
+    /// Disagreements allowed per ray kind that the f64 truth calls ours wrong.
     pub max_unexplained: u64,
     /// Largest allowed 99th percentile of |t − t_embree| / t_embree over rays hitting the same triangle.
     pub max_distance_error_p99: f64,
