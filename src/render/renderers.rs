@@ -21,20 +21,22 @@ pub struct RendererInfo {
     pub parse: Parse,
 }
 
-/// The keys of a distribution or path workload: `DrtSettings::KEYS`, then the workload's own
-/// (`DistributionWorkload`'s shutter and rmse).
-const SAMPLED_KEYS: [&str; 10] = [
-    "spp",
-    "aperture",
-    "focus",
-    "max_depth",
-    "shadows",
-    "sets",
-    "filter",
-    "retrace",
-    "shutter",
-    "rmse",
-];
+/// The keys a distribution or path workload reads besides its renderer's (`DrtSettings::KEYS`).
+const WORKLOAD_KEYS: [&str; 2] = ["shutter", "rmse"];
+
+/// The keys of a distribution or path workload: `DrtSettings::KEYS`, then `WORKLOAD_KEYS`.
+const SAMPLED_KEYS: [&str; DrtSettings::KEYS.len() + WORKLOAD_KEYS.len()] = {
+    let mut keys = [""; DrtSettings::KEYS.len() + WORKLOAD_KEYS.len()];
+    let mut i = 0;
+    while i < keys.len() {
+        keys[i] = match i < DrtSettings::KEYS.len() {
+            true => DrtSettings::KEYS[i],
+            false => WORKLOAD_KEYS[i - DrtSettings::KEYS.len()],
+        };
+        i += 1;
+    }
+    keys
+};
 
 pub const RENDERERS: &[RendererInfo] = &[
     RendererInfo {
@@ -130,11 +132,7 @@ impl DistributionWorkload {
             }
         };
         Ok(DistributionWorkload {
-            settings: DrtSettings::from_params(
-                integrator,
-                &settings,
-                &SAMPLED_KEYS[DrtSettings::KEYS.len()..],
-            )?,
+            settings: DrtSettings::from_params(integrator, &settings, &WORKLOAD_KEYS)?,
             shutter,
             rmse,
         })
@@ -226,7 +224,6 @@ mod tests {
 
     #[test]
     fn every_key_is_read() {
-        assert_eq!(SAMPLED_KEYS[..DrtSettings::KEYS.len()], DrtSettings::KEYS);
         for r in RENDERERS {
             let err = (r.parse)(&Params::new().with("no_such_key", 1)).unwrap_err();
             for key in r.keys {
