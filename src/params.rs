@@ -53,6 +53,25 @@ impl Params {
     }
 }
 
+/// The keys `first` then `then`, at compile time: one list of keys made of two others, so
+/// neither is copied by hand (`N` must be their total length).
+pub const fn concat_keys<const N: usize>(
+    first: &[&'static str],
+    then: &[&'static str],
+) -> [&'static str; N] {
+    assert!(first.len() + then.len() == N, "N is the total length");
+    let mut keys = [""; N];
+    let mut i = 0;
+    while i < N {
+        keys[i] = match i < first.len() {
+            true => first[i],
+            false => then[i - first.len()],
+        };
+        i += 1;
+    }
+    keys
+}
+
 impl fmt::Display for Params {
     /// `key=value;key=value`, sorted: the `parameters` column of runs.csv.
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {

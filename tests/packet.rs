@@ -8,12 +8,12 @@ use std::sync::Arc;
 
 use glam::Vec3;
 use raylab::accel::child_pairs::child_pairs;
-use raylab::accel::{Bvh, BvhConfig, BvhNode};
+use raylab::accel::{Bvh, BvhConfig, BvhNode, BvhOfWidth};
 use raylab::geometry::{Aabb, Hit, Ray, RayBatch, RayKind, Triangle};
 use raylab::stats::{Counters, Event};
 use raylab::test_util::same_or_tie;
 use raylab::tracers::chunked::{trace_hits, trace_occlusion};
-use raylab::tracers::packet::{PacketConfig, PacketTracer, Traversal, TreeWidth};
+use raylab::tracers::packet::{PacketConfig, PacketTracer, Traversal};
 use raylab::tracers::reference::ReferenceTracer;
 use raylab::tracers::{Params, Tracer, TracerInfo};
 
@@ -93,15 +93,14 @@ struct Counts {
 }
 
 fn count(traversal: Traversal, width: usize) -> (Counts, Vec<Hit>) {
-    let tracer = PacketTracer::with_width(
-        Arc::new(four_leaf_tree()),
+    let tracer = PacketTracer::new(
+        BvhOfWidth::of_width(Arc::new(four_leaf_tree()), width).unwrap(),
         PacketConfig {
             packet: 4,
             lanes: 4,
             traversal,
             frustum: false,
         },
-        TreeWidth::of(width).unwrap(),
     );
     let batch = column_packet([0.5, 10.0, 0.5, 3.5]);
     let mut hits = vec![Hit::MISS; batch.len()];
@@ -239,10 +238,9 @@ fn occlusion_stops_when_every_ray_is_occluded() {
             traversal: Traversal::Ranged,
             frustum: false,
         };
-        let tracer = PacketTracer::with_width(
-            Arc::new(four_leaf_tree()),
+        let tracer = PacketTracer::new(
+            BvhOfWidth::of_width(Arc::new(four_leaf_tree()), width).unwrap(),
             config,
-            TreeWidth::of(width).unwrap(),
         );
         let mut flags = vec![false; 16];
         tracer.occluded(column_packet([0.5, 10.0, 0.5, 3.5]).view(), &mut flags);
@@ -283,10 +281,9 @@ fn agrees_with_reference(name: &str, size: Option<u32>) {
                         traversal,
                         frustum,
                     };
-                    let tracer = PacketTracer::with_width(
-                        bvh.clone(),
+                    let tracer = PacketTracer::new(
+                        BvhOfWidth::of_width(bvh.clone(), width).unwrap(),
                         config,
-                        TreeWidth::of(width).unwrap(),
                     );
                     for (batch, expected) in [&primary, &diffuse].iter().zip(&expected_hits) {
                         let got = trace_hits(&tracer, batch);
@@ -392,7 +389,7 @@ fn explicit_packets_are_respected() {
             traversal,
             frustum: true,
         };
-        let tracer = PacketTracer::with_width(tree.clone(), config, TreeWidth::of(width).unwrap());
+        let tracer = PacketTracer::new(BvhOfWidth::of_width(tree.clone(), width).unwrap(), config);
         let mut hits = vec![Hit::MISS; 16];
         let mut c = Counters::default();
         tracer.intersect_counted(explicit.view(), &mut hits, &mut c);
@@ -417,7 +414,7 @@ fn wide_trees_trace_moving_geometry_like_the_reference() {
                 frustum,
             };
             let tracer =
-                PacketTracer::with_width(bvh.clone(), config, TreeWidth::of(width).unwrap());
+                PacketTracer::new(BvhOfWidth::of_width(bvh.clone(), width).unwrap(), config);
             let got = trace_hits(&tracer, &timed);
             for i in 0..timed.len() {
                 assert!(
@@ -482,8 +479,8 @@ fn every_ray_overwrites_a_stale_result() {
                     traversal,
                     frustum: false,
                 };
-                let width_of = TreeWidth::of(width).unwrap();
-                let tracer = PacketTracer::with_width(bvh.clone(), config, width_of);
+                let tracer =
+                    PacketTracer::new(BvhOfWidth::of_width(bvh.clone(), width).unwrap(), config);
                 let mut hits = vec![stale; batch.len()];
                 tracer.intersect(batch.view(), &mut hits);
                 assert_eq!(hits, want, "{config:?} width {width}");

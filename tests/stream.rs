@@ -8,7 +8,7 @@ use std::sync::Arc;
 
 use glam::Vec3;
 use raylab::accel::child_pairs::child_pairs;
-use raylab::accel::{AccelKind, Bvh, BvhConfig, BvhNode};
+use raylab::accel::{AccelKind, Bvh, BvhConfig, BvhNode, BvhOfWidth};
 use raylab::geometry::{Aabb, Hit, Ray, RayBatch, RayKind, Triangle};
 use raylab::render::rays::primary_rays;
 use raylab::scene::library::load_scene;
@@ -196,7 +196,8 @@ fn short_sub_streams_finish_one_ray_at_a_time() {
                 single_tree: TreeWidth::of(*tree).unwrap(),
                 ..hybrid_tracer(8, n, 8).config()
             };
-            StreamTracer::new(Arc::new(two_leaf_tree()), config)
+            let tree = BvhOfWidth::of_width(Arc::new(two_leaf_tree()), *tree).unwrap();
+            StreamTracer::new(tree, config)
         };
         let mut hits = vec![Hit::MISS; 8];
         let mut c = Counters::default();

@@ -8,7 +8,7 @@ mod common;
 use std::sync::Arc;
 
 use glam::Vec3;
-use raylab::accel::{Bvh, BvhConfig, WideBvh};
+use raylab::accel::{Bvh, BvhConfig, WideBvh, WideTree};
 use raylab::geometry::{Hit, Ray, RayBatch, RayKind, Triangle};
 use raylab::scene::Mesh;
 use raylab::stats::Counters;
@@ -16,7 +16,12 @@ use raylab::test_util::same_or_tie;
 use raylab::tracers::chunked::{trace_hits, trace_occlusion};
 use raylab::tracers::reference::ReferenceTracer;
 use raylab::tracers::wide_single::WideSingleTracer;
-use raylab::tracers::{build_tracer, tracer_for_mesh, Params, Tracer, TracerInfo};
+
+/// `bvh` collapsed to `width` children per node, as a run builds it.
+fn wide(bvh: Arc<Bvh>, width: usize) -> Arc<WideTree> {
+    Arc::new(WideTree::collapse(bvh, width).unwrap())
+}
+use raylab::tracers::{tracer_for_mesh, Params, Tracer};
 
 use common::{moving_room, reference_rays, same_or_tie_moving, MovingRoom, ReferenceRays};
 
@@ -83,8 +88,8 @@ fn children_are_visited_nearest_first_and_skipped_beyond_the_hit() {
     let forward = Ray::new(Vec3::new(-1.0, 0.75, 0.75), Vec3::X, 0.0, 1000.0);
     let backward = Ray::new(Vec3::new(101.0, 0.75, 0.75), -Vec3::X, 0.0, 1000.0);
     let short = Ray::new(Vec3::new(-1.0, 0.75, 0.75), Vec3::X, 0.0, 5.0);
-    let eight = WideSingleTracer::<8>::new(bvh.clone());
-    let four = WideSingleTracer::<4>::new(bvh.clone());
+    let eight = WideSingleTracer::new(wide(bvh.clone(), 8));
+    let four = WideSingleTracer::new(wide(bvh.clone(), 4));
     for any in [false, true] {
         let (hit, occluded, counts) = counted(&eight, forward, any);
         assert_eq!(counts, [3, 8, 2], "8-wide forward, any {any}");
@@ -118,7 +123,7 @@ fn batch_of(ray: Ray) -> RayBatch {
 fn agrees_with_reference(name: &str, size: Option<u32>) {
     let ReferenceRays {
         mesh,
-        accel,
+        accel: _,
         bvh,
         primary,
         shadow,
@@ -126,11 +131,11 @@ fn agrees_with_reference(name: &str, size: Option<u32>) {
         ..
     } = reference_rays(name, size);
     let reference = ReferenceTracer::new(bvh);
-    let info = TracerInfo::find("wide-single").unwrap();
     let mut ties = 0;
     for width in [4, 8] {
         let params = Params::new().with("width", width);
-        let tracer = build_tracer(info, &params, &accel).unwrap();
+        // Its own structure: the wide tree of this width over the same BVH.
+        let tracer = tracer_for_mesh("wide-single", &params, &mesh).unwrap();
         for batch in [&primary, &diffuse, &shadow] {
             let want = trace_hits(&reference, batch);
             assert!(want.iter().any(Hit::is_hit));
@@ -181,8 +186,8 @@ fn moving_geometry_gives_the_references_hits() {
     let MovingRoom { bvh, timed, want } = moving_room();
     let reference = ReferenceTracer::new(bvh.clone());
     for tracer in [
-        Box::new(WideSingleTracer::<4>::new(bvh.clone())) as Box<dyn Tracer>,
-        Box::new(WideSingleTracer::<8>::new(bvh.clone())),
+        Box::new(WideSingleTracer::new(wide(bvh.clone(), 4))) as Box<dyn Tracer>,
+        Box::new(WideSingleTracer::new(wide(bvh.clone(), 8))),
     ] {
         let got = trace_hits(tracer.as_ref(), &timed);
         for i in 0..timed.len() {
@@ -211,7 +216,7 @@ fn bad_width_and_empty_trees() {
         assert!(err.is_err(), "width {width}");
     }
     // An empty tree: every ray misses, nothing is occluded.
-    let empty = WideSingleTracer::<8>::new(Arc::new(Bvh::build(&[], BvhConfig::default())));
+    let empty = WideSingleTracer::new(wide(Arc::new(Bvh::build(&[], BvhConfig::default())), 8));
     let batch = batch_of(Ray::new(Vec3::ZERO, Vec3::X, 0.0, 10.0));
     assert_eq!(trace_hits(&empty, &batch), vec![Hit::MISS]);
     assert_eq!(trace_occlusion(&empty, &batch), vec![false]);

@@ -9,6 +9,7 @@ pub mod obvhs;
 pub mod presplit;
 pub mod spatial_split;
 pub mod wide_bvh;
+pub mod wide_tree;
 
 use std::sync::Arc;
 
@@ -23,12 +24,15 @@ pub use self::obvhs::{ObvhsBvh, ObvhsQuality};
 pub use bvh::{Bvh, BvhConfig, BvhNode};
 pub use grid::{Grid, GridConfig};
 pub use wide_bvh::{WideBvh, WideChild, WideEntry, WideNode};
+pub use wide_tree::{BvhOfWidth, WideNodes, WideTree};
 
 /// Which structure a tracer traverses.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum AccelKind {
     /// Our binned-SAH binary BVH.
     Bvh,
+    /// Our binary BVH collapsed to 4 or 8 children per node (`WideTree`).
+    Wide,
     /// Embree 3's own BVH over the mesh, built by the library (`quality`, `robust`).
     Embree,
     /// Embree 4's, with the same parameters (`accel::embree::v4`).
@@ -44,6 +48,7 @@ impl AccelKind {
     pub fn name(self) -> &'static str {
         match self {
             AccelKind::Bvh => "bvh",
+            AccelKind::Wide => "wide_bvh",
             AccelKind::Embree => "embree",
             #[cfg(embree4)]
             AccelKind::Embree4 => "embree4",
@@ -56,6 +61,7 @@ impl AccelKind {
     pub fn params(self) -> &'static [&'static str] {
         match self {
             AccelKind::Bvh => BvhConfig::PARAMS,
+            AccelKind::Wide => &WideTree::PARAMS,
             AccelKind::Embree => EmbreeConfig::PARAMS,
             #[cfg(embree4)]
             AccelKind::Embree4 => EmbreeConfig::PARAMS,
@@ -68,6 +74,9 @@ impl AccelKind {
     pub fn check_params(self, params: &Params) -> Result<()> {
         match self {
             AccelKind::Bvh => BvhConfig::from_params(params).map(drop),
+            AccelKind::Wide => BvhConfig::from_params(params)
+                .and(WideTree::width_from_params(params))
+                .map(drop),
             AccelKind::Embree => EmbreeConfig::from_params(params).map(drop),
             #[cfg(embree4)]
             AccelKind::Embree4 => EmbreeConfig::from_params(params).map(drop),
@@ -82,6 +91,10 @@ impl AccelKind {
                 &mesh.triangles,
                 BvhConfig::from_params(params)?,
             ))),
+            AccelKind::Wide => Accel::Wide(Arc::new(WideTree::collapse(
+                Arc::new(Bvh::build(&mesh.triangles, BvhConfig::from_params(params)?)),
+                WideTree::width_from_params(params)?,
+            )?)),
             AccelKind::Embree => Accel::Embree(Arc::new(EmbreeScene::build(
                 Device::shared()?,
                 mesh,
@@ -123,6 +136,14 @@ impl AccelKind {
                 &close.triangles,
                 BvhConfig::from_params(params)?,
             )))),
+            AccelKind::Wide => Ok(Accel::Wide(Arc::new(WideTree::collapse(
+                Arc::new(Bvh::build_moving(
+                    &open.triangles,
+                    &close.triangles,
+                    BvhConfig::from_params(params)?,
+                )),
+                WideTree::width_from_params(params)?,
+            )?))),
             AccelKind::Embree => Ok(Accel::Embree(Arc::new(EmbreeScene::build_moving(
                 Device::shared()?,
                 open,
@@ -173,7 +194,7 @@ impl AccelKind {
             AccelKind::Embree => true,
             #[cfg(embree4)]
             AccelKind::Embree4 => true,
-            AccelKind::Bvh | AccelKind::Obvhs | AccelKind::Grid => false,
+            AccelKind::Bvh | AccelKind::Wide | AccelKind::Obvhs | AccelKind::Grid => false,
         }
     }
 
@@ -188,6 +209,7 @@ impl AccelKind {
 #[derive(Clone, Debug)]
 pub enum Accel {
     Bvh(Arc<Bvh>),
+    Wide(Arc<WideTree>),
     Embree(Arc<EmbreeScene>),
     #[cfg(embree4)]
     Embree4(Arc<EmbreeScene<Embree4>>),
@@ -200,6 +222,7 @@ impl Accel {
     pub fn is_moving(&self) -> bool {
         match self {
             Accel::Bvh(b) => b.motion_end.is_some(),
+            Accel::Wide(w) => w.bvh.motion_end.is_some(),
             Accel::Embree(s) => s.is_moving(),
             #[cfg(embree4)]
             Accel::Embree4(s) => s.is_moving(),
@@ -207,9 +230,20 @@ impl Accel {
         }
     }
 
+    /// Our binary BVH, also the one a wide tree was collapsed from.
     pub fn bvh(&self) -> Result<&Arc<Bvh>> {
         match self {
             Accel::Bvh(b) => Ok(b),
+            Accel::Wide(w) => Ok(&w.bvh),
+            other => Err(other.not(AccelKind::Bvh)),
+        }
+    }
+
+    /// The tree a tracer over our BVH walks: the binary one, or a wide one.
+    pub fn tree(&self) -> Result<BvhOfWidth> {
+        match self {
+            Accel::Bvh(b) => Ok(BvhOfWidth::Binary(b.clone())),
+            Accel::Wide(w) => Ok(BvhOfWidth::Wide(w.clone())),
             other => Err(other.not(AccelKind::Bvh)),
         }
     }
@@ -246,6 +280,7 @@ impl Accel {
     pub fn kind(&self) -> AccelKind {
         match self {
             Accel::Bvh(_) => AccelKind::Bvh,
+            Accel::Wide(_) => AccelKind::Wide,
             Accel::Embree(_) => AccelKind::Embree,
             #[cfg(embree4)]
             Accel::Embree4(_) => AccelKind::Embree4,
@@ -266,6 +301,7 @@ impl Accel {
     pub fn build_seconds(&self) -> f64 {
         match self {
             Accel::Bvh(b) => b.build_seconds,
+            Accel::Wide(w) => w.build_seconds,
             Accel::Embree(s) => s.build_seconds,
             #[cfg(embree4)]
             Accel::Embree4(s) => s.build_seconds,

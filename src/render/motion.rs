@@ -98,9 +98,8 @@ pub fn tracer_for_motion(
         triangles: moving.close.clone(),
         material_ids: moving.open.material_ids.clone(),
     };
-    let accel =
-        info.accel
-            .build_moving(&moving.open, &close, &params.subset(info.accel.params()))?;
+    let (kind, structure_params) = info.structure(&config, params);
+    let accel = kind.build_moving(&moving.open, &close, &structure_params)?;
     make_tracer(info, &config, &accel)
 }
 

@@ -6,7 +6,7 @@
 use std::fmt;
 
 use crate::error::{Error, Result};
-use crate::params::Params;
+use crate::params::{concat_keys, Params};
 use crate::render::distribution::{DrtSettings, Integrator};
 use crate::render::whitted::WhittedSettings;
 
@@ -25,18 +25,8 @@ pub struct RendererInfo {
 const WORKLOAD_KEYS: [&str; 2] = ["shutter", "rmse"];
 
 /// The keys of a distribution or path workload: `DrtSettings::KEYS`, then `WORKLOAD_KEYS`.
-const SAMPLED_KEYS: [&str; DrtSettings::KEYS.len() + WORKLOAD_KEYS.len()] = {
-    let mut keys = [""; DrtSettings::KEYS.len() + WORKLOAD_KEYS.len()];
-    let mut i = 0;
-    while i < keys.len() {
-        keys[i] = match i < DrtSettings::KEYS.len() {
-            true => DrtSettings::KEYS[i],
-            false => WORKLOAD_KEYS[i - DrtSettings::KEYS.len()],
-        };
-        i += 1;
-    }
-    keys
-};
+const SAMPLED_KEYS: [&str; DrtSettings::KEYS.len() + WORKLOAD_KEYS.len()] =
+    concat_keys(&DrtSettings::KEYS, &WORKLOAD_KEYS);
 
 pub const RENDERERS: &[RendererInfo] = &[
     RendererInfo {

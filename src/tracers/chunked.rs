@@ -7,9 +7,9 @@ use std::ops::Range;
 
 use rayon::prelude::*;
 
-use crate::geometry::{Hit, RayBatch, Rays};
+use crate::geometry::{Hit, RayBatch, RayKind, Rays};
 use crate::stats::Counters;
-use crate::tracers::{Tracer, VisibilityQuery};
+use crate::tracers::{StagedRays, Tracer, VisibilityQuery};
 
 /// Rays per work chunk of most tracers (at least; see `chunk_ranges`). 4096 = four whole 32×32 camera tiles: a multiple of 16 (and of every
 /// aligned n×n block, n ≤ 32), so no packet or Morton block of primary rays straddles two chunks
@@ -80,6 +80,23 @@ pub fn pass<T: Send>(
         .for_each(|(rays, chunk)| trace(rays, chunk));
 }
 
+/// `rays` in `tracer`'s own layout for closest hits, staged chunk by chunk as `pass` cuts them,
+/// in the current pool (`Kernel::stage_closest`); `None` when the tracer reads `Rays` as they are.
+pub fn stage_closest<'t>(
+    tracer: &'t dyn Tracer,
+    rays: Rays<'_>,
+) -> Option<Box<dyn StagedRays<Hit> + 't>> {
+    tracer.stage_closest(rays, chunk_ranges(rays, tracer.chunk_rays()))
+}
+
+/// As `stage_closest`, for occlusion.
+pub fn stage_occlusion<'t>(
+    tracer: &'t dyn Tracer,
+    rays: Rays<'_>,
+) -> Option<Box<dyn StagedRays<bool> + 't>> {
+    tracer.stage_occlusion(rays, chunk_ranges(rays, tracer.chunk_rays()))
+}
+
 /// One counting pass: each chunk counts into its own `Counters`, merged at the end.
 pub fn counted_pass<T: Send>(
     rays: Rays<'_>,
@@ -113,6 +130,25 @@ fn visibility_chunks<'a, 'q>(
             (query.slice(range), chunk)
         })
         .collect()
+}
+
+/// The shadow rays of `query` (`VisibilityQuery::rays`: point by point, sample by sample, one
+/// explicit packet per packet of points), generated in parallel chunks of whole packets in the
+/// current pool: the query's rays made once for every tracer that traces them as a batch.
+pub fn query_rays(query: VisibilityQuery<'_>) -> RayBatch {
+    let parts: Vec<RayBatch> = packet_chunks(query.len(), query.packet_start, 1024)
+        .into_par_iter()
+        .map(|range| {
+            let first = range.start as u32;
+            let rays = range.len() * query.samples.per_point();
+            let mut part = RayBatch::with_capacity(RayKind::SoftShadow, rays);
+            query.slice(range).rays(&mut part, &mut Vec::new());
+            // `rays` numbers points from the slice's start: number them in the whole query.
+            part.pixel.iter_mut().for_each(|p| *p += first);
+            part
+        })
+        .collect();
+    RayBatch::concat(RayKind::SoftShadow, parts)
 }
 
 /// One light-visibility pass, chunk by chunk, in the current pool; with `counters`, the counting

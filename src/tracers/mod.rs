@@ -10,9 +10,12 @@ pub mod obvhs;
 pub mod packet;
 pub mod reference;
 pub mod registry;
+pub mod staged;
 pub mod stream;
 pub mod visibility;
 pub mod wide_single;
+
+use std::ops::Range;
 
 use crate::geometry::{Hit, Ray, Rays};
 use crate::stats::{Counters, NoStats, Stats};
@@ -22,6 +25,7 @@ pub use registry::{
     build_tracer, make_tracer, oracle_params, tracer_for_frame, tracer_for_mesh, Role,
     TracerConfig, TracerInfo, ORACLE, TRACERS,
 };
+pub use staged::StagedRays;
 pub use visibility::VisibilityQuery;
 
 /// What an algorithm implements: closest hit and occlusion over a chunk of rays, generic over the
@@ -29,6 +33,12 @@ pub use visibility::VisibilityQuery;
 pub trait Kernel: Send + Sync {
     /// Whether the kernel counts its own box/triangle tests (Embree cannot; it only counts rays).
     const COUNTS_INTERNALS: bool = true;
+
+    /// Whether `light_visibility_with` answers the query itself (generating its rays where it
+    /// needs them, as multi-frusta tracing does) rather than by the query's shadow rays through
+    /// `occluded_with` (the default answer), which a caller may then generate once for every
+    /// tracer and hand over as a batch.
+    const ANSWERS_VISIBILITY_NATIVELY: bool = false;
 
     /// `hits[i]` becomes the closest hit of ray `i` in `[tmin, tmax]`, or `Hit::MISS`.
     fn intersect_with<S: Stats>(&self, rays: Rays<'_>, hits: &mut [Hit], stats: &mut S);
@@ -46,6 +56,26 @@ pub trait Kernel: Send + Sync {
         stats: &mut S,
     ) {
         visibility::occluded_by_rays(self, query, occluded, stats)
+    }
+
+    /// `rays` converted, chunk by chunk (`chunks`, as `chunked` cuts them), into the tracer's own
+    /// layout for closest hits (`staged`); `None` (every from-scratch tracer): it reads `Rays`
+    /// as they are and there is nothing to convert.
+    fn stage_closest(
+        &self,
+        _rays: Rays<'_>,
+        _chunks: Vec<Range<usize>>,
+    ) -> Option<Box<dyn StagedRays<Hit> + '_>> {
+        None
+    }
+
+    /// As `stage_closest`, for occlusion.
+    fn stage_occlusion(
+        &self,
+        _rays: Rays<'_>,
+        _chunks: Vec<Range<usize>>,
+    ) -> Option<Box<dyn StagedRays<bool> + '_>> {
+        None
     }
 }
 
@@ -88,6 +118,8 @@ fn trace_checked<K: SingleRayKernel, S: Stats, const ANY: bool>(
 /// The object-safe face of a `Kernel`: the runner holds `Box<dyn Tracer>`.
 pub trait Tracer: Send + Sync {
     fn counts_internals(&self) -> bool;
+    /// `Kernel::ANSWERS_VISIBILITY_NATIVELY`.
+    fn answers_visibility_natively(&self) -> bool;
     /// Rays per work chunk of a batch pass (`TracerInfo::chunk_rays`).
     fn chunk_rays(&self) -> usize;
     fn intersect(&self, rays: Rays<'_>, hits: &mut [Hit]);
@@ -101,11 +133,26 @@ pub trait Tracer: Send + Sync {
         occluded: &mut [u64],
         counters: &mut Counters,
     );
+    /// `Kernel::stage_closest`.
+    fn stage_closest(
+        &self,
+        rays: Rays<'_>,
+        chunks: Vec<Range<usize>>,
+    ) -> Option<Box<dyn StagedRays<Hit> + '_>>;
+    /// `Kernel::stage_occlusion`.
+    fn stage_occlusion(
+        &self,
+        rays: Rays<'_>,
+        chunks: Vec<Range<usize>>,
+    ) -> Option<Box<dyn StagedRays<bool> + '_>>;
 }
 
 impl<K: Kernel> Tracer for K {
     fn counts_internals(&self) -> bool {
         K::COUNTS_INTERNALS
+    }
+    fn answers_visibility_natively(&self) -> bool {
+        K::ANSWERS_VISIBILITY_NATIVELY
     }
     fn chunk_rays(&self) -> usize {
         chunked::CHUNK_RAYS
@@ -132,5 +179,19 @@ impl<K: Kernel> Tracer for K {
         counters: &mut Counters,
     ) {
         self.light_visibility_with(query, occluded, counters)
+    }
+    fn stage_closest(
+        &self,
+        rays: Rays<'_>,
+        chunks: Vec<Range<usize>>,
+    ) -> Option<Box<dyn StagedRays<Hit> + '_>> {
+        Kernel::stage_closest(self, rays, chunks)
+    }
+    fn stage_occlusion(
+        &self,
+        rays: Rays<'_>,
+        chunks: Vec<Range<usize>>,
+    ) -> Option<Box<dyn StagedRays<bool> + '_>> {
+        Kernel::stage_occlusion(self, rays, chunks)
     }
 }

@@ -5,7 +5,9 @@
 #[cfg(embree4)]
 use crate::accel::embree::Embree4;
 use crate::accel::embree::{Embree3, EMBREE4_BUILT, EMBREE4_HINT};
-use crate::accel::{Accel, AccelKind};
+use std::ops::Range;
+
+use crate::accel::{Accel, AccelKind, BvhOfWidth};
 use crate::error::{Error, Result};
 use crate::geometry::{Hit, Rays};
 use crate::scene::{Frame, Mesh};
@@ -19,8 +21,8 @@ use crate::tracers::multi_frusta::{MftConfig, MftTracer};
 use crate::tracers::packet::{PacketConfig, PacketTracer, TreeWidth};
 use crate::tracers::stream::{StreamConfig, StreamTracer};
 use crate::tracers::{
-    grid_dda::GridDdaTracer, obvhs::ObvhsTracer, reference::ReferenceTracer, wide_single, Params,
-    Tracer, VisibilityQuery,
+    grid_dda::GridDdaTracer, obvhs::ObvhsTracer, reference::ReferenceTracer, wide_single,
+    wide_single::WideSingleTracer, Params, StagedRays, Tracer, VisibilityQuery,
 };
 
 /// What a tracer is in a comparison.
@@ -51,6 +53,20 @@ pub enum TracerConfig {
     },
     Mft(MftConfig),
     Stream(StreamConfig),
+}
+
+impl TracerConfig {
+    /// Children per node of the BVH the tracer walks: 2 (the binary tree; also every tracer
+    /// over another structure), or 4 or 8 for a wide tree (`accel::WideTree`).
+    pub fn tree_width(&self) -> usize {
+        match *self {
+            TracerConfig::WideSingle(width) => width.children(),
+            TracerConfig::Packet { width, .. } => width.children(),
+            TracerConfig::Mft(c) => c.width,
+            TracerConfig::Stream(c) if c.single > 0 => c.single_tree.children(),
+            _ => 2,
+        }
+    }
 }
 
 /// Checks a tracer's own parameters and returns its typed configuration.
@@ -207,7 +223,12 @@ pub const TRACERS: &[TracerInfo] = &[
         about: "single rays, the SAH BVH collapsed to 4 or 8 children per node (width, default 8): one SIMD slab test of all children, nearest first; the reference's watertight triangles and hits",
         parse: |params| wide_single::Width::from_params(params).map(TracerConfig::WideSingle),
         make: |config, accel| match *config {
-            TracerConfig::WideSingle(width) => Ok(width.tracer(accel.bvh()?.clone())),
+            TracerConfig::WideSingle(_) => match accel.tree()? {
+                BvhOfWidth::Wide(tree) => Ok(Box::new(WideSingleTracer::new(tree))),
+                BvhOfWidth::Binary(_) => Err(Error::Runtime(
+                    "wide-single was given the binary BVH, not a wide one".into(),
+                )),
+            },
             _ => Err(other_family(config)),
         },
         counts_internals: true,
@@ -323,11 +344,9 @@ pub const TRACERS: &[TracerInfo] = &[
             Ok(TracerConfig::Packet { config, width })
         },
         make: |config, accel| match *config {
-            TracerConfig::Packet { config, width } => Ok(Box::new(PacketTracer::with_width(
-                accel.bvh()?.clone(),
-                config,
-                width,
-            ))),
+            TracerConfig::Packet { config, .. } => {
+                Ok(Box::new(PacketTracer::new(accel.tree()?, config)))
+            }
             _ => Err(other_family(config)),
         },
         counts_internals: true,
@@ -342,7 +361,7 @@ pub const TRACERS: &[TracerInfo] = &[
         about: "multi-frusta tracing (Benthin & Wald 2009): light-visibility queries as blocks of shadow frusta (block points, ≤ 64) through the SAH BVH together, rays generated on demand at leaves, box culling for all frusta at once, plane and corner-ray triangle culling, occlusion bits, corner-ray recomputation (cr), frustum shrinking (fs) and leaf ray–box tests (leaf_rays); with primary = frusta, pinhole camera batches as blocks of 4×4-pixel primary frusta, their rays made on demand from the camera grid; other ray batches (and camera rays by default) by 4×4 packets; exact answers (watertight)",
         parse: |params| MftConfig::from_params(params).map(TracerConfig::Mft),
         make: |config, accel| match *config {
-            TracerConfig::Mft(c) => Ok(Box::new(MftTracer::new(accel.bvh()?.clone(), c))),
+            TracerConfig::Mft(c) => Ok(Box::new(MftTracer::new(accel.tree()?, c))),
             _ => Err(other_family(config)),
         },
         counts_internals: true,
@@ -357,10 +376,9 @@ pub const TRACERS: &[TracerInfo] = &[
         about: "stream filtering (Gribble & Ramani 2008): streams of S rays (stream = S or frame) through the SAH BVH; at each node a box filter tests N rays at a time (width ∈ 4,8,12,16,32,64) and partitions the stream in place, the rays that meet the box going on to the leaf or to both children, front to back; exact closest hits (watertight, robust slabs per lane)",
         parse: |params| StreamConfig::from_params(params).map(TracerConfig::Stream),
         make: |config, accel| match *config {
-            TracerConfig::Stream(c) => Ok(Box::new(StreamTracer::over_static(
-                accel.bvh()?.clone(),
-                c,
-            )?)),
+            TracerConfig::Stream(c) => {
+                Ok(Box::new(StreamTracer::over_static(accel.tree()?, c)?))
+            }
             _ => Err(other_family(config)),
         },
         counts_internals: true,
@@ -400,6 +418,18 @@ impl TracerInfo {
     pub fn config(&self, params: &Params) -> Result<TracerConfig> {
         params.check_known(self.name, &self.accepts())?;
         (self.parse)(params)
+    }
+
+    /// The structure an instance with `params` (parsed into `config`) traverses: its kind and
+    /// the parameters it is built with. A tracer over our BVH with a tree width of 4 or 8 walks
+    /// the wide tree of that width (`AccelKind::Wide`), a structure of its own shared by every
+    /// tracer of the same BVH parameters and width.
+    pub fn structure(&self, config: &TracerConfig, params: &Params) -> (AccelKind, Params) {
+        let own = params.subset(self.accel.params());
+        match (self.accel, config.tree_width()) {
+            (AccelKind::Bvh, width) if width > 2 => (AccelKind::Wide, own.with("width", width)),
+            (kind, _) => (kind, own),
+        }
     }
 
     /// Every parameter this tracer accepts: its own and its structure's.
@@ -446,9 +476,8 @@ pub fn make_tracer(
 pub fn tracer_for_mesh(name: &str, params: &Params, mesh: &Mesh) -> Result<Box<dyn Tracer>> {
     let info = TracerInfo::find(name)?;
     let config = info.config(params)?;
-    let accel = info
-        .accel
-        .build(mesh, &params.subset(info.accel.params()))?;
+    let (kind, structure_params) = info.structure(&config, params);
+    let accel = kind.build(mesh, &structure_params)?;
     make_tracer(info, &config, &accel)
 }
 
@@ -474,6 +503,9 @@ struct Registered {
 impl Tracer for Registered {
     fn counts_internals(&self) -> bool {
         self.tracer.counts_internals()
+    }
+    fn answers_visibility_natively(&self) -> bool {
+        self.tracer.answers_visibility_natively()
     }
     fn chunk_rays(&self) -> usize {
         self.chunk_rays
@@ -501,6 +533,20 @@ impl Tracer for Registered {
     ) {
         self.tracer
             .light_visibility_counted(query, occluded, counters)
+    }
+    fn stage_closest(
+        &self,
+        rays: Rays<'_>,
+        chunks: Vec<Range<usize>>,
+    ) -> Option<Box<dyn StagedRays<Hit> + '_>> {
+        self.tracer.stage_closest(rays, chunks)
+    }
+    fn stage_occlusion(
+        &self,
+        rays: Rays<'_>,
+        chunks: Vec<Range<usize>>,
+    ) -> Option<Box<dyn StagedRays<bool> + '_>> {
+        self.tracer.stage_occlusion(rays, chunks)
     }
 }
 
@@ -567,7 +613,8 @@ mod tests {
         );
         for t in TRACERS {
             let config = t.config(&Params::new()).unwrap();
-            let accel = t.accel.build(&triangle(), &Params::new()).unwrap();
+            let (kind, params) = t.structure(&config, &Params::new());
+            let accel = kind.build(&triangle(), &params).unwrap();
             let tracer = make_tracer(t, &config, &accel).unwrap();
             assert_eq!(tracer.counts_internals(), t.counts_internals, "{}", t.name);
             assert_eq!(t.accel.is_embree(), is_embree(t.name), "{}", t.name);

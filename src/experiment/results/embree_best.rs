@@ -133,6 +133,7 @@ mod tests {
                 hits: 0,
                 seconds_min: seconds,
                 seconds_median: seconds,
+                generation_seconds: None,
                 build_seconds: build,
                 built: true,
                 counted_rays: 100,

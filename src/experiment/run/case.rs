@@ -80,6 +80,10 @@ pub struct Case {
     /// Whether the structure was built this frame (false: reused from frame 0 of a static scene).
     pub built: bool,
     pub timings: Vec<Timing>,
+    /// The generation of the rays the tracer was handed, where the runner generated them once
+    /// for every tracer (the soft-shadow query's shadow rays), at every thread count; empty
+    /// otherwise.
+    pub generation: Vec<Timing>,
     /// A distribution frame's RMSE against its reference image (frame rows only).
     pub rmse: Option<f64>,
     /// An interleaved-soft-shadow frame's share of pixels retraced (frame rows, with retrace).
@@ -111,6 +115,11 @@ impl Case {
             hits: self.counted.hits as u64,
             seconds_min: timing.seconds_min,
             seconds_median: timing.seconds_median,
+            generation_seconds: self
+                .generation
+                .iter()
+                .find(|g| g.threads == timing.threads)
+                .map(|g| g.seconds_min),
             build_seconds: self.build_seconds,
             built: self.built,
             counted_rays: c.rays,

@@ -1,7 +1,8 @@
 //! What `raylab run --dump-rays` writes into the results directory's `rays/`, so that another
 //! program can replay a run's exact work (`tools/embree-direct.c` calls Embree directly on it):
-//! every generated ray batch as a binary ray file (`geometry::ray_file`), the frame's triangles,
-//! and the soft-shadow query's shading points with their quad light.
+//! every generated ray batch as a binary ray file (`geometry::ray_file`) — the soft-shadow query's
+//! shadow rays too (`<…>-soft_shadow.rays`, the batch every tracer but a native one traces) — the
+//! frame's triangles, and the soft-shadow query's shading points with their quad light.
 //!
 //! Both extra files are little-endian, a 24-byte header then f32 records:
 //!

@@ -10,6 +10,7 @@ use rayon::ThreadPool;
 use crate::experiment::record::selection::median_of_sorted;
 use crate::render::wavefront::{answer, Answers, Work};
 use crate::stats::Counters;
+use crate::tracers::chunked::{stage_closest, stage_occlusion};
 use crate::tracers::Tracer;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -43,20 +44,40 @@ pub fn time_passes(
     let mut answers = Answers::blank(&work);
     let seconds = pool.install(|| {
         for _ in 0..warmup {
-            answer(tracer, work, &mut answers, None);
-            black_box(&mut answers);
+            timed_pass(tracer, work, &mut answers);
         }
         (0..repeats)
-            .map(|_| {
-                let start = Instant::now();
-                answer(tracer, work, &mut answers, None);
-                let elapsed = start.elapsed().as_secs_f64();
-                black_box(&mut answers);
-                elapsed
-            })
+            .map(|_| timed_pass(tracer, work, &mut answers))
             .collect()
     });
     timing_of(pool.current_num_threads(), seconds)
+}
+
+/// The seconds of one pass of `tracer` over `work`, in the current pool. A tracer with a layout
+/// of its own (a baseline library's) gets the rays staged in it first, untimed
+/// (`chunked::stage_*`): it is timed on rays as its user would hold them.
+fn timed_pass(tracer: &dyn Tracer, work: Work<'_>, answers: &mut Answers) -> f64 {
+    // Each staged batch is freed after its clock stops.
+    let seconds = match (work, &mut *answers) {
+        (Work::Closest(batch), Answers::Hits(hits)) => {
+            stage_closest(tracer, batch.view()).map(|mut staged| seconds_of(|| staged.trace(hits)))
+        }
+        (Work::Occlusion(batch), Answers::Occluded(occluded)) => {
+            stage_occlusion(tracer, batch.view())
+                .map(|mut staged| seconds_of(|| staged.trace(occluded)))
+        }
+        _ => None,
+    };
+    let seconds = seconds.unwrap_or_else(|| seconds_of(|| answer(tracer, work, answers, None)));
+    black_box(answers);
+    seconds
+}
+
+/// Wall seconds of `f`.
+fn seconds_of(f: impl FnOnce()) -> f64 {
+    let start = Instant::now();
+    f();
+    start.elapsed().as_secs_f64()
 }
 
 /// The fastest and the median of `seconds` (one per timed pass, at least one).

@@ -32,7 +32,7 @@ use crate::render::specular::specular_rays;
 use crate::render::wavefront::{BatchRecord, Tracing, Work};
 use crate::render::whitted::render_whitted;
 use crate::scene::{Frame, Scene};
-use crate::tracers::chunked::trace_hits;
+use crate::tracers::chunked::{query_rays, trace_hits};
 use crate::tracers::visibility::{LightSamples, QuadLight, ShadingPoints};
 use crate::tracers::{
     make_tracer, oracle_params, tracer_for_frame, Params, Tracer, VisibilityQuery, ORACLE,
@@ -49,6 +49,14 @@ use crate::experiment::spec::plan::{
     secondary_ray_structure, secondary_ray_tracer, Plan, SceneLoader, ScenePlan,
 };
 use crate::experiment::spec::shard::Part;
+
+/// The pool with the most threads.
+fn widest(pools: &[ThreadPool]) -> &ThreadPool {
+    pools
+        .iter()
+        .max_by_key(|p| p.current_num_threads())
+        .expect("threads is never empty")
+}
 
 /// A built structure with its build time.
 struct Built {
@@ -128,10 +136,7 @@ pub fn run_plan(
         })
         .collect::<Result<Vec<ThreadPool>>>()?;
     // Counting and ray generation are not timed: give them the widest pool.
-    let widest = pools
-        .iter()
-        .max_by_key(|p| p.current_num_threads())
-        .expect("threads is never empty");
+    let widest = widest(&pools);
 
     let mut cases = Vec::new();
     for (scene_index, (spec, scene_plan)) in exp.scenes.iter().zip(&plan.scenes).enumerate() {
@@ -160,7 +165,7 @@ pub fn run_plan(
             }
             let frame_tracers = current.as_ref().expect("built above");
             let workloads =
-                generate_workloads(exp, scene_plan, &scene, &frame, frame_tracers, widest)?;
+                generate_workloads(exp, scene_plan, &scene, &frame, frame_tracers, &pools)?;
             if let Some(dir) = dump_rays {
                 dump::write_triangles(
                     &dir.join(dump::triangles_name(spec, f)),
@@ -176,9 +181,13 @@ pub fn run_plan(
                             points,
                             light,
                             samples,
+                            rays,
+                            ..
                         } => {
                             let path = dir.join(dump::points_name(spec, f));
                             dump::write_points(&path, points, *light, samples.per_point())?;
+                            let path = dir.join(dump::rays_name(spec, f, rays.kind()));
+                            dump::write_batch(&path, rays)?;
                         }
                     }
                 }
@@ -283,16 +292,27 @@ impl TracerOnFrame<'_> {
             build_seconds: self.build_seconds,
             built: self.built,
             timings,
+            generation: Vec::new(),
             rmse: None,
             retraced_share: None,
             checked: None,
         }
     }
 
-    /// One workload traced on its own.
+    /// One workload traced on its own. The soft-shadow query goes to a tracer that answers it
+    /// natively as a query, to the others as its shadow rays, generated once for all of them
+    /// (their generation time is the row's `generation_seconds`, not in its own).
     fn batch(&self, workload: &Workload) -> Case {
         let kind = workload.kind();
-        let case = self.traced(Traced::Batch(kind), kind.name(), workload.work());
+        let case = match workload {
+            Workload::SoftShadow {
+                rays, generation, ..
+            } if !self.tracer.answers_visibility_natively() => Case {
+                generation: generation.clone(),
+                ..self.traced(Traced::Batch(kind), kind.name(), Work::Occlusion(rays))
+            },
+            _ => self.traced(Traced::Batch(kind), kind.name(), workload.work()),
+        };
         let (mesh, tracer, oracle) = (&self.frame.mesh, self.tracer, self.oracle);
         let checked = self.widest.install(|| match workload {
             Workload::Rays(batch) => sampled_check::check(mesh, tracer, oracle, batch),
@@ -300,6 +320,7 @@ impl TracerOnFrame<'_> {
                 points,
                 light,
                 samples,
+                ..
             } => sampled_check::check_visibility(
                 mesh,
                 tracer,
@@ -611,6 +632,10 @@ enum Workload {
         points: ShadingPoints,
         light: QuadLight,
         samples: LightSamples,
+        /// The query's shadow rays (`chunked::query_rays`), for the tracers that take rays.
+        rays: RayBatch,
+        /// Their generation, timed like a tracer's passes at every thread count.
+        generation: Vec<Timing>,
     },
 }
 
@@ -629,9 +654,41 @@ impl Workload {
                 points,
                 light,
                 samples,
+                ..
             } => Work::LightVisibility(light_query(points, *light, samples)),
         }
     }
+}
+
+/// The shadow rays of `query`, generated `warmup` + `repeats` times in every pool, the
+/// generations timed as a tracer's passes are.
+fn time_shadow_rays(
+    exp: &Experiment,
+    pools: &[ThreadPool],
+    query: VisibilityQuery<'_>,
+) -> (RayBatch, Vec<Timing>) {
+    let mut rays = RayBatch::new(RayKind::SoftShadow);
+    let timings = pools
+        .iter()
+        .map(|pool| {
+            pool.install(|| {
+                for _ in 0..exp.warmup {
+                    rays = query_rays(query);
+                }
+                let seconds = (0..exp.repeats)
+                    .map(|_| {
+                        // The previous rays are freed outside the clock.
+                        drop(std::mem::take(&mut rays));
+                        let start = Instant::now();
+                        rays = query_rays(query);
+                        start.elapsed().as_secs_f64()
+                    })
+                    .collect();
+                timing_of(pool.current_num_threads(), seconds)
+            })
+        })
+        .collect();
+    (rays, timings)
 }
 
 /// The light-visibility query of every shading point.
@@ -656,8 +713,9 @@ fn generate_workloads(
     scene: &Scene,
     frame: &Frame,
     tracers: &FrameTracers,
-    pool: &ThreadPool,
+    pools: &[ThreadPool],
 ) -> Result<Vec<Workload>> {
+    let pool = widest(pools);
     let primary = primary_rays(&frame.camera, exp.width, exp.height);
     let hits = tracers
         .secondary
@@ -691,10 +749,15 @@ fn generate_workloads(
                     exp.soft_shadow_sets,
                     seed(kind),
                 )?;
+                let light = QuadLight::of(light);
+                let query = light_query(&points, light, &samples);
+                let (rays, generation) = time_shadow_rays(exp, pools, query);
                 workloads.push(Workload::SoftShadow {
                     points,
-                    light: QuadLight::of(light),
+                    light,
                     samples,
+                    rays,
+                    generation,
                 });
                 continue;
             }

@@ -1,9 +1,10 @@
 //! `embree3-4/8/16`, `embree4-4/8/16`: `rtcIntersectN` / `rtcOccludedN` on consecutive groups of
-//! N rays of the chunk (never across an explicit packet boundary, `Rays::packets`); a partial
-//! group masks its missing lanes off. One implementation over the packet type and the Embree
+//! N rays of the chunk (never across an explicit packet boundary, `Rays::packets`), each staged
+//! in its own `RTCRayHitN` / `RTCRayN`; a partial group masks its missing lanes off. One implementation over the packet type and the Embree
 //! version; the three bindgen structs only supply their lanes and their calls.
 
 use std::marker::PhantomData;
+use std::ops::Range;
 
 use super::{convert, Submission};
 use crate::accel::embree::ffi::{self, RTCRay, RTCScene, RTC_INVALID_GEOMETRY_ID};
@@ -146,54 +147,63 @@ impl ValidMask {
 /// Rays in packets of `P`'s width.
 pub struct Packets<P>(PhantomData<fn() -> P>);
 
-impl<A: EmbreeApi, P: RayHitPacket + 'static> Submission<A> for Packets<P> {
+impl<A: EmbreeApi, P: RayHitPacket + Send + 'static> Submission<A> for Packets<P>
+where
+    P::Rays: Send,
+{
+    type Hits = Padded<P>;
+    type Shadows = P::Rays;
+
+    fn calls(rays: Rays<'_>) -> impl Iterator<Item = Range<usize>> + '_ {
+        rays.packets(P::Rays::WIDTH)
+    }
+
+    #[inline(always)]
+    fn stage_hits(rays: &Rays<'_>, call: Range<usize>) -> Padded<P> {
+        let mut packet = Padded::new(P::zeroed());
+        for (lane, i) in call.enumerate() {
+            packet.record.rays().set_ray(lane, &convert::ray(rays, i));
+            packet.record.clear_hit(lane);
+        }
+        packet
+    }
+
+    #[inline(always)]
+    fn stage_shadows(rays: &Rays<'_>, call: Range<usize>) -> P::Rays {
+        let mut packet = P::Rays::zeroed();
+        for (lane, i) in call.enumerate() {
+            packet.set_ray(lane, &convert::ray(rays, i));
+        }
+        packet
+    }
+
+    #[inline(always)]
     fn intersect(
         scene: &EmbreeScene<A>,
         args: &mut A::Arguments,
-        rays: Rays<'_>,
+        packet: &mut Padded<P>,
         hits: &mut [Hit],
     ) {
-        let width = P::Rays::WIDTH;
-        let mut padded = Padded::new(P::zeroed());
-        for group in rays.packets(width) {
-            let start = group.start;
-            let hits = &mut hits[group];
-            let packet = &mut padded.record;
-            for lane in 0..hits.len() {
-                packet
-                    .rays()
-                    .set_ray(lane, &convert::ray(&rays, start + lane));
-                packet.clear_hit(lane);
-            }
-            let valid = ValidMask::first(hits.len());
-            // SAFETY: WIDTH valid ints, a committed scene, a padded packet aligned by its type.
-            unsafe { P::intersect::<A>(padded.as_mut_ptr(), valid.0.as_ptr(), scene.raw(), args) };
-            for (lane, hit) in hits.iter_mut().enumerate() {
-                *hit = padded.record.hit(lane);
-            }
+        let valid = ValidMask::first(hits.len());
+        // SAFETY: WIDTH valid ints, a committed scene, a padded packet aligned by its type.
+        unsafe { P::intersect::<A>(packet.as_mut_ptr(), valid.0.as_ptr(), scene.raw(), args) };
+        for (lane, hit) in hits.iter_mut().enumerate() {
+            *hit = packet.record.hit(lane);
         }
     }
 
+    #[inline(always)]
     fn occluded(
         scene: &EmbreeScene<A>,
         args: &mut A::Arguments,
-        rays: Rays<'_>,
+        packet: &mut P::Rays,
         occluded: &mut [bool],
     ) {
-        let width = P::Rays::WIDTH;
-        let mut packet = P::Rays::zeroed();
-        for group in rays.packets(width) {
-            let start = group.start;
-            let occluded = &mut occluded[group];
-            for lane in 0..occluded.len() {
-                packet.set_ray(lane, &convert::ray(&rays, start + lane));
-            }
-            let valid = ValidMask::first(occluded.len());
-            // SAFETY: as above.
-            unsafe { packet.occluded::<A>(valid.0.as_ptr(), scene.raw(), args) };
-            for (lane, o) in occluded.iter_mut().enumerate() {
-                *o = convert::is_occluded(packet.tfar(lane));
-            }
+        let valid = ValidMask::first(occluded.len());
+        // SAFETY: as above.
+        unsafe { packet.occluded::<A>(valid.0.as_ptr(), scene.raw(), args) };
+        for (lane, o) in occluded.iter_mut().enumerate() {
+            *o = convert::is_occluded(packet.tfar(lane));
         }
     }
 }

@@ -4,6 +4,7 @@
 
 use std::fmt;
 use std::marker::PhantomData;
+use std::ops::Range;
 use std::str::FromStr;
 use std::sync::Arc;
 
@@ -13,15 +14,33 @@ use crate::error::Result;
 use crate::geometry::{Hit, RayKind, Rays};
 use crate::params::Params;
 use crate::stats::Stats;
-use crate::tracers::Kernel;
+use crate::tracers::staged::Chunks;
+use crate::tracers::{Kernel, StagedRays};
 
-/// One way of calling Embree `A`'s intersect/occluded functions on a chunk of rays.
+/// One way of calling Embree `A` on a chunk of rays: how the chunk is cut into calls, the record
+/// each call takes (a ray, a packet of 4/8/16, a stream), made from our rays (`stage_*`), and the
+/// calls on it. A timed pass of a baseline stages the whole batch first (`Kernel::stage_*`), so
+/// it pays only for the calls, as a user holding rays in Embree's layout would.
 pub trait Submission<A: EmbreeApi>: 'static {
-    fn intersect(scene: &EmbreeScene<A>, args: &mut A::Arguments, rays: Rays<'_>, hits: &mut [Hit]);
+    /// One closest-hit call's record.
+    type Hits: Send;
+    /// One occlusion call's record.
+    type Shadows: Send;
+    /// The calls of `rays`, in order: consecutive runs covering them.
+    fn calls(rays: Rays<'_>) -> impl Iterator<Item = Range<usize>> + '_;
+    fn stage_hits(rays: &Rays<'_>, call: Range<usize>) -> Self::Hits;
+    fn stage_shadows(rays: &Rays<'_>, call: Range<usize>) -> Self::Shadows;
+    /// Traces one call's record; `hits` has one entry per ray of its call.
+    fn intersect(
+        scene: &EmbreeScene<A>,
+        args: &mut A::Arguments,
+        record: &mut Self::Hits,
+        hits: &mut [Hit],
+    );
     fn occluded(
         scene: &EmbreeScene<A>,
         args: &mut A::Arguments,
-        rays: Rays<'_>,
+        record: &mut Self::Shadows,
         occluded: &mut [bool],
     );
 }
@@ -122,23 +141,152 @@ fn count_rays<S: Stats>(n: usize, stats: &mut S) {
     }
 }
 
+impl<A: EmbreeApi, M: Submission<A>> EmbreeTracer<A, M> {
+    /// The records of the calls of `rays`, each with its run of the rays.
+    fn stage<Q: Query<A, M>>(rays: Rays<'_>) -> Vec<(Range<usize>, Q::Record)> {
+        M::calls(rays)
+            .map(|call| (call.clone(), Q::stage(&rays, call)))
+            .collect()
+    }
+
+    /// Every call of `staged` (records of rays of `kind`), answers into `out`.
+    fn trace_staged<Q: Query<A, M>>(
+        &self,
+        kind: RayKind,
+        staged: &mut [(Range<usize>, Q::Record)],
+        out: &mut [Q::Answer],
+    ) {
+        self.call(kind, |scene, args| {
+            for (call, record) in staged {
+                Q::trace(scene, args, record, &mut out[call.clone()]);
+            }
+        })
+    }
+
+    /// `rays` converted call by call and traced: what a renderer's wavefront gets.
+    fn convert_and_trace<Q: Query<A, M>, S: Stats>(
+        &self,
+        rays: Rays<'_>,
+        out: &mut [Q::Answer],
+        stats: &mut S,
+    ) {
+        let rays = rays.slice(0..out.len());
+        count_rays(out.len(), stats);
+        self.call(rays.kind, |scene, args| {
+            for call in M::calls(rays) {
+                let mut record = Q::stage(&rays, call.clone());
+                Q::trace(scene, args, &mut record, &mut out[call]);
+            }
+        })
+    }
+
+    fn staged<Q: Query<A, M>>(
+        &self,
+        rays: Rays<'_>,
+        chunks: Vec<Range<usize>>,
+    ) -> Box<dyn StagedRays<Q::Answer> + '_> {
+        Box::new(Staged::<A, M, Q> {
+            tracer: self,
+            kind: rays.kind,
+            chunks: Chunks::stage(chunks, |range| Self::stage::<Q>(rays.slice(range))),
+        })
+    }
+}
+
 impl<A: EmbreeApi, M: Submission<A>> Kernel for EmbreeTracer<A, M> {
     const COUNTS_INTERNALS: bool = false;
 
     fn intersect_with<S: Stats>(&self, rays: Rays<'_>, hits: &mut [Hit], stats: &mut S) {
-        let rays = rays.slice(0..hits.len());
-        count_rays(hits.len(), stats);
-        self.call(rays.kind, |scene, args| {
-            M::intersect(scene, args, rays, hits)
-        });
+        self.convert_and_trace::<Closest, S>(rays, hits, stats)
     }
 
     fn occluded_with<S: Stats>(&self, rays: Rays<'_>, occluded: &mut [bool], stats: &mut S) {
-        let rays = rays.slice(0..occluded.len());
-        count_rays(occluded.len(), stats);
-        self.call(rays.kind, |scene, args| {
-            M::occluded(scene, args, rays, occluded)
-        });
+        self.convert_and_trace::<Occlusion, S>(rays, occluded, stats)
+    }
+
+    fn stage_closest(
+        &self,
+        rays: Rays<'_>,
+        chunks: Vec<Range<usize>>,
+    ) -> Option<Box<dyn StagedRays<Hit> + '_>> {
+        Some(self.staged::<Closest>(rays, chunks))
+    }
+
+    fn stage_occlusion(
+        &self,
+        rays: Rays<'_>,
+        chunks: Vec<Range<usize>>,
+    ) -> Option<Box<dyn StagedRays<bool> + '_>> {
+        Some(self.staged::<Occlusion>(rays, chunks))
+    }
+}
+
+/// Closest hit or occlusion: the record a submission stages for it and the call that traces it,
+/// so staging and tracing are written once for both queries.
+trait Query<A: EmbreeApi, M: Submission<A>>: 'static {
+    type Record: Send;
+    type Answer: Send;
+    fn stage(rays: &Rays<'_>, call: Range<usize>) -> Self::Record;
+    fn trace(
+        scene: &EmbreeScene<A>,
+        args: &mut A::Arguments,
+        record: &mut Self::Record,
+        out: &mut [Self::Answer],
+    );
+}
+
+struct Closest;
+struct Occlusion;
+
+impl<A: EmbreeApi, M: Submission<A>> Query<A, M> for Closest {
+    type Record = M::Hits;
+    type Answer = Hit;
+    #[inline(always)]
+    fn stage(rays: &Rays<'_>, call: Range<usize>) -> M::Hits {
+        M::stage_hits(rays, call)
+    }
+    #[inline(always)]
+    fn trace(
+        scene: &EmbreeScene<A>,
+        args: &mut A::Arguments,
+        record: &mut M::Hits,
+        out: &mut [Hit],
+    ) {
+        M::intersect(scene, args, record, out)
+    }
+}
+
+impl<A: EmbreeApi, M: Submission<A>> Query<A, M> for Occlusion {
+    type Record = M::Shadows;
+    type Answer = bool;
+    #[inline(always)]
+    fn stage(rays: &Rays<'_>, call: Range<usize>) -> M::Shadows {
+        M::stage_shadows(rays, call)
+    }
+    #[inline(always)]
+    fn trace(
+        scene: &EmbreeScene<A>,
+        args: &mut A::Arguments,
+        record: &mut M::Shadows,
+        out: &mut [bool],
+    ) {
+        M::occluded(scene, args, record, out)
+    }
+}
+
+/// A batch staged for Embree: per chunk, the records of its calls. Counting is not done here:
+/// counted passes go through `Kernel` (Embree counts rays only).
+struct Staged<'t, A: EmbreeApi, M: Submission<A>, Q: Query<A, M>> {
+    tracer: &'t EmbreeTracer<A, M>,
+    kind: RayKind,
+    chunks: Chunks<Vec<(Range<usize>, Q::Record)>>,
+}
+
+impl<A: EmbreeApi, M: Submission<A>, Q: Query<A, M>> StagedRays<Q::Answer> for Staged<'_, A, M, Q> {
+    fn trace(&mut self, out: &mut [Q::Answer]) {
+        let (tracer, kind) = (self.tracer, self.kind);
+        self.chunks
+            .trace(out, |calls, out| tracer.trace_staged::<Q>(kind, calls, out));
     }
 }
 

@@ -71,7 +71,7 @@ use std::cell::RefCell;
 use std::str::FromStr;
 use std::sync::Arc;
 
-use crate::accel::{Bvh, WideBvh};
+use crate::accel::{Bvh, BvhOfWidth, WideNodes};
 use crate::error::{Error, Result};
 use crate::geometry::{Hit, Rays};
 use crate::stats::Stats;
@@ -179,23 +179,25 @@ impl MftConfig {
     }
 }
 
-/// The tree the frusta walk (`MftConfig::width`); a wide one is built only when asked for.
-enum TreeOfWidth {
-    Binary,
-    Four(WideBvh<4>),
-    Eight(WideBvh<8>),
-}
-
 pub struct MftTracer {
     bvh: Arc<Bvh>,
-    tree: TreeOfWidth,
+    /// The tree the frusta walk (`MftConfig::width`): the binary one or a wide one.
+    tree: BvhOfWidth,
     config: MftConfig,
     /// Ordinary ray batches (P-Packet, see the module doc).
     packets: PacketTracer,
 }
 
 impl MftTracer {
-    pub fn new(bvh: Arc<Bvh>, config: MftConfig) -> Self {
+    /// Over `tree`: the binary BVH, or the wide tree the run built for `config.width`.
+    pub fn new(tree: impl Into<BvhOfWidth>, config: MftConfig) -> Self {
+        let tree = tree.into();
+        debug_assert_eq!(
+            tree.wide().map_or(2, WideNodes::children),
+            config.width,
+            "the tree of the configured width"
+        );
+        let bvh = tree.bvh().clone();
         let packets = PacketTracer::new(
             bvh.clone(),
             PacketConfig {
@@ -205,11 +207,6 @@ impl MftTracer {
                 frustum: true,
             },
         );
-        let tree = match config.width {
-            4 => TreeOfWidth::Four(WideBvh::collapse(&bvh)),
-            8 => TreeOfWidth::Eight(WideBvh::collapse(&bvh)),
-            _ => TreeOfWidth::Binary,
-        };
         MftTracer {
             bvh,
             tree,
@@ -277,6 +274,9 @@ thread_local! {
 }
 
 impl Kernel for MftTracer {
+    /// Rays are generated inside the frusta, at the leaves that need them (§4).
+    const ANSWERS_VISIBILITY_NATIVELY: bool = true;
+
     fn intersect_with<S: Stats>(&self, rays: Rays<'_>, hits: &mut [Hit], stats: &mut S) {
         match rays.camera {
             // Primary frusta test static triangles only.
@@ -284,14 +284,12 @@ impl Kernel for MftTracer {
                 if self.config.primary == PrimaryRays::Frusta && self.bvh.motion_end.is_none() =>
             {
                 let (bvh, config) = (&*self.bvh, &self.config);
-                match &self.tree {
-                    TreeOfWidth::Binary => {
-                        primary::intersect(bvh, bvh, grid, config, rays, hits, stats)
-                    }
-                    TreeOfWidth::Four(w) => {
+                match self.tree.wide() {
+                    None => primary::intersect(bvh, bvh, grid, config, rays, hits, stats),
+                    Some(WideNodes::Four(w)) => {
                         primary::intersect(bvh, w, grid, config, rays, hits, stats)
                     }
-                    TreeOfWidth::Eight(w) => {
+                    Some(WideNodes::Eight(w)) => {
                         primary::intersect(bvh, w, grid, config, rays, hits, stats)
                     }
                 }
@@ -310,10 +308,10 @@ impl Kernel for MftTracer {
         occluded: &mut [u64],
         stats: &mut S,
     ) {
-        match &self.tree {
-            TreeOfWidth::Binary => self.visibility_over(&*self.bvh, query, occluded, stats),
-            TreeOfWidth::Four(w) => self.visibility_over(w, query, occluded, stats),
-            TreeOfWidth::Eight(w) => self.visibility_over(w, query, occluded, stats),
+        match self.tree.wide() {
+            None => self.visibility_over(&*self.bvh, query, occluded, stats),
+            Some(WideNodes::Four(w)) => self.visibility_over(w, query, occluded, stats),
+            Some(WideNodes::Eight(w)) => self.visibility_over(w, query, occluded, stats),
         }
     }
 }

@@ -7,6 +7,7 @@ use std::sync::Arc;
 use glam::Vec3;
 
 use super::primary::{generate, FRUSTUM_RAYS};
+use super::tests::tree_of;
 use super::*;
 use crate::accel::BvhConfig;
 use crate::geometry::{Ray, RayBatch, RayKind, Triangle};
@@ -92,7 +93,11 @@ fn agrees_with_reference(name: &str, triangles: &[Triangle], batch: &RayBatch) -
             ..frusta()
         };
         let mut counters = Counters::default();
-        let got = hits_of(&MftTracer::new(bvh.clone(), config), batch, &mut counters);
+        let got = hits_of(
+            &MftTracer::new(tree_of(&bvh, config), config),
+            batch,
+            &mut counters,
+        );
         let mut ties = 0;
         for i in 0..batch.len() {
             if got[i] != expected[i] {

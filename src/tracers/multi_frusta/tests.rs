@@ -72,6 +72,11 @@ fn soup(seed: u64) -> Vec<Triangle> {
     soup.triangles(400, seed)
 }
 
+/// `bvh` as the tree of `config`'s width, as a run builds it.
+pub(super) fn tree_of(bvh: &Arc<Bvh>, config: MftConfig) -> BvhOfWidth {
+    BvhOfWidth::of_width(bvh.clone(), config.width).unwrap()
+}
+
 fn bvh(triangles: &[Triangle]) -> Arc<Bvh> {
     Arc::new(Bvh::build(triangles, BvhConfig::default()))
 }
@@ -146,7 +151,7 @@ fn bits_equal_the_reference_tracers_on_the_same_rays() {
             "seed {seed}: both answers occur ({occluded} occluded)"
         );
         for config in configs {
-            let mft = MftTracer::new(bvh.clone(), config);
+            let mft = MftTracer::new(tree_of(&bvh, config), config);
             let mut counters = Counters::default();
             let got = answer(&mft, query, &mut counters);
             assert_eq!(got, expected, "seed {seed}, {config:?}");
@@ -163,7 +168,11 @@ fn shrinking_culls_more_triangles_and_changes_no_answer() {
     let query = VisibilityQuery::new(&points, light(2.0), &samples).unwrap();
     let run = |config: MftConfig| {
         let mut counters = Counters::default();
-        let v = answer(&MftTracer::new(bvh.clone(), config), query, &mut counters);
+        let v = answer(
+            &MftTracer::new(tree_of(&bvh, config), config),
+            query,
+            &mut counters,
+        );
         (v, counters)
     };
     let none = MftConfig {
@@ -256,7 +265,11 @@ fn wide_walks_answer_as_the_binary_walk() {
                 ..MftConfig::default()
             };
             let mut counters = Counters::default();
-            let v = answer(&MftTracer::new(bvh.clone(), config), query, &mut counters);
+            let v = answer(
+                &MftTracer::new(tree_of(&bvh, config), config),
+                query,
+                &mut counters,
+            );
             (v, counters)
         };
         let (binary, binary_counts) = run(2);
@@ -325,7 +338,11 @@ fn a_wide_node_tests_all_its_children_at_once() {
             ..MftConfig::default()
         };
         let mut counters = Counters::default();
-        let got = answer(&MftTracer::new(bvh.clone(), config), query, &mut counters);
+        let got = answer(
+            &MftTracer::new(tree_of(&bvh, config), config),
+            query,
+            &mut counters,
+        );
         assert_eq!(got, expected, "width {width}");
         assert_eq!(counters.get(Event::FrustumBoxTests), boxes, "width {width}");
         assert_eq!(
@@ -653,7 +670,11 @@ fn backface_culling_changes_no_answer_on_closed_meshes() {
             ..MftConfig::default()
         };
         let mut counters = Counters::default();
-        let v = answer(&MftTracer::new(bvh.clone(), config), query, &mut counters);
+        let v = answer(
+            &MftTracer::new(tree_of(&bvh, config), config),
+            query,
+            &mut counters,
+        );
         (v, counters.get(Event::TrianglesCulled))
     };
     let ((plain, plain_culled), (culled, backface_culled)) = (run(false), run(true));

@@ -61,7 +61,7 @@ mod workspace;
 use std::str::FromStr;
 use std::sync::Arc;
 
-use crate::accel::{Bvh, WideBvh};
+use crate::accel::{Bvh, BvhOfWidth, WideNodes};
 use crate::error::{Error, Result};
 use crate::geometry::ray::prefetch;
 use crate::geometry::{Hit, Rays};
@@ -178,13 +178,6 @@ impl PacketConfig {
     }
 }
 
-/// The tree a packet walks: the binary one, or a wide one collapsed from it.
-enum Nodes {
-    Binary,
-    Four(WideBvh<4>),
-    Eight(WideBvh<8>),
-}
-
 /// Children per node of the tree a packet walks (`width` = 2, 4 or 8).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum TreeWidth {
@@ -207,33 +200,32 @@ impl TreeWidth {
             ))),
         }
     }
+
+    pub fn children(self) -> usize {
+        match self {
+            TreeWidth::Binary => 2,
+            TreeWidth::Four => 4,
+            TreeWidth::Eight => 8,
+        }
+    }
 }
 
 pub struct PacketTracer {
     bvh: Arc<Bvh>,
     order: ChildOrder,
-    nodes: Nodes,
+    nodes: BvhOfWidth,
     config: PacketConfig,
 }
 
 impl PacketTracer {
-    /// Over the binary tree (`width` = 2).
-    pub fn new(bvh: Arc<Bvh>, config: PacketConfig) -> Self {
-        Self::with_width(bvh, config, TreeWidth::Binary)
-    }
-
-    /// Over the tree of `width` children per node (a wide tree is collapsed from `bvh` here,
-    /// and only ranged traversal walks it).
-    pub fn with_width(bvh: Arc<Bvh>, config: PacketConfig, width: TreeWidth) -> Self {
-        let order = ChildOrder::new(&bvh);
-        let nodes = match width {
-            TreeWidth::Binary => Nodes::Binary,
-            TreeWidth::Four => Nodes::Four(WideBvh::collapse(&bvh)),
-            TreeWidth::Eight => Nodes::Eight(WideBvh::collapse(&bvh)),
-        };
+    /// Over `tree`: the binary BVH, or a wide tree the run built for this tracer's `width`
+    /// (which only ranged traversal walks).
+    pub fn new(tree: impl Into<BvhOfWidth>, config: PacketConfig) -> Self {
+        let nodes = tree.into();
+        let bvh = nodes.bvh().clone();
         PacketTracer {
+            order: ChildOrder::new(&bvh),
             bvh,
-            order,
             nodes,
             config,
         }
@@ -274,16 +266,16 @@ impl PacketTracer {
             }
             let first = range.start;
             // The wide traversal's node test is the interval test.
-            let interval = traversal == Traversal::Ia || !matches!(self.nodes, Nodes::Binary);
+            let interval = traversal == Traversal::Ia || self.nodes.wide().is_some();
             packet.load(rays.slice(range), &tree, self.config.frustum, interval);
-            match (&self.nodes, traversal) {
-                (Nodes::Four(wide), _) => {
+            match (self.nodes.wide(), traversal) {
+                (Some(WideNodes::Four(wide)), _) => {
                     traverse_wide::<4, L, S, ANY>(&mut packet, &tree, wide, &mut wide_stack, stats)
                 }
-                (Nodes::Eight(wide), _) => {
+                (Some(WideNodes::Eight(wide)), _) => {
                     traverse_wide::<8, L, S, ANY>(&mut packet, &tree, wide, &mut wide_stack, stats)
                 }
-                (Nodes::Binary, traversal) => match traversal {
+                (None, traversal) => match traversal {
                     Traversal::Masked => traverse::<Masked, L, S, ANY>(&mut packet, &tree, stats),
                     Traversal::Ranged => traverse::<Ranged, L, S, ANY>(&mut packet, &tree, stats),
                     Traversal::Partition => {

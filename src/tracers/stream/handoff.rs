@@ -4,29 +4,26 @@
 //! `wide_single::trace_wide`), entered where the binary node the stream reached sits in it
 //! (`WideBvh::entry`). Both find the reference's hits.
 
-use crate::accel::{Bvh, WideBvh};
+use std::sync::Arc;
+
+use crate::accel::{Bvh, BvhOfWidth, WideNodes, WideTree};
 use crate::geometry::{Hit, Rays};
 use crate::stats::Stats;
-use crate::tracers::packet::TreeWidth;
 use crate::tracers::reference::trace_subtree;
 use crate::tracers::wide_single::trace_wide;
 
 use super::rays::StreamRays;
 
-pub enum Handoff {
-    Binary,
-    Four(WideBvh<4>),
-    Eight(WideBvh<8>),
-}
+/// The wide tree the hand-off walks; `None`: the binary one.
+pub struct Handoff(Option<Arc<WideTree>>);
 
 impl Handoff {
-    /// The hand-off over a tree of `width` children per node, collapsed from `bvh` here (as the
-    /// packet tracer's wide trees are) — only when there is a hand-off (`single` > 0).
-    pub fn new(bvh: &Bvh, width: TreeWidth, single: usize) -> Self {
-        match (width, single) {
-            (_, 0) | (TreeWidth::Binary, _) => Handoff::Binary,
-            (TreeWidth::Four, _) => Handoff::Four(WideBvh::collapse(bvh)),
-            (TreeWidth::Eight, _) => Handoff::Eight(WideBvh::collapse(bvh)),
+    /// The hand-off over `tree` (the run builds the wide tree of `single_tree` when there is a
+    /// hand-off, `single` > 0).
+    pub fn new(tree: &BvhOfWidth, single: usize) -> Self {
+        match (tree, single) {
+            (BvhOfWidth::Wide(wide), 1..) => Handoff(Some(wide.clone())),
+            _ => Handoff(None),
         }
     }
 
@@ -44,17 +41,17 @@ impl Handoff {
         (rays, at, input): (&StreamRays<L>, usize, &Rays<'_>),
         stats: &mut S,
     ) -> Hit {
-        match self {
-            Handoff::Binary => {
+        match self.0.as_deref().map(|tree| &tree.nodes) {
+            None => {
                 let mut ray = input.ray(rays.id(at));
                 ray.tmax = rays.tmax(at);
                 trace_subtree::<S, ANY>(bvh, node, &ray, stats)
             }
-            Handoff::Four(wide) => {
+            Some(WideNodes::Four(wide)) => {
                 let start = wide.entry[node as usize];
                 trace_wide::<4, S, ANY>(bvh, wide, start, &rays.wide_ray(at), stats)
             }
-            Handoff::Eight(wide) => {
+            Some(WideNodes::Eight(wide)) => {
                 let start = wide.entry[node as usize];
                 trace_wide::<8, S, ANY>(bvh, wide, start, &rays.wide_ray(at), stats)
             }

@@ -52,7 +52,7 @@ mod width;
 use std::str::FromStr;
 use std::sync::Arc;
 
-use crate::accel::Bvh;
+use crate::accel::{Bvh, BvhOfWidth, WideNodes};
 use crate::error::{Error, Result};
 use crate::geometry::{Hit, Rays};
 use crate::lanes::SimdRay;
@@ -152,9 +152,18 @@ pub struct StreamTracer {
 }
 
 impl StreamTracer {
-    pub fn new(bvh: Arc<Bvh>, config: StreamConfig) -> Self {
+    /// Over `tree`: the binary BVH, or the wide tree the run built for the hand-off's
+    /// `single_tree`, which the hand-off then walks.
+    pub fn new(tree: impl Into<BvhOfWidth>, config: StreamConfig) -> Self {
+        let tree = tree.into();
+        debug_assert!(
+            config.single == 0
+                || tree.wide().map_or(2, WideNodes::children) == config.single_tree.children(),
+            "the tree of the configured hand-off width"
+        );
+        let handoff = Handoff::new(&tree, config.single);
+        let bvh = tree.bvh().clone();
         let order = ChildOrder::new(&bvh);
-        let handoff = Handoff::new(&bvh, config.single_tree, config.single);
         StreamTracer {
             bvh,
             order,
@@ -163,14 +172,15 @@ impl StreamTracer {
         }
     }
 
-    /// The tracer over a static `bvh` (it has no motion blur).
-    pub fn over_static(bvh: Arc<Bvh>, config: StreamConfig) -> Result<Self> {
-        if bvh.motion_end.is_some() {
+    /// The tracer over a static `tree` (it has no motion blur).
+    pub fn over_static(tree: impl Into<BvhOfWidth>, config: StreamConfig) -> Result<Self> {
+        let tree = tree.into();
+        if tree.bvh().motion_end.is_some() {
             return Err(Error::usage(
                 "stream tracer: no motion blur (a moving BVH was given)",
             ));
         }
-        Ok(Self::new(bvh, config))
+        Ok(Self::new(tree, config))
     }
 
     pub fn config(&self) -> StreamConfig {

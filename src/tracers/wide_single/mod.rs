@@ -28,25 +28,25 @@ use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
 use std::mem::MaybeUninit;
 use std::sync::Arc;
 
-use crate::accel::{Bvh, BvhConfig, WideBvh, WideEntry, WideNode};
+use crate::accel::{Bvh, BvhConfig, WideBvh, WideEntry, WideNode, WideNodes, WideTree};
 use crate::error::{Error, Result};
 use crate::geometry::{Hit, Ray, Triangle};
 use crate::stats::Stats;
 use crate::tracers::reference::{intersect_leaf, LeafRange, LeafRay};
-use crate::tracers::{Params, SingleRayKernel, Tracer};
+use crate::tracers::{Params, SingleRayKernel};
 
 pub use slab::WideRayTest;
 
-pub struct WideSingleTracer<const W: usize> {
-    bvh: Arc<Bvh>,
-    wide: WideBvh<W>,
+/// Single rays through a wide tree of either width (the walk is generic over it; which one is a
+/// branch per ray, always taken the same way).
+pub struct WideSingleTracer {
+    tree: Arc<WideTree>,
 }
 
-impl<const W: usize> WideSingleTracer<W> {
-    /// Collapses `bvh` into a `W`-wide tree (as the packet tracer's `width` does).
-    pub fn new(bvh: Arc<Bvh>) -> Self {
-        let wide = WideBvh::collapse(&bvh);
-        WideSingleTracer { bvh, wide }
+impl WideSingleTracer {
+    /// Over `tree`, built by the run as the structure of this tracer's `width`.
+    pub fn new(tree: Arc<WideTree>) -> Self {
+        WideSingleTracer { tree }
     }
 }
 
@@ -73,27 +73,42 @@ impl Width {
         }
     }
 
-    /// The tracer of this width over `bvh`.
-    pub fn tracer(self, bvh: Arc<Bvh>) -> Box<dyn Tracer> {
+    /// Children per node.
+    pub fn children(self) -> usize {
         match self {
-            Width::Four => Box::new(WideSingleTracer::<4>::new(bvh)),
-            Width::Eight => Box::new(WideSingleTracer::<8>::new(bvh)),
+            Width::Four => 4,
+            Width::Eight => 8,
         }
     }
 }
 
-impl<const W: usize> SingleRayKernel for WideSingleTracer<W> {
+impl SingleRayKernel for WideSingleTracer {
     #[inline(always)]
     fn trace<S: Stats, const ANY: bool>(&self, ray: &Ray, stats: &mut S) -> Hit {
         if S::ENABLED {
             stats.ray();
         }
-        if self.wide.is_empty() {
-            return Hit::MISS;
+        let bvh = &self.tree.bvh;
+        match &self.tree.nodes {
+            WideNodes::Four(wide) => trace_from_root::<4, S, ANY>(bvh, wide, ray, stats),
+            WideNodes::Eight(wide) => trace_from_root::<8, S, ANY>(bvh, wide, ray, stats),
         }
-        let root = self.wide.entry[Bvh::ROOT];
-        trace_wide::<W, S, ANY>(&self.bvh, &self.wide, root, &WideRay::new(ray), stats)
     }
+}
+
+/// `ray` from the root of `wide` (a miss for an empty tree).
+#[inline(always)]
+fn trace_from_root<const W: usize, S: Stats, const ANY: bool>(
+    bvh: &Bvh,
+    wide: &WideBvh<W>,
+    ray: &Ray,
+    stats: &mut S,
+) -> Hit {
+    if wide.is_empty() {
+        return Hit::MISS;
+    }
+    let root = wide.entry[Bvh::ROOT];
+    trace_wide::<W, S, ANY>(bvh, wide, root, &WideRay::new(ray), stats)
 }
 
 /// One ray as `trace_wide` reads it: its test of a wide node's children, what the leaf stage

@@ -38,10 +38,8 @@ pub struct StructureKey {
 
 impl TracerInstance {
     pub fn structure(&self) -> StructureKey {
-        StructureKey {
-            kind: self.info.accel,
-            params: self.params.subset(self.info.accel.params()),
-        }
+        let (kind, params) = self.info.structure(&self.config, &self.params);
+        StructureKey { kind, params }
     }
 }
 
