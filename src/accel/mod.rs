@@ -20,7 +20,7 @@ use embree::Embree4;
 use embree::{BuildQuality, Device, EmbreeConfig, EmbreeScene};
 
 pub use self::obvhs::{ObvhsBvh, ObvhsQuality};
-pub use bvh::{Bvh, BvhConfig, BvhNode};
+pub use bvh::{Bvh, BvhBuilder, BvhConfig, BvhNode};
 pub use grid::{Grid, GridConfig};
 pub use wide_bvh::{WideBvh, WideChild, WideEntry, WideNode};
 
@@ -78,10 +78,10 @@ impl AccelKind {
 
     pub fn build(self, mesh: &Mesh, params: &Params) -> Result<Accel> {
         Ok(match self {
-            AccelKind::Bvh => Accel::Bvh(Arc::new(Bvh::build(
+            AccelKind::Bvh => Accel::Bvh(Arc::new(Bvh::build_with(
                 &mesh.triangles,
                 BvhConfig::from_params(params)?,
-            ))),
+            )?)),
             AccelKind::Embree => Accel::Embree(Arc::new(EmbreeScene::build(
                 Device::shared()?,
                 mesh,
@@ -121,7 +121,7 @@ impl AccelKind {
             AccelKind::Bvh => Ok(Accel::Bvh(Arc::new(Bvh::build_moving(
                 &open.triangles,
                 &close.triangles,
-                BvhConfig::from_params(params)?,
+                BvhConfig::from_params(params)?.for_moving()?,
             )))),
             AccelKind::Embree => Ok(Accel::Embree(Arc::new(EmbreeScene::build_moving(
                 Device::shared()?,
@@ -261,6 +261,15 @@ impl Accel {
             wanted.name(),
             self.kind().name()
         ))
+    }
+
+    /// The tree's SAH cost (`Bvh::sah_cost`) for our BVH, the one structure whose nodes we hold;
+    /// `None` for the others.
+    pub fn sah_cost(&self) -> Option<f64> {
+        match self {
+            Accel::Bvh(b) => Some(b.sah_cost()),
+            _ => None,
+        }
     }
 
     pub fn build_seconds(&self) -> f64 {
