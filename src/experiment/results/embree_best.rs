@@ -135,6 +135,7 @@ mod tests {
                 seconds_median: seconds,
                 build_seconds: build,
                 built: true,
+                sah_cost: None,
                 counted_rays: 100,
                 nodes_visited: None,
                 aabb_tests: None,

@@ -79,6 +79,8 @@ pub struct Case {
     pub build_seconds: f64,
     /// Whether the structure was built this frame (false: reused from frame 0 of a static scene).
     pub built: bool,
+    /// The SAH cost of the instance's structure, when it is our BVH.
+    pub sah_cost: Option<f64>,
     pub timings: Vec<Timing>,
     /// A distribution frame's RMSE against its reference image (frame rows only).
     pub rmse: Option<f64>,
@@ -113,6 +115,7 @@ impl Case {
             seconds_median: timing.seconds_median,
             build_seconds: self.build_seconds,
             built: self.built,
+            sah_cost: self.sah_cost,
             counted_rays: c.rays,
             nodes_visited: internal(c.nodes_visited),
             aabb_tests: internal(c.aabb_tests),
