@@ -2,6 +2,7 @@
 //! and only for the tracers that need it (see `experiment::plan`).
 
 pub mod bvh;
+pub mod bvh_validity;
 pub mod child_pairs;
 pub mod embree;
 pub mod grid;
