@@ -921,3 +921,42 @@ fn overrides_replace_settings_and_reject_zeros() {
     };
     assert!(matches!(zero.apply(&mut exp), Err(Error::Usage(_))));
 }
+
+/// runs.csv carries the SAH cost of our BVH, whichever builder made it (`builder = "embree"`:
+/// Embree's rtcBuildBVH), equal to the tree's own `sah_cost`; Embree's own scenes have none.
+#[test]
+fn runs_carry_the_sah_cost_of_our_trees_from_either_builder() {
+    use raylab::accel::AccelKind;
+    use raylab::params::Params;
+    let out = scratch("sah");
+    let text = "name = \"t\"\nscenes = [\"room\"]\ntracers = [\"reference\", \
+        { name = \"reference\", params = { builder = \"embree\" } }, \"embree1\"]\n\
+        rays = [\"primary\"]\nresolution = { width = 16, height = 16 }\nwarmup = 0\nrepeats = 1\n";
+    let load = |spec: &SceneSpec| load_scene(&spec.name, spec.size);
+    let dir = run_text(text, &out, &load);
+    let (_, runs) = read_csv(&dir.join(RUNS_CSV));
+    let room = load_scene("room", None).unwrap();
+    let mesh = room.frame(0, 1).mesh.into_owned();
+    let sah = |params: Params| {
+        AccelKind::Bvh
+            .build(&mesh, &params)
+            .unwrap()
+            .sah_cost()
+            .unwrap()
+    };
+    let (ours, embrees) = (
+        sah(Params::new()),
+        sah(Params::new().with("builder", "embree")),
+    );
+    assert!(ours > 1.0 && embrees > 1.0, "{ours}, {embrees}");
+    assert_eq!(runs.len(), 3, "{runs:?}");
+    for r in &runs {
+        let expected = match (r["tracer"].as_str(), r["parameters"].as_str()) {
+            ("reference", "") => ours.to_string(),
+            ("reference", "builder=embree") => embrees.to_string(),
+            _ => String::new(),
+        };
+        assert_eq!(r["sah_cost"], expected, "{r:?}");
+    }
+    fs::remove_dir_all(&out).unwrap();
+}

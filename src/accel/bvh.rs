@@ -4,7 +4,8 @@
 //! plain SAH (`presplit = 0`, `spatial = 0`): early split clipping before the build (`presplit`,
 //! on by default) and spatial splits during it (`spatial_split`, the SBVH, off by default); with
 //! either, a triangle may be referenced by several leaves, each holding the box of its part only.
-//! `sah_cost` measures the result.
+//! `sah_cost` measures the result. `builder = "embree"` builds the same layout with Embree's own
+//! builder instead (`accel::embree::build_bvh`), to tell tree quality from traversal speed.
 //!
 //! Layout: the two children of an interior node are adjacent (`first`, `first + 1`), so a
 //! traversal step tests both boxes at once. Triangles are copied in leaf order for locality;
@@ -19,8 +20,26 @@ use crate::error::{Error, Result};
 use crate::geometry::{Aabb, Triangle};
 use crate::params::Params;
 
+/// Who builds the tree: our binned SAH (with presplit and spatial splits as configured) or Embree's
+/// `rtcBuildBVH` (high quality, its SBVH with our triangle splitter); the layout is the same.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BvhBuilder {
+    Raylab,
+    Embree,
+}
+
+impl BvhBuilder {
+    pub fn name(self) -> &'static str {
+        match self {
+            BvhBuilder::Raylab => "raylab",
+            BvhBuilder::Embree => "embree",
+        }
+    }
+}
+
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BvhConfig {
+    pub builder: BvhBuilder,
     /// A node with at most this many triangles becomes a leaf when SAH says splitting does not pay;
     /// a node with more is always split (unless `max_depth` is reached).
     pub max_leaf_size: usize,
@@ -40,6 +59,7 @@ pub struct BvhConfig {
 impl Default for BvhConfig {
     fn default() -> Self {
         BvhConfig {
+            builder: BvhBuilder::Raylab,
             max_leaf_size: 4,
             max_depth: 48,
             bins: 16,
@@ -54,12 +74,41 @@ impl BvhConfig {
     pub const DEPTH_LIMIT: usize = 62;
     /// More SAH bins than this buy nothing and only cost memory and time.
     pub const BINS_LIMIT: usize = 4096;
-    pub const PARAMS: &'static [&'static str] =
-        &["leaf_size", "max_depth", "bins", "presplit", "spatial"];
+    pub const PARAMS: &'static [&'static str] = &[
+        "builder",
+        "leaf_size",
+        "max_depth",
+        "bins",
+        "presplit",
+        "spatial",
+    ];
+    /// The parameters only our builder reads: setting one with `builder = "embree"` is an error
+    /// rather than a silent no-op (Embree bins and splits by its own rules).
+    pub const RAYLAB_ONLY: &'static [&'static str] = &["bins", "presplit", "spatial"];
+    /// Embree's `RTC_BUILD_MAX_PRIMITIVES_PER_LEAF`: its builder's largest leaf.
+    pub const EMBREE_LEAF_LIMIT: usize = 32;
 
     pub fn from_params(p: &Params) -> Result<Self> {
         let d = BvhConfig::default();
+        let builder = match p.0.get("builder").map(String::as_str) {
+            None | Some("raylab") => BvhBuilder::Raylab,
+            Some("embree") => BvhBuilder::Embree,
+            Some(other) => {
+                return Err(Error::usage(format!(
+                    "parameter builder = {other:?} is not a BVH builder (raylab or embree)"
+                )))
+            }
+        };
+        if builder == BvhBuilder::Embree {
+            if let Some(key) = Self::RAYLAB_ONLY.iter().find(|k| p.0.contains_key(**k)) {
+                return Err(Error::usage(format!(
+                    "parameter {key} is not used by builder = \"embree\" (Embree's builder bins and \
+                     splits by its own rules; it reads leaf_size and max_depth only)"
+                )));
+            }
+        }
         let c = BvhConfig {
+            builder,
             max_leaf_size: p.get_or("leaf_size", d.max_leaf_size)?,
             max_depth: p.get_or("max_depth", d.max_depth)?,
             bins: p.get_or("bins", d.bins)?,
@@ -68,6 +117,13 @@ impl BvhConfig {
         };
         let presplit_ok = c.presplit.is_finite() && (0.0..=16.0).contains(&c.presplit);
         let spatial_ok = c.spatial.is_finite() && (0.0..=1.0).contains(&c.spatial);
+        if builder == BvhBuilder::Embree && c.max_leaf_size > Self::EMBREE_LEAF_LIMIT {
+            return Err(Error::usage(format!(
+                "builder = \"embree\" makes leaves of at most {} triangles (got leaf_size = {})",
+                Self::EMBREE_LEAF_LIMIT,
+                c.max_leaf_size
+            )));
+        }
         if c.max_leaf_size == 0
             || !(2..=Self::BINS_LIMIT).contains(&c.bins)
             || c.max_depth > Self::DEPTH_LIMIT
@@ -81,6 +137,16 @@ impl BvhConfig {
             )));
         }
         Ok(c)
+    }
+
+    /// The configuration for a moving mesh, which only our builder handles (swept boxes).
+    pub fn for_moving(self) -> Result<Self> {
+        match self.builder {
+            BvhBuilder::Raylab => Ok(self),
+            BvhBuilder::Embree => Err(Error::usage(
+                "builder = \"embree\" has no motion blur: a moving mesh needs builder = \"raylab\"",
+            )),
+        }
     }
 }
 
@@ -234,10 +300,25 @@ fn intersection(a: &Aabb, b: &Aabb) -> Aabb {
 impl Bvh {
     pub const ROOT: usize = 0;
 
+    /// The tree by our builder (`config.builder` must be `Raylab`; `build_with` takes either).
     pub fn build(triangles: &[Triangle], config: BvhConfig) -> Bvh {
+        debug_assert_eq!(
+            config.builder,
+            BvhBuilder::Raylab,
+            "Bvh::build is our builder"
+        );
         let start = Instant::now();
         let refs = split_references(triangles, config.presplit);
         Self::build_over(refs, triangles, None, config, start)
+    }
+
+    /// The tree by the builder `config` names: ours, or Embree's (which can fail, e.g. at its
+    /// depth limit).
+    pub fn build_with(triangles: &[Triangle], config: BvhConfig) -> Result<Bvh> {
+        match config.builder {
+            BvhBuilder::Raylab => Ok(Self::build(triangles, config)),
+            BvhBuilder::Embree => super::embree::build_bvh(triangles, config),
+        }
     }
 
     /// The tree over a mesh moving linearly from `open` to `close` (same count and order) during
@@ -246,6 +327,7 @@ impl Bvh {
     /// end boxes). No early split clipping: a piece clipped at one end is not that piece later.
     pub fn build_moving(open: &[Triangle], close: &[Triangle], config: BvhConfig) -> Bvh {
         assert_eq!(open.len(), close.len(), "both ends of a moving mesh");
+        debug_assert_eq!(config.builder, BvhBuilder::Raylab, "moving trees are ours");
         let start = Instant::now();
         let refs: Vec<Reference> = open
             .iter()
@@ -318,6 +400,21 @@ impl Bvh {
             order,
             ..
         } = builder;
+        Self::from_leaf_order(nodes, depth, &order, triangles, close, config, start)
+    }
+
+    /// The finished tree from its nodes (children adjacent, leaves' ranges into `order`) and the
+    /// leaves' references in tree order: triangles copied in that order, child pairs, build time
+    /// since `start`. Shared by both builders, so their trees differ in shape only.
+    pub(crate) fn from_leaf_order(
+        nodes: Vec<BvhNode>,
+        depth: Vec<u8>,
+        order: &[Reference],
+        triangles: &[Triangle],
+        close: Option<&[Triangle]>,
+        config: BvhConfig,
+        start: Instant,
+    ) -> Bvh {
         Bvh {
             triangles: order.iter().map(|r| triangles[r.prim as usize]).collect(),
             prim_ids: order.iter().map(|r| r.prim).collect(),

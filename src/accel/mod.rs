@@ -2,6 +2,7 @@
 //! and only for the tracers that need it (see `experiment::plan`).
 
 pub mod bvh;
+pub mod bvh_validity;
 pub mod child_pairs;
 pub mod embree;
 pub mod grid;
@@ -21,7 +22,7 @@ use embree::Embree4;
 use embree::{BuildQuality, Device, EmbreeConfig, EmbreeScene};
 
 pub use self::obvhs::{ObvhsBvh, ObvhsQuality};
-pub use bvh::{Bvh, BvhConfig, BvhNode};
+pub use bvh::{Bvh, BvhBuilder, BvhConfig, BvhNode};
 pub use grid::{Grid, GridConfig};
 pub use wide_bvh::{WideBvh, WideChild, WideEntry, WideNode};
 pub use wide_tree::{BvhOfWidth, WideNodes, WideTree};
@@ -87,12 +88,15 @@ impl AccelKind {
 
     pub fn build(self, mesh: &Mesh, params: &Params) -> Result<Accel> {
         Ok(match self {
-            AccelKind::Bvh => Accel::Bvh(Arc::new(Bvh::build(
+            AccelKind::Bvh => Accel::Bvh(Arc::new(Bvh::build_with(
                 &mesh.triangles,
                 BvhConfig::from_params(params)?,
-            ))),
+            )?)),
             AccelKind::Wide => Accel::Wide(Arc::new(WideTree::collapse(
-                Arc::new(Bvh::build(&mesh.triangles, BvhConfig::from_params(params)?)),
+                Arc::new(Bvh::build_with(
+                    &mesh.triangles,
+                    BvhConfig::from_params(params)?,
+                )?),
                 WideTree::width_from_params(params)?,
             )?)),
             AccelKind::Embree => Accel::Embree(Arc::new(EmbreeScene::build(
@@ -134,13 +138,13 @@ impl AccelKind {
             AccelKind::Bvh => Ok(Accel::Bvh(Arc::new(Bvh::build_moving(
                 &open.triangles,
                 &close.triangles,
-                BvhConfig::from_params(params)?,
+                BvhConfig::from_params(params)?.for_moving()?,
             )))),
             AccelKind::Wide => Ok(Accel::Wide(Arc::new(WideTree::collapse(
                 Arc::new(Bvh::build_moving(
                     &open.triangles,
                     &close.triangles,
-                    BvhConfig::from_params(params)?,
+                    BvhConfig::from_params(params)?.for_moving()?,
                 )),
                 WideTree::width_from_params(params)?,
             )?))),
@@ -296,6 +300,16 @@ impl Accel {
             wanted.name(),
             self.kind().name()
         ))
+    }
+
+    /// The tree's SAH cost (`Bvh::sah_cost`) for our BVH, the one structure whose nodes we hold;
+    /// `None` for the others.
+    pub fn sah_cost(&self) -> Option<f64> {
+        match self {
+            Accel::Bvh(b) => Some(b.sah_cost()),
+            Accel::Wide(w) => Some(w.bvh.sah_cost()),
+            _ => None,
+        }
     }
 
     pub fn build_seconds(&self) -> f64 {

@@ -1,9 +1,10 @@
 //! Embree's side of the structures: the bindings (`build.rs`), the calls raylab makes (`api`,
 //! implemented by Embree 3 and, with the cfg `embree4`, Embree 4 in `v4`), the device, and a scene
-//! over our mesh with its build quality. The tracers that submit rays to it live in
+//! over our mesh with its build quality, and our BVH built by Embree's builder (`build_bvh`). The tracers that submit rays to it live in
 //! `tracers::embree`.
 
 mod api;
+mod build_bvh;
 mod config;
 mod device;
 pub mod ffi;
@@ -12,6 +13,7 @@ mod scene;
 pub mod v4;
 
 pub use api::{Embree3, EmbreeApi, Padded};
+pub use build_bvh::build_bvh;
 pub use config::{BuildQuality, EmbreeConfig};
 pub use device::{version, Device};
 pub use scene::EmbreeScene;

@@ -36,6 +36,7 @@ pub const RUNS_COLUMNS: &[&str] = &[
     "build_seconds",
     "build",
     "build_mtris_per_s",
+    "sah_cost",
     "build_plus_trace_seconds",
     "counted_rays",
     "nodes_visited",
@@ -119,6 +120,8 @@ pub struct RunRow {
     pub build_seconds: f64,
     /// Whether the structure was built this frame (false: reused from frame 0).
     pub built: bool,
+    /// The SAH cost of the row's structure (`Bvh::sah_cost`), for our BVH only.
+    pub sah_cost: Option<f64>,
     /// Rays the counting pass saw.
     pub counted_rays: u64,
     /// `None` for tracers that count rays only.
@@ -180,6 +183,7 @@ impl RunRow {
             self.build_seconds.to_string(),
             if self.built { "built" } else { "reused" }.to_string(),
             cell(self.build_mtris_per_s()),
+            cell(self.sah_cost),
             self.build_plus_trace_seconds().to_string(),
             self.counted_rays.to_string(),
             cell(self.nodes_visited),
@@ -257,6 +261,11 @@ impl RunRow {
                 "reused" => false,
                 other => return Err(format!("build: {other:?} is neither built nor reused")),
             },
+            // runs.csv files written before the column read as without it.
+            sah_cost: match cells.0.contains_key("sah_cost") {
+                true => cells.optional("sah_cost")?,
+                false => None,
+            },
             counted_rays: cells.number("counted_rays")?,
             nodes_visited: cells.optional("nodes_visited")?,
             aabb_tests: cells.optional("aabb_tests")?,
@@ -307,6 +316,7 @@ mod tests {
             generation_seconds: Some(0.125),
             build_seconds: 0.0,
             built: false,
+            sah_cost: Some(61.25 + 1e-9),
             counted_rays: 4096,
             nodes_visited: Some(12345),
             aabb_tests: None,

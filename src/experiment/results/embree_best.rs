@@ -136,6 +136,7 @@ mod tests {
                 generation_seconds: None,
                 build_seconds: build,
                 built: true,
+                sah_cost: None,
                 counted_rays: 100,
                 nodes_visited: None,
                 aabb_tests: None,

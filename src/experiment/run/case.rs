@@ -79,6 +79,8 @@ pub struct Case {
     pub build_seconds: f64,
     /// Whether the structure was built this frame (false: reused from frame 0 of a static scene).
     pub built: bool,
+    /// The SAH cost of the instance's structure, when it is our BVH.
+    pub sah_cost: Option<f64>,
     pub timings: Vec<Timing>,
     /// The generation of the rays the tracer was handed, where the runner generated them once
     /// for every tracer (the soft-shadow query's shadow rays), at every thread count; empty
@@ -122,6 +124,7 @@ impl Case {
                 .map(|g| g.seconds_min),
             build_seconds: self.build_seconds,
             built: self.built,
+            sah_cost: self.sah_cost,
             counted_rays: c.rays,
             nodes_visited: internal(c.nodes_visited),
             aabb_tests: internal(c.aabb_tests),

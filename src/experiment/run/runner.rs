@@ -213,6 +213,9 @@ pub fn run_plan(
                         false => 0.0,
                     },
                     built: built_now,
+                    sah_cost: frame_tracers.structures[&exp.instances[i].structure()]
+                        .accel
+                        .sah_cost(),
                 };
                 for workload in &workloads {
                     cases.push(measure.batch(workload));
@@ -247,6 +250,7 @@ struct TracerOnFrame<'a> {
     oracle: &'a dyn Tracer,
     build_seconds: f64,
     built: bool,
+    sah_cost: Option<f64>,
 }
 
 impl TracerOnFrame<'_> {
@@ -291,6 +295,7 @@ impl TracerOnFrame<'_> {
             counts_internals: self.tracer.counts_internals(),
             build_seconds: self.build_seconds,
             built: self.built,
+            sah_cost: self.sah_cost,
             timings,
             generation: Vec::new(),
             rmse: None,
