@@ -6,29 +6,30 @@
 //! `FAR_SCALE`, running max/min that ignore a NaN (`0·∞` for an origin on a slab plane) — so each
 //! child's verdict is `RayBoxTest`'s.
 //!
-//! Written with intrinsics on groups of children, not as lane loops over `[f32; W]`: LLVM's SLP
-//! vectorizer split those loops' far-plane half into scalar loads and shuffles (checked in the
-//! assembly), while these compile to straight vector code, one sub/mul/max-or-min per group and
-//! plane and one movemask per group. The kernel is written once over `SlabVector`: groups of 8
-//! children in one AVX register where the build has AVX (`target-cpu=native` on the AVX2 and
-//! AVX-512 machines the project runs on), so an 8-wide node is one pass; otherwise groups of 4 in
-//! SSE (the x86-64 baseline, as `child_pairs`).
-
-use std::arch::x86_64::*;
+//! Written with explicit vectors (`lanes::vector`) on groups of children, not as lane loops over
+//! `[f32; W]`: LLVM's SLP vectorizer split those loops' far-plane half into scalar loads and
+//! shuffles (checked in the assembly), while these compile to straight vector code, one
+//! sub/mul/max-or-min per group and plane and one movemask per group. The kernel is written once
+//! over `Vector`: groups of 8 children in `Avx2` where the build has AVX2 (`target-cpu=native` on
+//! the AVX2 and AVX-512 machines the project runs on), so an 8-wide node is one pass; otherwise
+//! groups of 4 in `Sse` (the x86-64 baseline, as `child_pairs`).
 
 use glam::Vec3;
 
 use crate::accel::WideNode;
 use crate::geometry::aabb::FAR_SCALE;
+#[cfg(target_feature = "avx2")]
+use crate::lanes::vector::Avx2;
+use crate::lanes::vector::{Sse, Vector};
 use crate::lanes::BroadcastRay;
 
 /// A ray prepared for wide-node tests: origin and reciprocal direction broadcast per axis, in SSE
-/// lanes and (AVX builds) AVX lanes.
+/// lanes and (AVX2 builds) AVX lanes.
 #[derive(Clone, Copy)]
 pub struct WideRayTest {
-    sse: BroadcastRay,
-    #[cfg(target_feature = "avx")]
-    avx: [[__m256; 3]; 2],
+    sse: BroadcastRay<Sse>,
+    #[cfg(target_feature = "avx2")]
+    avx: BroadcastRay<Avx2>,
 }
 
 impl WideRayTest {
@@ -42,14 +43,14 @@ impl WideRayTest {
     pub fn from_inv(origin: Vec3, inv: Vec3) -> Self {
         WideRayTest {
             sse: BroadcastRay::from_inv(origin, inv),
-            #[cfg(target_feature = "avx")]
-            avx: [origin, inv].map(|v| v.to_array().map(<__m256 as SlabVector>::splat)),
+            #[cfg(target_feature = "avx2")]
+            avx: BroadcastRay::from_inv(origin, inv),
         }
     }
 
     /// Each child's entry distance (clipped to `tmin`) and which children the ray meets within
     /// `[tmin, tmax]` (bit `c`: child `c`; empty slots never). `W` is a multiple of 4; a multiple
-    /// of 8 is tested 8 children at a time on AVX builds.
+    /// of 8 is tested 8 children at a time on AVX2 builds.
     #[inline(always)]
     pub fn test<const W: usize>(
         &self,
@@ -57,166 +58,53 @@ impl WideRayTest {
         tmin: f32,
         tmax: f32,
     ) -> ([f32; W], u32) {
-        #[cfg(target_feature = "avx")]
+        #[cfg(target_feature = "avx2")]
         if W.is_multiple_of(8) {
-            return self.test_in::<__m256, W>(node, tmin, tmax);
+            return test_in(&self.avx, node, tmin, tmax);
         }
-        self.test_in::<__m128, W>(node, tmin, tmax)
+        test_in(&self.sse, node, tmin, tmax)
     }
+}
 
-    /// `test` in groups of `V::LANES` children.
-    #[inline(always)]
-    fn test_in<V: SlabVector, const W: usize>(
-        &self,
-        node: &WideNode<W>,
-        tmin: f32,
-        tmax: f32,
-    ) -> ([f32; W], u32) {
-        // Folded away: `test` picks `V` by `W` (a `const` assertion would be evaluated for the
-        // branch it does not take too).
-        assert!(
-            W.is_multiple_of(V::LANES),
-            "children are tested in whole groups"
-        );
-        let (origin, inv_dir) = V::ray(self);
-        let mut enter = [0.0f32; W];
-        let mut hit = 0u32;
-        let far_scale = V::splat(FAR_SCALE);
-        for group in (0..W).step_by(V::LANES) {
-            let mut near_max = V::splat(tmin);
-            let mut far_min = V::splat(tmax);
-            for a in 0..3 {
-                let (near, far) = if self.sse.negative[a] {
-                    (&node.hi[a], &node.lo[a])
-                } else {
-                    (&node.lo[a], &node.hi[a])
-                };
-                let (o, inv) = (origin[a], inv_dir[a]);
-                let t_near = V::load(&near[group..]).sub(o).mul(inv);
-                let t_far = V::load(&far[group..]).sub(o).mul(inv);
-                // `max`/`min` (MAXPS/MINPS) return their second operand when either is NaN: the
-                // new plane first, so a NaN leaves the interval as it was.
-                near_max = t_near.max(near_max);
-                far_min = t_far.mul(far_scale).min(far_min);
-            }
-            near_max.store(&mut enter[group..]);
-            hit |= near_max.le_bits(far_min) << group;
+/// `WideRayTest::test` in groups of `V::WIDTH` children, the ray broadcast to `V`'s lanes. Per
+/// lane the operations of `RayBoxTest::hit`: `max`/`min` are MAXPS/MINPS (`Vector`), which return
+/// their second operand when either is NaN, and `le` is ordered (false on NaN).
+#[inline(always)]
+fn test_in<V: Vector, const W: usize>(
+    ray: &BroadcastRay<V>,
+    node: &WideNode<W>,
+    tmin: f32,
+    tmax: f32,
+) -> ([f32; W], u32) {
+    // Folded away: `test` picks `V` by `W` (a `const` assertion would be evaluated for the
+    // branch it does not take too).
+    assert!(
+        W.is_multiple_of(V::WIDTH),
+        "children are tested in whole groups"
+    );
+    let mut enter = [0.0f32; W];
+    let mut hit = 0u32;
+    let far_scale = V::splat(FAR_SCALE);
+    for group in (0..W).step_by(V::WIDTH) {
+        let mut near_max = V::splat(tmin);
+        let mut far_min = V::splat(tmax);
+        for a in 0..3 {
+            let (near, far) = if ray.negative[a] {
+                (&node.hi[a], &node.lo[a])
+            } else {
+                (&node.lo[a], &node.hi[a])
+            };
+            let (o, inv) = (ray.origin[a], ray.inv_dir[a]);
+            let t_near = (V::load(near, group) - o) * inv;
+            let t_far = (V::load(far, group) - o) * inv;
+            // The new plane first, so a NaN leaves the interval as it was.
+            near_max = t_near.max(near_max);
+            far_min = (t_far * far_scale).min(far_min);
         }
-        (enter, hit)
+        near_max.store(&mut enter[group..]);
+        hit |= (V::bits(near_max.le(far_min)) as u32) << group;
     }
-}
-
-/// The lane operations of the slab test: MAXPS/MINPS semantics (`x > y ? x : y`, `x < y ? x : y`)
-/// and an ordered `≤` (false on NaN), as `RayBoxTest`'s scalar operations. The intrinsics are
-/// `unsafe` only for the CPU features they need; each implementation exists only when the build
-/// enables its features, so every call is sound (the `unsafe` blocks below).
-trait SlabVector: Copy {
-    const LANES: usize;
-    /// The ray's origin and reciprocal direction lanes per axis.
-    fn ray(test: &WideRayTest) -> ([Self; 3], [Self; 3]);
-    fn splat(x: f32) -> Self;
-    /// Lanes `x[..LANES]`.
-    fn load(x: &[f32]) -> Self;
-    /// The lanes into `out[..LANES]`.
-    fn store(self, out: &mut [f32]);
-    fn sub(self, y: Self) -> Self;
-    fn mul(self, y: Self) -> Self;
-    fn max(self, y: Self) -> Self;
-    fn min(self, y: Self) -> Self;
-    /// Lane `l`'s `self ≤ y` as bit `l`.
-    fn le_bits(self, y: Self) -> u32;
-}
-
-/// Groups of 4 children (SSE, the x86-64 baseline).
-impl SlabVector for __m128 {
-    const LANES: usize = 4;
-    #[inline(always)]
-    fn ray(test: &WideRayTest) -> ([Self; 3], [Self; 3]) {
-        (test.sse.origin, test.sse.inv_dir)
-    }
-    #[inline(always)]
-    fn splat(x: f32) -> Self {
-        unsafe { _mm_set1_ps(x) }
-    }
-    #[inline(always)]
-    fn load(x: &[f32]) -> Self {
-        let lanes = &x[..4];
-        // SAFETY: `lanes` holds the 4 floats read (unaligned load).
-        unsafe { _mm_loadu_ps(lanes.as_ptr()) }
-    }
-    #[inline(always)]
-    fn store(self, out: &mut [f32]) {
-        let lanes = &mut out[..4];
-        // SAFETY: `lanes` holds the 4 floats written (unaligned store).
-        unsafe { _mm_storeu_ps(lanes.as_mut_ptr(), self) }
-    }
-    #[inline(always)]
-    fn sub(self, y: Self) -> Self {
-        unsafe { _mm_sub_ps(self, y) }
-    }
-    #[inline(always)]
-    fn mul(self, y: Self) -> Self {
-        unsafe { _mm_mul_ps(self, y) }
-    }
-    #[inline(always)]
-    fn max(self, y: Self) -> Self {
-        unsafe { _mm_max_ps(self, y) }
-    }
-    #[inline(always)]
-    fn min(self, y: Self) -> Self {
-        unsafe { _mm_min_ps(self, y) }
-    }
-    #[inline(always)]
-    fn le_bits(self, y: Self) -> u32 {
-        unsafe { _mm_movemask_ps(_mm_cmple_ps(self, y)) as u32 }
-    }
-}
-
-/// Groups of 8 children (AVX: one pass over an 8-wide node).
-#[cfg(target_feature = "avx")]
-impl SlabVector for __m256 {
-    const LANES: usize = 8;
-    #[inline(always)]
-    fn ray(test: &WideRayTest) -> ([Self; 3], [Self; 3]) {
-        (test.avx[0], test.avx[1])
-    }
-    #[inline(always)]
-    fn splat(x: f32) -> Self {
-        unsafe { _mm256_set1_ps(x) }
-    }
-    #[inline(always)]
-    fn load(x: &[f32]) -> Self {
-        let lanes = &x[..8];
-        // SAFETY: `lanes` holds the 8 floats read (unaligned load).
-        unsafe { _mm256_loadu_ps(lanes.as_ptr()) }
-    }
-    #[inline(always)]
-    fn store(self, out: &mut [f32]) {
-        let lanes = &mut out[..8];
-        // SAFETY: `lanes` holds the 8 floats written (unaligned store).
-        unsafe { _mm256_storeu_ps(lanes.as_mut_ptr(), self) }
-    }
-    #[inline(always)]
-    fn sub(self, y: Self) -> Self {
-        unsafe { _mm256_sub_ps(self, y) }
-    }
-    #[inline(always)]
-    fn mul(self, y: Self) -> Self {
-        unsafe { _mm256_mul_ps(self, y) }
-    }
-    #[inline(always)]
-    fn max(self, y: Self) -> Self {
-        unsafe { _mm256_max_ps(self, y) }
-    }
-    #[inline(always)]
-    fn min(self, y: Self) -> Self {
-        unsafe { _mm256_min_ps(self, y) }
-    }
-    #[inline(always)]
-    fn le_bits(self, y: Self) -> u32 {
-        // Ordered, as `_mm_cmple_ps`: false when either lane is NaN.
-        unsafe { _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(self, y)) as u32 }
-    }
+    (enter, hit)
 }
 
 #[cfg(test)]
@@ -241,14 +129,14 @@ mod tests {
         node
     }
 
-    /// The node tests this build has for `W = 8`: SSE groups of 4 (every build), AVX groups of 8
-    /// (AVX builds), and `test`'s pick between them.
+    /// The node tests this build has for `W = 8`: SSE groups of 4 (every build), AVX2 groups of
+    /// 8 (AVX2 builds), and `test`'s pick between them.
     fn eight_wide_tests() -> Vec<(&'static str, EightWideTest)> {
         vec![
             ("test", |r, n, t0, t1| r.test(n, t0, t1)),
-            ("sse", |r, n, t0, t1| r.test_in::<__m128, 8>(n, t0, t1)),
-            #[cfg(target_feature = "avx")]
-            ("avx", |r, n, t0, t1| r.test_in::<__m256, 8>(n, t0, t1)),
+            ("sse", |r, n, t0, t1| test_in(&r.sse, n, t0, t1)),
+            #[cfg(target_feature = "avx2")]
+            ("avx2", |r, n, t0, t1| test_in(&r.avx, n, t0, t1)),
         ]
     }
 
