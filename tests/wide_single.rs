@@ -1,7 +1,7 @@
 //! Single rays through the wide BVH (`wide-single`): a hand-built tree whose visiting order and
 //! counters are worked out by hand, and agreement with the reference tracer — closest hits on
 //! primary and diffuse rays, occlusion on shadow rays, of the built-in room, rings and balls
-//! scenes, and on moving geometry — for 4 and 8 children per node.
+//! scenes, and on moving geometry — for 4 and 8 children per node, robust and not.
 
 mod common;
 
@@ -125,21 +125,28 @@ fn agrees_with_reference(name: &str, size: Option<u32>) {
         diffuse,
         ..
     } = reference_rays(name, size);
-    let reference = ReferenceTracer::new(bvh);
     let info = TracerInfo::find("wide-single").unwrap();
     let mut ties = 0;
-    for width in [4, 8] {
-        let params = Params::new().with("width", width);
+    // With `robust = false` both run plain slabs and Möller–Trumbore: the same hits again.
+    for (robust, width) in [(true, 4), (true, 8), (false, 4), (false, 8)] {
+        let reference = if robust {
+            Box::new(ReferenceTracer::new(bvh.clone())) as Box<dyn Tracer>
+        } else {
+            let fast = Params::new().with("robust", false);
+            build_tracer(TracerInfo::find("reference").unwrap(), &fast, &accel).unwrap()
+        };
+        let reference = reference.as_ref();
+        let params = Params::new().with("width", width).with("robust", robust);
         let tracer = build_tracer(info, &params, &accel).unwrap();
         for batch in [&primary, &diffuse, &shadow] {
-            let want = trace_hits(&reference, batch);
+            let want = trace_hits(reference, batch);
             assert!(want.iter().any(Hit::is_hit));
             let got = trace_hits(tracer.as_ref(), batch);
             for i in 0..batch.len() {
                 if got[i] != want[i] {
                     assert!(
                         same_or_tie(&mesh.triangles, &batch.ray(i), &got[i], &want[i]),
-                        "{name} {:?} width {width} ray {i}: {:?} vs reference {:?}",
+                        "{name} {:?} width {width} robust {robust} ray {i}: {:?} vs reference {:?}",
                         batch.kind(),
                         got[i],
                         want[i]
@@ -149,8 +156,8 @@ fn agrees_with_reference(name: &str, size: Option<u32>) {
             }
             assert_eq!(
                 trace_occlusion(tracer.as_ref(), batch),
-                trace_occlusion(&reference, batch),
-                "{name} {:?} width {width}",
+                trace_occlusion(reference, batch),
+                "{name} {:?} width {width} robust {robust}",
                 batch.kind()
             );
         }
@@ -210,6 +217,9 @@ fn bad_width_and_empty_trees() {
         let err = tracer_for_mesh("wide-single", &Params::new().with("width", width), &mesh);
         assert!(err.is_err(), "width {width}");
     }
+    let err = tracer_for_mesh("wide-single", &Params::new().with("robust", "yes"), &mesh);
+    let message = err.err().unwrap().to_string();
+    assert!(message.contains("robust = \"yes\""), "{message}");
     // An empty tree: every ray misses, nothing is occluded.
     let empty = WideSingleTracer::<8>::new(Arc::new(Bvh::build(&[], BvhConfig::default())));
     let batch = batch_of(Ray::new(Vec3::ZERO, Vec3::X, 0.0, 10.0));

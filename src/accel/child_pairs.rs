@@ -8,7 +8,7 @@
 use glam::Vec3;
 
 use super::bvh::BvhNode;
-use crate::geometry::aabb::FAR_SCALE;
+use crate::geometry::{RayTests, Robust};
 use crate::lanes::vector::{Sse, Vector};
 use crate::lanes::BroadcastRay;
 
@@ -46,8 +46,8 @@ pub fn child_pairs(nodes: &[BvhNode]) -> Vec<ChildPair> {
 
 /// A ray prepared for child-pair tests. Per axis, a negative direction (sign bit, so −0.0 counts)
 /// swaps the min/max halves so lanes come out as `[near_l, near_r, far_l, far_r]`; far lanes are
-/// then scaled by `−FAR_SCALE` so that one running `max` computes both the entry distance and the
-/// (negated) exit distance.
+/// then scaled by `−FAR_SCALE` (`RayTests::FAR_SCALE`: 1 for plain slabs) so that one running
+/// `max` computes both the entry distance and the (negated) exit distance.
 #[derive(Clone, Copy)]
 pub struct PairRayTest {
     ray: BroadcastRay<Sse>,
@@ -55,11 +55,18 @@ pub struct PairRayTest {
 }
 
 impl PairRayTest {
+    /// The conservative test (`with::<Robust>`), bit for bit `RayBoxTest::hit`.
     #[inline(always)]
     pub fn new(origin: Vec3, dir: Vec3) -> Self {
+        Self::with::<Robust>(origin, dir)
+    }
+
+    /// The test with `R`'s slabs: conservative (`Robust`) or plain (`Fast`).
+    #[inline(always)]
+    pub fn with<R: RayTests>(origin: Vec3, dir: Vec3) -> Self {
         PairRayTest {
             ray: BroadcastRay::new(origin, dir),
-            far_sign: Sse::new([1.0, 1.0, -FAR_SCALE, -FAR_SCALE]),
+            far_sign: Sse::new([1.0, 1.0, -R::FAR_SCALE, -R::FAR_SCALE]),
         }
     }
 
@@ -105,9 +112,15 @@ mod tests {
     }
 
     /// The SIMD pair test must give exactly the scalar `RayBoxTest` answers, including the
-    /// awkward cases (zero and −0.0 components, origins on slab planes, inside, behind).
+    /// awkward cases (zero and −0.0 components, origins on slab planes, inside, behind), with
+    /// conservative slabs (`Robust`) and plain ones (`Fast`).
     #[test]
     fn pair_test_matches_scalar_slab_test() {
+        matches_scalar_slab_test::<Robust>();
+        matches_scalar_slab_test::<crate::geometry::Fast>();
+    }
+
+    fn matches_scalar_slab_test<R: RayTests>() {
         let boxes = [
             Aabb::new(Vec3::ZERO, Vec3::ONE),
             Aabb::new(Vec3::new(2.0, 0.0, 0.0), Vec3::new(3.0, 1.0, 1.0)),
@@ -122,9 +135,11 @@ mod tests {
                     for d in dirs {
                         for (tmin, tmax) in [(0.0, f32::INFINITY), (0.0, 1.2), (2.0, 10.0)] {
                             let scalar = RayBoxTest::new(o, d);
-                            let (want_l, want_r) =
-                                (scalar.hit(l, tmin, tmax), scalar.hit(r, tmin, tmax));
-                            let (t, mask) = PairRayTest::new(o, d).test(&p, tmin, tmax);
+                            let (want_l, want_r) = (
+                                scalar.hit_with::<R>(l, tmin, tmax),
+                                scalar.hit_with::<R>(r, tmin, tmax),
+                            );
+                            let (t, mask) = PairRayTest::with::<R>(o, d).test(&p, tmin, tmax);
                             assert_eq!(
                                 mask & 1 != 0,
                                 want_l.is_some(),

@@ -5,7 +5,7 @@
 //! (`WideBvh::entry`). Both find the reference's hits.
 
 use crate::accel::{Bvh, WideBvh};
-use crate::geometry::{Hit, Rays};
+use crate::geometry::{Hit, Rays, Robust};
 use crate::stats::Stats;
 use crate::tracers::packet::TreeWidth;
 use crate::tracers::reference::trace_subtree;
@@ -48,15 +48,15 @@ impl Handoff {
             Handoff::Binary => {
                 let mut ray = input.ray(rays.id(at));
                 ray.tmax = rays.tmax(at);
-                trace_subtree::<S, ANY>(bvh, node, &ray, stats)
+                trace_subtree::<Robust, S, ANY>(bvh, node, &ray, stats)
             }
             Handoff::Four(wide) => {
                 let start = wide.entry[node as usize];
-                trace_wide::<4, S, ANY>(bvh, wide, start, &rays.wide_ray(at), stats)
+                trace_wide::<4, Robust, S, ANY>(bvh, wide, start, &rays.wide_ray(at), stats)
             }
             Handoff::Eight(wide) => {
                 let start = wide.entry[node as usize];
-                trace_wide::<8, S, ANY>(bvh, wide, start, &rays.wide_ray(at), stats)
+                trace_wide::<8, Robust, S, ANY>(bvh, wide, start, &rays.wide_ray(at), stats)
             }
         }
     }

@@ -17,6 +17,9 @@
 //!   test, in the leaf's order, moving triangles at the ray's time), and the slab verdicts are the
 //!   reference's, so every ray gets the reference's closest hit (up to the order in which
 //!   triangles at exactly equal distance are met). Occlusion stops at the first hit.
+//! - **`robust`**: `true` (default) as above; `false` (`R = Fast`) plain slabs and Möller–Trumbore,
+//!   as Embree's non-robust mode, for a like-for-like comparison with it (`geometry::robustness`):
+//!   then the hits are `reference`'s with `robust = false`.
 //!
 //! Counters: `ray` per ray; `node(depth)` per wide node whose children are tested and per leaf
 //! whose triangles are; `aabb_test(depth)` per child slot tested (the children's depth);
@@ -25,28 +28,35 @@
 mod slab;
 
 use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+use std::marker::PhantomData;
 use std::mem::MaybeUninit;
 use std::sync::Arc;
 
 use crate::accel::{Bvh, BvhConfig, WideBvh, WideEntry, WideNode};
 use crate::error::{Error, Result};
-use crate::geometry::{Hit, Ray, Triangle};
+use crate::geometry::{Fast, Hit, Ray, RayTests, Robust, Triangle};
 use crate::stats::Stats;
 use crate::tracers::reference::{intersect_leaf, LeafRange, LeafRay};
 use crate::tracers::{Params, SingleRayKernel, Tracer};
 
 pub use slab::WideRayTest;
 
-pub struct WideSingleTracer<const W: usize> {
+/// `R`: the box and triangle tests (`robust`; `Robust` unless asked).
+pub struct WideSingleTracer<const W: usize, R: RayTests = Robust> {
     bvh: Arc<Bvh>,
     wide: WideBvh<W>,
+    tests: PhantomData<R>,
 }
 
-impl<const W: usize> WideSingleTracer<W> {
+impl<const W: usize, R: RayTests> WideSingleTracer<W, R> {
     /// Collapses `bvh` into a `W`-wide tree (as the packet tracer's `width` does).
     pub fn new(bvh: Arc<Bvh>) -> Self {
         let wide = WideBvh::collapse(&bvh);
-        WideSingleTracer { bvh, wide }
+        WideSingleTracer {
+            bvh,
+            wide,
+            tests: PhantomData,
+        }
     }
 }
 
@@ -73,16 +83,24 @@ impl Width {
         }
     }
 
-    /// The tracer of this width over `bvh`.
-    pub fn tracer(self, bvh: Arc<Bvh>) -> Box<dyn Tracer> {
+    /// The tracer of this width over `bvh`, robust or not (`robust`).
+    pub fn tracer(self, bvh: Arc<Bvh>, robust: bool) -> Box<dyn Tracer> {
+        if robust {
+            self.tracer_with::<Robust>(bvh)
+        } else {
+            self.tracer_with::<Fast>(bvh)
+        }
+    }
+
+    fn tracer_with<R: RayTests>(self, bvh: Arc<Bvh>) -> Box<dyn Tracer> {
         match self {
-            Width::Four => Box::new(WideSingleTracer::<4>::new(bvh)),
-            Width::Eight => Box::new(WideSingleTracer::<8>::new(bvh)),
+            Width::Four => Box::new(WideSingleTracer::<4, R>::new(bvh)),
+            Width::Eight => Box::new(WideSingleTracer::<8, R>::new(bvh)),
         }
     }
 }
 
-impl<const W: usize> SingleRayKernel for WideSingleTracer<W> {
+impl<const W: usize, R: RayTests> SingleRayKernel for WideSingleTracer<W, R> {
     #[inline(always)]
     fn trace<S: Stats, const ANY: bool>(&self, ray: &Ray, stats: &mut S) -> Hit {
         if S::ENABLED {
@@ -92,20 +110,21 @@ impl<const W: usize> SingleRayKernel for WideSingleTracer<W> {
             return Hit::MISS;
         }
         let root = self.wide.entry[Bvh::ROOT];
-        trace_wide::<W, S, ANY>(&self.bvh, &self.wide, root, &WideRay::new(ray), stats)
+        let ray = WideRay::<R>::new(ray);
+        trace_wide::<W, R, S, ANY>(&self.bvh, &self.wide, root, &ray, stats)
     }
 }
 
 /// One ray as `trace_wide` reads it: its test of a wide node's children, what the leaf stage
 /// reads, and its segment's end.
 #[derive(Clone, Copy)]
-pub struct WideRay {
+pub struct WideRay<R: RayTests = Robust> {
     pub boxes: WideRayTest,
-    pub leaf: LeafRay,
+    pub leaf: LeafRay<R>,
     pub tmax: f32,
 }
 
-impl WideRay {
+impl<R: RayTests> WideRay<R> {
     #[inline(always)]
     pub fn new(ray: &Ray) -> Self {
         WideRay {
@@ -158,9 +177,9 @@ const LEAF_PREFETCH_LINES: usize = 3;
 
 /// A leaf's triangles (`intersect_leaf`), counted as a node at its depth: whether to stop.
 #[inline(always)]
-fn visit_leaf<S: Stats, const ANY: bool>(
+fn visit_leaf<R: RayTests, S: Stats, const ANY: bool>(
     bvh: &Bvh,
-    ray: &LeafRay,
+    ray: &LeafRay<R>,
     leaf: LeafRange,
     tmax: &mut f32,
     best: &mut Hit,
@@ -169,7 +188,7 @@ fn visit_leaf<S: Stats, const ANY: bool>(
     if S::ENABLED {
         stats.node(leaf.depth);
     }
-    intersect_leaf::<S, ANY>(bvh, ray, leaf, tmax, best, stats)
+    intersect_leaf::<R, S, ANY>(bvh, ray, leaf, tmax, best, stats)
 }
 
 /// The widest node this traversal takes.
@@ -183,12 +202,13 @@ const STACK: usize = MAX_WIDTH * (BvhConfig::DEPTH_LIMIT + 2);
 /// One ray's traversal (module doc) of the subtree at `start` (its slots of its wide node, whose
 /// boxes are tested here): the closest hit (`ANY`: the first found) within `[ray.leaf.tmin,
 /// ray.tmax]`, or a miss. `wide` was collapsed from `bvh`, whose triangles the leaves index.
+/// `R`: the box and triangle tests.
 #[inline(always)]
-pub fn trace_wide<const W: usize, S: Stats, const ANY: bool>(
+pub fn trace_wide<const W: usize, R: RayTests, S: Stats, const ANY: bool>(
     bvh: &Bvh,
     wide: &WideBvh<W>,
     start: WideEntry,
-    ray: &WideRay,
+    ray: &WideRay<R>,
     stats: &mut S,
 ) -> Hit {
     const {
@@ -219,7 +239,7 @@ pub fn trace_wide<const W: usize, S: Stats, const ANY: bool>(
             let tested = (slots & cell.used()).count_ones();
             (0..tested).for_each(|_| stats.aabb_test(depth as usize + 1));
         }
-        let (enter, hit) = boxes.test(cell, tmin, tmax);
+        let (enter, hit) = boxes.test::<R, W>(cell, tmin, tmax);
         let mut hit = hit & slots;
         if hit != 0 && hit & (hit - 1) == 0 {
             // One child met (the common case on incoherent rays): straight into it, no stack
@@ -235,7 +255,7 @@ pub fn trace_wide<const W: usize, S: Stats, const ANY: bool>(
                 count: cell.count[c],
                 depth: depth as usize + 1,
             };
-            if visit_leaf::<S, ANY>(bvh, &ray.leaf, leaf, &mut tmax, &mut best, stats) {
+            if visit_leaf::<R, S, ANY>(bvh, &ray.leaf, leaf, &mut tmax, &mut best, stats) {
                 return best;
             }
         } else {
@@ -298,7 +318,7 @@ pub fn trace_wide<const W: usize, S: Stats, const ANY: bool>(
                     0
                 },
             };
-            if visit_leaf::<S, ANY>(bvh, &ray.leaf, leaf, &mut tmax, &mut best, stats) {
+            if visit_leaf::<R, S, ANY>(bvh, &ray.leaf, leaf, &mut tmax, &mut best, stats) {
                 return best;
             }
         }

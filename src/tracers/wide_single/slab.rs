@@ -4,7 +4,8 @@
 //! ray's direction sign bit (so −0.0 counts as negative) and every lane runs the scalar test's
 //! operations in its order — `(plane − origin) · inverse direction`, far distances scaled by
 //! `FAR_SCALE`, running max/min that ignore a NaN (`0·∞` for an origin on a slab plane) — so each
-//! child's verdict is `RayBoxTest`'s.
+//! child's verdict is `RayBoxTest`'s. With `robust = false` (`Fast`) the far distances are not
+//! scaled: plain slabs, each verdict `RayBoxTest::hit_with::<Fast>`'s.
 //!
 //! Written with explicit vectors (`lanes::vector`) on groups of children, not as lane loops over
 //! `[f32; W]`: LLVM's SLP vectorizer split those loops' far-plane half into scalar loads and
@@ -17,7 +18,7 @@
 use glam::Vec3;
 
 use crate::accel::WideNode;
-use crate::geometry::aabb::FAR_SCALE;
+use crate::geometry::RayTests;
 #[cfg(target_feature = "avx2")]
 use crate::lanes::vector::Avx2;
 use crate::lanes::vector::{Sse, Vector};
@@ -50,9 +51,9 @@ impl WideRayTest {
 
     /// Each child's entry distance (clipped to `tmin`) and which children the ray meets within
     /// `[tmin, tmax]` (bit `c`: child `c`; empty slots never). `W` is a multiple of 4; a multiple
-    /// of 8 is tested 8 children at a time on AVX2 builds.
+    /// of 8 is tested 8 children at a time on AVX2 builds. `R`: conservative or plain slabs.
     #[inline(always)]
-    pub fn test<const W: usize>(
+    pub fn test<R: RayTests, const W: usize>(
         &self,
         node: &WideNode<W>,
         tmin: f32,
@@ -60,17 +61,17 @@ impl WideRayTest {
     ) -> ([f32; W], u32) {
         #[cfg(target_feature = "avx2")]
         if W.is_multiple_of(8) {
-            return test_in(&self.avx, node, tmin, tmax);
+            return test_in::<R, _, W>(&self.avx, node, tmin, tmax);
         }
-        test_in(&self.sse, node, tmin, tmax)
+        test_in::<R, _, W>(&self.sse, node, tmin, tmax)
     }
 }
 
 /// `WideRayTest::test` in groups of `V::WIDTH` children, the ray broadcast to `V`'s lanes. Per
-/// lane the operations of `RayBoxTest::hit`: `max`/`min` are MAXPS/MINPS (`Vector`), which return
+/// lane the operations of `RayBoxTest::hit_with::<R>`: `max`/`min` are MAXPS/MINPS (`Vector`), which return
 /// their second operand when either is NaN, and `le` is ordered (false on NaN).
 #[inline(always)]
-fn test_in<V: Vector, const W: usize>(
+fn test_in<R: RayTests, V: Vector, const W: usize>(
     ray: &BroadcastRay<V>,
     node: &WideNode<W>,
     tmin: f32,
@@ -84,7 +85,7 @@ fn test_in<V: Vector, const W: usize>(
     );
     let mut enter = [0.0f32; W];
     let mut hit = 0u32;
-    let far_scale = V::splat(FAR_SCALE);
+    let far_scale = V::splat(R::FAR_SCALE);
     for group in (0..W).step_by(V::WIDTH) {
         let mut near_max = V::splat(tmin);
         let mut far_min = V::splat(tmax);
@@ -112,7 +113,7 @@ mod tests {
     use super::*;
     use crate::accel::wide_bvh::spaced_leaves;
     use crate::accel::{Bvh, BvhConfig, WideBvh};
-    use crate::geometry::{Aabb, RayBoxTest, Triangle};
+    use crate::geometry::{Aabb, Fast, RayBoxTest, Robust, Triangle};
     use crate::random::SplitMix64;
     use crate::test_util::awkward_slab_rays;
 
@@ -130,22 +131,38 @@ mod tests {
     }
 
     /// The node tests this build has for `W = 8`: SSE groups of 4 (every build), AVX2 groups of
-    /// 8 (AVX2 builds), and `test`'s pick between them.
-    fn eight_wide_tests() -> Vec<(&'static str, EightWideTest)> {
+    /// 8 (AVX2 builds), and `test`'s pick between them; with conservative slabs (`robust`
+    /// true) and plain ones.
+    fn eight_wide_tests() -> Vec<(&'static str, bool, EightWideTest)> {
         vec![
-            ("test", |r, n, t0, t1| r.test(n, t0, t1)),
-            ("sse", |r, n, t0, t1| test_in(&r.sse, n, t0, t1)),
+            ("test", true, |r, n, t0, t1| r.test::<Robust, 8>(n, t0, t1)),
+            ("sse", true, |r, n, t0, t1| {
+                test_in::<Robust, _, 8>(&r.sse, n, t0, t1)
+            }),
             #[cfg(target_feature = "avx2")]
-            ("avx2", |r, n, t0, t1| test_in(&r.avx, n, t0, t1)),
+            ("avx2", true, |r, n, t0, t1| {
+                test_in::<Robust, _, 8>(&r.avx, n, t0, t1)
+            }),
+            ("fast test", false, |r, n, t0, t1| {
+                r.test::<Fast, 8>(n, t0, t1)
+            }),
+            ("fast sse", false, |r, n, t0, t1| {
+                test_in::<Fast, _, 8>(&r.sse, n, t0, t1)
+            }),
+            #[cfg(target_feature = "avx2")]
+            ("fast avx2", false, |r, n, t0, t1| {
+                test_in::<Fast, _, 8>(&r.avx, n, t0, t1)
+            }),
         ]
     }
 
     type EightWideTest = fn(&WideRayTest, &WideNode<8>, f32, f32) -> ([f32; 8], u32);
 
     /// `tested`'s verdict and entry distance for every child of `node` (its boxes `boxes`) are
-    /// the scalar `RayBoxTest`'s; the number of children met.
+    /// the scalar `RayBoxTest`'s (conservative if `robust`, else plain); the number of children
+    /// met.
     fn agrees_with_scalar(
-        tested: ([f32; 8], u32),
+        (tested, robust): (([f32; 8], u32), bool),
         boxes: &[Aabb; 8],
         (o, d): (Vec3, Vec3),
         (tmin, tmax): (f32, f32),
@@ -155,7 +172,11 @@ mod tests {
         let scalar = RayBoxTest::new(o, d);
         let mut hits = 0;
         for (c, b) in boxes.iter().enumerate() {
-            let want = scalar.hit(b, tmin, tmax);
+            let want = if robust {
+                scalar.hit(b, tmin, tmax)
+            } else {
+                scalar.hit_with::<Fast>(b, tmin, tmax)
+            };
             let case = format!("{name}: box {c} o {o:?} d {d:?} [{tmin}, {tmax}]");
             assert_eq!(mask & (1 << c) != 0, want.is_some(), "{case}");
             if let Some(t) = want {
@@ -183,13 +204,14 @@ mod tests {
         ];
         let node = node_of(&boxes);
         let (origins, dirs) = awkward_slab_rays();
-        for (name, test) in eight_wide_tests() {
+        for (name, robust, test) in eight_wide_tests() {
             let mut hits = 0;
             for o in origins {
                 for d in dirs {
                     for interval in [(0.0, f32::INFINITY), (0.0, 1.2), (2.0, 10.0)] {
                         let tested = test(&WideRayTest::new(o, d), &node, interval.0, interval.1);
-                        hits += agrees_with_scalar(tested, &boxes, (o, d), interval, name);
+                        hits +=
+                            agrees_with_scalar((tested, robust), &boxes, (o, d), interval, name);
                     }
                 }
             }
@@ -200,7 +222,7 @@ mod tests {
             &[Triangle::new(Vec3::ZERO, Vec3::X, Vec3::Y)],
             BvhConfig::default(),
         ));
-        let (_, mask) = WideRayTest::new(Vec3::new(0.2, 0.2, 1.0), -Vec3::Z).test(
+        let (_, mask) = WideRayTest::new(Vec3::new(0.2, 0.2, 1.0), -Vec3::Z).test::<Robust, 4>(
             &four.nodes[0],
             0.0,
             f32::INFINITY,
@@ -240,9 +262,9 @@ mod tests {
                 f32::INFINITY
             };
             let ray = WideRayTest::new(o, d);
-            for (name, test) in eight_wide_tests() {
+            for (name, robust, test) in eight_wide_tests() {
                 met += agrees_with_scalar(
-                    test(&ray, &node, tmin, tmax),
+                    (test(&ray, &node, tmin, tmax), robust),
                     &boxes,
                     (o, d),
                     (tmin, tmax),
@@ -250,7 +272,8 @@ mod tests {
                 );
             }
         }
-        // Not vacuous: hundreds of boxes met per lane width (563 with this seed).
+        // Not vacuous: hundreds of boxes met per lane width and slab kind (563 robust with this
+        // seed).
         let per_test = met / eight_wide_tests().len();
         assert!(per_test > 400, "{per_test}");
     }
