@@ -5,7 +5,7 @@
 //! is the stream tracer's hand-off kernel (`stream`'s `single_tree`) and shows on its own, beside
 //! `embree3-1`, what one ray at a time costs on a wide tree.
 //!
-//! - **Node**: one slab test of the ray against all `W` children (`slab`: 8 at a time in AVX,
+//! - **Node**: one slab test of the ray against all `W` children (`slab`: 8 at a time in AVX2,
 //!   else SSE groups of 4), within `[tmin, tmax]` with `tmax` the current closest hit.
 //! - **Order**: a lone child met is entered at once (Embree's `BVHNNodeTraverser1Hit` does the
 //!   same; on incoherent rays it is the common case, and it saves the stack's store and load);
