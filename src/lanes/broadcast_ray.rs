@@ -25,10 +25,16 @@ impl<V: Vector> BroadcastRay<V> {
     /// direction's, `1 / −0.0 = −∞`).
     #[inline(always)]
     pub fn from_inv(origin: Vec3, inv: Vec3) -> Self {
+        // Component by component: through arrays (`to_array().map`) it cost 4 instructions more
+        // per ray (callgrind, `wide-single` 4 wide).
         BroadcastRay {
-            origin: origin.to_array().map(V::splat),
-            inv_dir: inv.to_array().map(V::splat),
-            negative: inv.to_array().map(f32::is_sign_negative),
+            origin: [V::splat(origin.x), V::splat(origin.y), V::splat(origin.z)],
+            inv_dir: [V::splat(inv.x), V::splat(inv.y), V::splat(inv.z)],
+            negative: [
+                inv.x.is_sign_negative(),
+                inv.y.is_sign_negative(),
+                inv.z.is_sign_negative(),
+            ],
         }
     }
 }
