@@ -1,7 +1,7 @@
 //! Single rays through the wide BVH (`wide-single`): a hand-built tree whose visiting order and
 //! counters are worked out by hand, and agreement with the reference tracer — closest hits on
 //! primary and diffuse rays, occlusion on shadow rays, of the built-in room, rings and balls
-//! scenes, and on moving geometry — for 4 and 8 children per node.
+//! scenes, and on moving geometry — for 4 and 8 children per node, robust and not.
 
 mod common;
 
@@ -9,7 +9,7 @@ use std::sync::Arc;
 
 use glam::Vec3;
 use raylab::accel::{Bvh, BvhConfig, WideBvh, WideTree};
-use raylab::geometry::{Hit, Ray, RayBatch, RayKind, Triangle};
+use raylab::geometry::{Hit, Ray, RayBatch, RayKind, Robust, Triangle};
 use raylab::scene::Mesh;
 use raylab::stats::Counters;
 use raylab::test_util::same_or_tie;
@@ -21,7 +21,7 @@ use raylab::tracers::wide_single::WideSingleTracer;
 fn wide(bvh: Arc<Bvh>, width: usize) -> Arc<WideTree> {
     Arc::new(WideTree::collapse(bvh, width).unwrap())
 }
-use raylab::tracers::{tracer_for_mesh, Params, Tracer};
+use raylab::tracers::{build_tracer, tracer_for_mesh, Params, Tracer, TracerInfo};
 
 use common::{moving_room, reference_rays, same_or_tie_moving, MovingRoom, ReferenceRays};
 
@@ -88,8 +88,8 @@ fn children_are_visited_nearest_first_and_skipped_beyond_the_hit() {
     let forward = Ray::new(Vec3::new(-1.0, 0.75, 0.75), Vec3::X, 0.0, 1000.0);
     let backward = Ray::new(Vec3::new(101.0, 0.75, 0.75), -Vec3::X, 0.0, 1000.0);
     let short = Ray::new(Vec3::new(-1.0, 0.75, 0.75), Vec3::X, 0.0, 5.0);
-    let eight = WideSingleTracer::new(wide(bvh.clone(), 8));
-    let four = WideSingleTracer::new(wide(bvh.clone(), 4));
+    let eight = WideSingleTracer::<Robust>::new(wide(bvh.clone(), 8));
+    let four = WideSingleTracer::<Robust>::new(wide(bvh.clone(), 4));
     for any in [false, true] {
         let (hit, occluded, counts) = counted(&eight, forward, any);
         assert_eq!(counts, [3, 8, 2], "8-wide forward, any {any}");
@@ -123,28 +123,35 @@ fn batch_of(ray: Ray) -> RayBatch {
 fn agrees_with_reference(name: &str, size: Option<u32>) {
     let ReferenceRays {
         mesh,
-        accel: _,
+        accel,
         bvh,
         primary,
         shadow,
         diffuse,
         ..
     } = reference_rays(name, size);
-    let reference = ReferenceTracer::new(bvh);
     let mut ties = 0;
-    for width in [4, 8] {
-        let params = Params::new().with("width", width);
+    // With `robust = false` both run plain slabs and Möller–Trumbore: the same hits again.
+    for (robust, width) in [(true, 4), (true, 8), (false, 4), (false, 8)] {
+        let reference = if robust {
+            Box::new(ReferenceTracer::new(bvh.clone())) as Box<dyn Tracer>
+        } else {
+            let fast = Params::new().with("robust", false);
+            build_tracer(TracerInfo::find("reference").unwrap(), &fast, &accel).unwrap()
+        };
+        let reference = reference.as_ref();
+        let params = Params::new().with("width", width).with("robust", robust);
         // Its own structure: the wide tree of this width over the same BVH.
         let tracer = tracer_for_mesh("wide-single", &params, &mesh).unwrap();
         for batch in [&primary, &diffuse, &shadow] {
-            let want = trace_hits(&reference, batch);
+            let want = trace_hits(reference, batch);
             assert!(want.iter().any(Hit::is_hit));
             let got = trace_hits(tracer.as_ref(), batch);
             for i in 0..batch.len() {
                 if got[i] != want[i] {
                     assert!(
                         same_or_tie(&mesh.triangles, &batch.ray(i), &got[i], &want[i]),
-                        "{name} {:?} width {width} ray {i}: {:?} vs reference {:?}",
+                        "{name} {:?} width {width} robust {robust} ray {i}: {:?} vs reference {:?}",
                         batch.kind(),
                         got[i],
                         want[i]
@@ -154,8 +161,8 @@ fn agrees_with_reference(name: &str, size: Option<u32>) {
             }
             assert_eq!(
                 trace_occlusion(tracer.as_ref(), batch),
-                trace_occlusion(&reference, batch),
-                "{name} {:?} width {width}",
+                trace_occlusion(reference, batch),
+                "{name} {:?} width {width} robust {robust}",
                 batch.kind()
             );
         }
@@ -186,8 +193,8 @@ fn moving_geometry_gives_the_references_hits() {
     let MovingRoom { bvh, timed, want } = moving_room();
     let reference = ReferenceTracer::new(bvh.clone());
     for tracer in [
-        Box::new(WideSingleTracer::new(wide(bvh.clone(), 4))) as Box<dyn Tracer>,
-        Box::new(WideSingleTracer::new(wide(bvh.clone(), 8))),
+        Box::new(WideSingleTracer::<Robust>::new(wide(bvh.clone(), 4))) as Box<dyn Tracer>,
+        Box::new(WideSingleTracer::<Robust>::new(wide(bvh.clone(), 8))),
     ] {
         let got = trace_hits(tracer.as_ref(), &timed);
         for i in 0..timed.len() {
@@ -215,8 +222,11 @@ fn bad_width_and_empty_trees() {
         let err = tracer_for_mesh("wide-single", &Params::new().with("width", width), &mesh);
         assert!(err.is_err(), "width {width}");
     }
+    let err = tracer_for_mesh("wide-single", &Params::new().with("robust", "yes"), &mesh);
+    let message = err.err().unwrap().to_string();
+    assert!(message.contains("robust = \"yes\""), "{message}");
     // An empty tree: every ray misses, nothing is occluded.
-    let empty = WideSingleTracer::new(wide(Arc::new(Bvh::build(&[], BvhConfig::default())), 8));
+    let empty = WideSingleTracer::<Robust>::new(wide(Arc::new(Bvh::build(&[], BvhConfig::default())), 8));
     let batch = batch_of(Ray::new(Vec3::ZERO, Vec3::X, 0.0, 10.0));
     assert_eq!(trace_hits(&empty, &batch), vec![Hit::MISS]);
     assert_eq!(trace_occlusion(&empty, &batch), vec![false]);

@@ -2,14 +2,14 @@
 //! children's boxes in structure-of-arrays form, one 4-lane vector per axis
 //! `[left.min, right.min, left.max, right.max]`, so one SSE sequence tests both children
 //! (the child-pair layout of Aila & Laine 2009, "Understanding the efficiency of ray traversal on
-//! GPUs", used on the CPU as in tinybvh). One 64-byte cache line per interior node.
-
-use std::arch::x86_64::*;
+//! GPUs", used on the CPU as in tinybvh). One 64-byte cache line per interior node; the test runs
+//! on the lane layer's 4-lane `Sse` vector.
 
 use glam::Vec3;
 
 use super::bvh::BvhNode;
-use crate::geometry::aabb::FAR_SCALE;
+use crate::geometry::{RayTests, Robust};
+use crate::lanes::vector::{Sse, Vector};
 use crate::lanes::BroadcastRay;
 
 #[derive(Clone, Copy, Debug, Default)]
@@ -46,53 +46,53 @@ pub fn child_pairs(nodes: &[BvhNode]) -> Vec<ChildPair> {
 
 /// A ray prepared for child-pair tests. Per axis, a negative direction (sign bit, so −0.0 counts)
 /// swaps the min/max halves so lanes come out as `[near_l, near_r, far_l, far_r]`; far lanes are
-/// then scaled by `−FAR_SCALE` so that one running `max` computes both the entry distance and the
-/// (negated) exit distance.
+/// then scaled by `−FAR_SCALE` (`RayTests::FAR_SCALE`: 1 for plain slabs) so that one running
+/// `max` computes both the entry distance and the (negated) exit distance.
 #[derive(Clone, Copy)]
 pub struct PairRayTest {
-    ray: BroadcastRay,
-    far_sign: __m128,
+    ray: BroadcastRay<Sse>,
+    far_sign: Sse,
 }
 
 impl PairRayTest {
+    /// The conservative test (`with::<Robust>`), bit for bit `RayBoxTest::hit`.
     #[inline(always)]
     pub fn new(origin: Vec3, dir: Vec3) -> Self {
+        Self::with::<Robust>(origin, dir)
+    }
+
+    /// The test with `R`'s slabs: conservative (`Robust`) or plain (`Fast`).
+    #[inline(always)]
+    pub fn with<R: RayTests>(origin: Vec3, dir: Vec3) -> Self {
         PairRayTest {
             ray: BroadcastRay::new(origin, dir),
-            // SAFETY: SSE is part of the x86_64 baseline.
-            far_sign: unsafe { _mm_setr_ps(1.0, 1.0, -FAR_SCALE, -FAR_SCALE) },
+            far_sign: Sse::new([1.0, 1.0, -R::FAR_SCALE, -R::FAR_SCALE]),
         }
     }
 
     /// Entry distances into the left and right child and which of them the ray hits within
     /// `[tmin, tmax]` (bit 0 left, bit 1 right).
     ///
-    /// An origin on a slab plane with a zero direction component gives `0·∞ = NaN`;
-    /// `_mm_max_ps(a, b)` returns `b` when either is NaN, so putting the new axis first makes NaN
-    /// lanes leave the interval unrestricted — the conservative answer, as in `RayBoxTest`.
+    /// An origin on a slab plane with a zero direction component gives `0·∞ = NaN`; `max`
+    /// (MAXPS) returns its second operand when either is NaN, so putting the new axis first makes
+    /// NaN lanes leave the interval unrestricted — the conservative answer, as in `RayBoxTest`.
     #[inline(always)]
     pub fn test(&self, pair: &ChildPair, tmin: f32, tmax: f32) -> ([f32; 2], u32) {
-        // SAFETY: SSE is part of the x86_64 baseline; `pair` is 64-byte aligned.
-        unsafe {
-            let mut acc = _mm_setr_ps(tmin, tmin, -tmax, -tmax);
-            for (axis, planes) in [&pair.x, &pair.y, &pair.z].into_iter().enumerate() {
-                let t = _mm_mul_ps(
-                    _mm_sub_ps(_mm_load_ps(planes.as_ptr()), self.ray.origin[axis]),
-                    self.ray.inv_dir[axis],
-                );
-                let t = if self.ray.negative[axis] {
-                    _mm_shuffle_ps::<0b01_00_11_10>(t, t)
-                } else {
-                    t
-                };
-                acc = _mm_max_ps(_mm_mul_ps(t, self.far_sign), acc);
-            }
-            let exit = _mm_sub_ps(_mm_setzero_ps(), _mm_shuffle_ps::<0b01_00_11_10>(acc, acc));
-            let hit = (_mm_movemask_ps(_mm_cmple_ps(acc, exit)) & 0b11) as u32;
-            let mut lanes = [0.0f32; 4];
-            _mm_storeu_ps(lanes.as_mut_ptr(), acc);
-            ([lanes[0], lanes[1]], hit)
+        let mut acc = Sse::new([tmin, tmin, -tmax, -tmax]);
+        for (axis, planes) in [&pair.x, &pair.y, &pair.z].into_iter().enumerate() {
+            let t = (Sse::load(planes, 0) - self.ray.origin[axis]) * self.ray.inv_dir[axis];
+            let t = if self.ray.negative[axis] {
+                t.swap_halves()
+            } else {
+                t
+            };
+            acc = (t * self.far_sign).max(acc);
         }
+        let exit = Sse::splat(0.0) - acc.swap_halves();
+        let hit = (Sse::bits(acc.le(exit)) & 0b11) as u32;
+        let mut lanes = [0.0f32; 4];
+        acc.store(&mut lanes);
+        ([lanes[0], lanes[1]], hit)
     }
 }
 
@@ -112,9 +112,15 @@ mod tests {
     }
 
     /// The SIMD pair test must give exactly the scalar `RayBoxTest` answers, including the
-    /// awkward cases (zero and −0.0 components, origins on slab planes, inside, behind).
+    /// awkward cases (zero and −0.0 components, origins on slab planes, inside, behind), with
+    /// conservative slabs (`Robust`) and plain ones (`Fast`).
     #[test]
     fn pair_test_matches_scalar_slab_test() {
+        matches_scalar_slab_test::<Robust>();
+        matches_scalar_slab_test::<crate::geometry::Fast>();
+    }
+
+    fn matches_scalar_slab_test<R: RayTests>() {
         let boxes = [
             Aabb::new(Vec3::ZERO, Vec3::ONE),
             Aabb::new(Vec3::new(2.0, 0.0, 0.0), Vec3::new(3.0, 1.0, 1.0)),
@@ -129,9 +135,11 @@ mod tests {
                     for d in dirs {
                         for (tmin, tmax) in [(0.0, f32::INFINITY), (0.0, 1.2), (2.0, 10.0)] {
                             let scalar = RayBoxTest::new(o, d);
-                            let (want_l, want_r) =
-                                (scalar.hit(l, tmin, tmax), scalar.hit(r, tmin, tmax));
-                            let (t, mask) = PairRayTest::new(o, d).test(&p, tmin, tmax);
+                            let (want_l, want_r) = (
+                                scalar.hit_with::<R>(l, tmin, tmax),
+                                scalar.hit_with::<R>(r, tmin, tmax),
+                            );
+                            let (t, mask) = PairRayTest::with::<R>(o, d).test(&p, tmin, tmax);
                             assert_eq!(
                                 mask & 1 != 0,
                                 want_l.is_some(),

@@ -2,6 +2,8 @@
 
 use glam::Vec3;
 
+use super::robustness::{RayTests, Robust};
+
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Aabb {
     pub min: Vec3,
@@ -116,9 +118,17 @@ impl RayBoxTest {
         }
     }
 
-    /// Entry distance of the ray into `b` clipped to `[tmin, tmax]`, or `None` when it misses.
+    /// Entry distance of the ray into `b` clipped to `[tmin, tmax]`, or `None` when it misses:
+    /// the conservative test (`hit_with::<Robust>`).
     #[inline(always)]
     pub fn hit(&self, b: &Aabb, tmin: f32, tmax: f32) -> Option<f32> {
+        self.hit_with::<Robust>(b, tmin, tmax)
+    }
+
+    /// `hit` with the far distances scaled by `R::FAR_SCALE`: conservative (`Robust`) or plain
+    /// (`Fast`, `robust = false`).
+    #[inline(always)]
+    pub fn hit_with<R: RayTests>(&self, b: &Aabb, tmin: f32, tmax: f32) -> Option<f32> {
         let (nx, fx) = if self.neg[0] {
             (b.max.x, b.min.x)
         } else {
@@ -141,9 +151,9 @@ impl RayBoxTest {
             .max((ny - o.y) * i.y)
             .max((nz - o.z) * i.z);
         let exit = tmax
-            .min((fx - o.x) * i.x * FAR_SCALE)
-            .min((fy - o.y) * i.y * FAR_SCALE)
-            .min((fz - o.z) * i.z * FAR_SCALE);
+            .min((fx - o.x) * i.x * R::FAR_SCALE)
+            .min((fy - o.y) * i.y * R::FAR_SCALE)
+            .min((fz - o.z) * i.z * R::FAR_SCALE);
         (enter <= exit).then_some(enter)
     }
 }

@@ -8,7 +8,10 @@
 //! around it).
 //!
 //! - `LaneMask<L>`: which lanes a test passed (one bit per lane).
-//! - `BroadcastRay`: one ray in every SSE lane, for tests with boxes in the lanes.
+//! - `vector`: explicit f32 vectors (`Avx512`, `Avx2`, `Sse`, `Portable<N>`; `Native` the
+//!   build's widest) for kernels with something other than rays in the lanes: frusta, a node's
+//!   children.
+//! - `BroadcastRay<V>`: one ray in every lane of a `vector`, for tests with boxes in the lanes.
 //! - `SharedFrame`: the origin and watertight axes all lanes of some SIMD rays share, so a
 //!   triangle is made relative to it once for all of them.
 //! - `SimdRay<L>`: `L` rays traced in lock step with their closest hits (the packet tracer's
@@ -23,18 +26,21 @@
 //!   `highest` of one lane array.
 //!
 //! A tracer picks `L` once (its `lanes` parameter) and every lane type and test of its kernel
-//! takes that `L`.
+//! takes that `L`; `with_lanes!` (`dispatch`) turns the run-time count into the kernel's const.
 
 mod broadcast_ray;
+mod dispatch;
 mod mask;
 mod min_max;
 mod shared_frame;
 mod simd_ray;
 pub mod slab;
 pub mod stream;
+pub mod vector;
 pub mod watertight;
 
 pub use broadcast_ray::BroadcastRay;
+pub(crate) use dispatch::{with_lanes, with_width};
 pub use mask::LaneMask;
 pub use min_max::{highest, lowest, min_max};
 pub use shared_frame::SharedFrame;

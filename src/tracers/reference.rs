@@ -3,18 +3,22 @@
 //! — it is the yardstick the packet, grid and stream tracers are checked and measured against.
 //! Both children of a node are tested at once with SSE on the child-pair layout
 //! (`accel::child_pairs`). Over a moving mesh (`Bvh::build_moving`) it tests each triangle where it
-//! is at the ray's time (motion blur).
+//! is at the ray's time (motion blur). With `robust = false` (`R = Fast`) it runs plain slabs and
+//! Möller–Trumbore instead, as Embree's non-robust mode (`geometry::robustness`).
 
+use std::marker::PhantomData;
 use std::sync::Arc;
 
 use crate::accel::child_pairs::PairRayTest;
 use crate::accel::{Bvh, BvhConfig};
-use crate::geometry::{Hit, Ray, RayBoxTest, WatertightRay};
+use crate::geometry::{Hit, Ray, RayBoxTest, RayTests, Robust};
 use crate::stats::Stats;
 use crate::tracers::SingleRayKernel;
 
-pub struct ReferenceTracer {
+/// `R`: the box and triangle tests (`robust`; `Robust` unless asked).
+pub struct ReferenceTracer<R: RayTests = Robust> {
     bvh: Arc<Bvh>,
+    tests: PhantomData<R>,
 }
 
 /// A node waiting on the stack: its index, its triangle range (`count > 0`: leaf) and the
@@ -28,12 +32,22 @@ struct Pending {
 }
 
 impl ReferenceTracer {
+    /// The robust tracer (conservative slabs, watertight triangles).
     pub fn new(bvh: Arc<Bvh>) -> Self {
-        ReferenceTracer { bvh }
+        Self::with_tests(bvh)
     }
 }
 
-impl SingleRayKernel for ReferenceTracer {
+impl<R: RayTests> ReferenceTracer<R> {
+    pub fn with_tests(bvh: Arc<Bvh>) -> Self {
+        ReferenceTracer {
+            bvh,
+            tests: PhantomData,
+        }
+    }
+}
+
+impl<R: RayTests> SingleRayKernel for ReferenceTracer<R> {
     #[inline(always)]
     fn trace<S: Stats, const ANY: bool>(&self, ray: &Ray, stats: &mut S) -> Hit {
         let bvh = &*self.bvh;
@@ -47,8 +61,8 @@ impl SingleRayKernel for ReferenceTracer {
             stats.aabb_test(0);
         }
         let root = &bvh.nodes[Bvh::ROOT];
-        match RayBoxTest::new(ray.origin, ray.dir).hit(&root.bounds, ray.tmin, ray.tmax) {
-            Some(_) => trace_subtree::<S, ANY>(bvh, Bvh::ROOT as u32, ray, stats),
+        match RayBoxTest::new(ray.origin, ray.dir).hit_with::<R>(&root.bounds, ray.tmin, ray.tmax) {
+            Some(_) => trace_subtree::<R, S, ANY>(bvh, Bvh::ROOT as u32, ray, stats),
             None => Hit::MISS,
         }
     }
@@ -62,20 +76,20 @@ pub struct LeafRange {
     pub depth: usize,
 }
 
-/// What the leaf stage reads of a ray: its watertight frame, where its segment starts, and its
-/// time (motion blur).
+/// What the leaf stage reads of a ray: its triangle test's ray (`R`: the watertight frame, or
+/// the ray itself for Möller–Trumbore), where its segment starts, and its time (motion blur).
 #[derive(Clone, Copy)]
-pub struct LeafRay {
-    pub tris: WatertightRay,
+pub struct LeafRay<R: RayTests = Robust> {
+    pub tris: R::TriangleRay,
     pub tmin: f32,
     pub time: f32,
 }
 
-impl LeafRay {
+impl<R: RayTests> LeafRay<R> {
     #[inline(always)]
     pub fn new(ray: &Ray) -> Self {
         LeafRay {
-            tris: WatertightRay::new(ray.origin, ray.dir),
+            tris: R::triangle_ray(ray.origin, ray.dir),
             tmin: ray.tmin,
             time: ray.time,
         }
@@ -83,12 +97,12 @@ impl LeafRay {
 }
 
 /// The reference tracer's leaf stage, shared with the wide single-ray traversal so both find
-/// bit-identical hits: each triangle's watertight test within `[ray.tmin, tmax]`, a hit becoming
+/// bit-identical hits: each triangle's test (`R`) within `[ray.tmin, tmax]`, a hit becoming
 /// `best` and shortening `tmax`. Returns whether to stop (`ANY` and something was hit).
 #[inline(always)]
-pub fn intersect_leaf<S: Stats, const ANY: bool>(
+pub fn intersect_leaf<R: RayTests, S: Stats, const ANY: bool>(
     bvh: &Bvh,
-    ray: &LeafRay,
+    ray: &LeafRay<R>,
     leaf: LeafRange,
     tmax: &mut f32,
     best: &mut Hit,
@@ -108,7 +122,7 @@ pub fn intersect_leaf<S: Stats, const ANY: bool>(
                 &moved
             }
         };
-        if let Some((t, u, v)) = ray.tris.intersect(tri, ray.tmin, *tmax) {
+        if let Some((t, u, v)) = R::intersect(&ray.tris, tri, ray.tmin, *tmax) {
             *best = Hit {
                 t,
                 prim: bvh.prim_ids[i],
@@ -126,9 +140,10 @@ pub fn intersect_leaf<S: Stats, const ANY: bool>(
 
 /// The reference traversal of the subtree under `node`, whose box `ray` is known to meet: the
 /// closest hit (`ANY`: the first found) within `[ray.tmin, ray.tmax]`, or a miss. The stream
-/// tracer hands the rays of a short sub-stream to it (`stream`'s `single` parameter).
+/// tracer hands the rays of a short sub-stream to it (`stream`'s `single` parameter). `R`: the
+/// box and triangle tests.
 #[inline(always)]
-pub fn trace_subtree<S: Stats, const ANY: bool>(
+pub fn trace_subtree<R: RayTests, S: Stats, const ANY: bool>(
     bvh: &Bvh,
     node: u32,
     ray: &Ray,
@@ -143,8 +158,8 @@ pub fn trace_subtree<S: Stats, const ANY: bool>(
             0
         }
     };
-    let boxes = PairRayTest::new(ray.origin, ray.dir);
-    let leaf_ray = LeafRay::new(ray);
+    let boxes = PairRayTest::with::<R>(ray.origin, ray.dir);
+    let leaf_ray = LeafRay::<R>::new(ray);
     // Far children wait here with their entry distance, so a pop can skip boxes that now lie
     // beyond the closest hit without testing them again.
     let mut stack = [Pending::default(); BvhConfig::DEPTH_LIMIT + 2];
@@ -166,7 +181,7 @@ pub fn trace_subtree<S: Stats, const ANY: bool>(
                 count: node.count,
                 depth: depth(node.index),
             };
-            if intersect_leaf::<S, ANY>(bvh, &leaf_ray, leaf, &mut tmax, &mut best, stats) {
+            if intersect_leaf::<R, S, ANY>(bvh, &leaf_ray, leaf, &mut tmax, &mut best, stats) {
                 return best;
             }
         } else {

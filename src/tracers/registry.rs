@@ -9,7 +9,7 @@ use std::ops::Range;
 
 use crate::accel::{Accel, AccelKind, BvhOfWidth};
 use crate::error::{Error, Result};
-use crate::geometry::{Hit, Rays};
+use crate::geometry::{Fast, Hit, Rays, Robust};
 use crate::scene::{Frame, Mesh};
 use crate::stats::Counters;
 use crate::tracers::chunked::CHUNK_RAYS;
@@ -41,9 +41,16 @@ pub enum Role {
 /// takes, one variant per tracer family.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum TracerConfig {
-    /// A tracer with no parameters of its own (reference, obvhs, grid-dda).
+    /// A tracer with no parameters of its own (obvhs, grid-dda).
     Plain,
-    WideSingle(wide_single::Width),
+    /// `robust`: conservative slabs and watertight triangles, or plain ones (`ROBUST`).
+    Reference {
+        robust: bool,
+    },
+    WideSingle {
+        width: wide_single::Width,
+        robust: bool,
+    },
     /// Every Embree entry point: the coherence hint (`context`).
     Embree(Coherence),
     Cgt(CgtConfig),
@@ -60,7 +67,7 @@ impl TracerConfig {
     /// over another structure), or 4 or 8 for a wide tree (`accel::WideTree`).
     pub fn tree_width(&self) -> usize {
         match *self {
-            TracerConfig::WideSingle(width) => width.children(),
+            TracerConfig::WideSingle { width, .. } => width.children(),
             TracerConfig::Packet { width, .. } => width.children(),
             TracerConfig::Mft(c) => c.width,
             TracerConfig::Stream(c) if c.single > 0 => c.single_tree.children(),
@@ -106,6 +113,19 @@ fn other_family(config: &TracerConfig) -> Error {
 
 fn plain(_: &Params) -> Result<TracerConfig> {
     Ok(TracerConfig::Plain)
+}
+
+/// The switch between our robust tests and the fast ones, named and meant as Embree's `robust`
+/// (`geometry::robustness`): accepted by every tracer of ours, default `true`.
+pub const ROBUST: &str = "robust";
+
+/// Our tracers whose kernels take `robust = false` (plain slabs, Möller–Trumbore); the others
+/// run the lane layer's robust tests only and refuse it.
+pub const FAST_TESTS: &[&str] = &["reference", "wide-single"];
+
+/// The `robust` parameter (default `true`).
+fn robust(params: &Params) -> Result<bool> {
+    params.get_or(ROBUST, true)
 }
 
 fn embree_config(params: &Params) -> Result<TracerConfig> {
@@ -208,9 +228,20 @@ pub const TRACERS: &[TracerInfo] = &[
         accel: AccelKind::Bvh,
         params: &[],
         about:
-            "single rays, binary SAH BVH, nearer child first; watertight triangles, robust slabs",
-        parse: plain,
-        make: |_, accel| Ok(Box::new(ReferenceTracer::new(accel.bvh()?.clone()))),
+            "single rays, binary SAH BVH, nearer child first; watertight triangles, robust slabs (robust = false: plain slabs, Möller–Trumbore)",
+        parse: |params| Ok(TracerConfig::Reference { robust: robust(params)? }),
+        make: |config, accel| {
+            let bvh = accel.bvh()?.clone();
+            match *config {
+                TracerConfig::Reference { robust: true } => {
+                    Ok(Box::new(ReferenceTracer::<Robust>::with_tests(bvh)))
+                }
+                TracerConfig::Reference { robust: false } => {
+                    Ok(Box::new(ReferenceTracer::<Fast>::with_tests(bvh)))
+                }
+                _ => Err(other_family(config)),
+            }
+        },
         counts_internals: true,
         motion_blur: true,
         chunk_rays: CHUNK_RAYS,
@@ -220,11 +251,19 @@ pub const TRACERS: &[TracerInfo] = &[
         role: Role::Paper,
         accel: AccelKind::Bvh,
         params: wide_single::PARAMS,
-        about: "single rays, the SAH BVH collapsed to 4 or 8 children per node (width, default 8): one SIMD slab test of all children, nearest first; the reference's watertight triangles and hits",
-        parse: |params| wide_single::Width::from_params(params).map(TracerConfig::WideSingle),
+        about: "single rays, the SAH BVH collapsed to 4 or 8 children per node (width, default 8): one SIMD slab test of all children, nearest first; the reference's watertight triangles and hits (robust = false: plain slabs, Möller–Trumbore)",
+        parse: |params| {
+            Ok(TracerConfig::WideSingle {
+                width: wide_single::Width::from_params(params)?,
+                robust: robust(params)?,
+            })
+        },
         make: |config, accel| match *config {
-            TracerConfig::WideSingle(_) => match accel.tree()? {
-                BvhOfWidth::Wide(tree) => Ok(Box::new(WideSingleTracer::new(tree))),
+            TracerConfig::WideSingle { robust, .. } => match accel.tree()? {
+                BvhOfWidth::Wide(tree) if robust => {
+                    Ok(Box::new(WideSingleTracer::<Robust>::new(tree)))
+                }
+                BvhOfWidth::Wide(tree) => Ok(Box::new(WideSingleTracer::<Fast>::new(tree))),
                 BvhOfWidth::Binary(_) => Err(Error::Runtime(
                     "wide-single was given the binary BVH, not a wide one".into(),
                 )),
@@ -417,6 +456,13 @@ impl TracerInfo {
     /// does not read, and the tracer's own values parsed into its configuration.
     pub fn config(&self, params: &Params) -> Result<TracerConfig> {
         params.check_known(self.name, &self.accepts())?;
+        if self.is_ours() && !FAST_TESTS.contains(&self.name) && !robust(params)? {
+            return Err(Error::usage(format!(
+                "tracer {}: robust = false is not available (its kernels run only the robust tests: conservative slabs, watertight triangles); the tracers with fast tests are {}",
+                self.name,
+                FAST_TESTS.join(", ")
+            )));
+        }
         (self.parse)(params)
     }
 
@@ -432,13 +478,20 @@ impl TracerInfo {
         }
     }
 
-    /// Every parameter this tracer accepts: its own and its structure's.
+    /// Every parameter this tracer accepts: its own, its structure's, and `robust` for ours.
     pub fn accepts(&self) -> Vec<&'static str> {
+        let robust = self.is_ours().then_some(ROBUST);
         self.params
             .iter()
             .chain(self.accel.params())
             .copied()
+            .chain(robust)
             .collect()
+    }
+
+    /// Whether it is one of our from-scratch tracers (not a library's).
+    fn is_ours(&self) -> bool {
+        self.role != Role::Baseline
     }
 }
 
@@ -655,6 +708,51 @@ mod tests {
         let bvh = AccelKind::Bvh.build(&triangle(), &Params::new()).unwrap();
         let wrong = make_tracer(packet, &TracerConfig::Plain, &bvh);
         assert!(matches!(wrong, Err(Error::Runtime(_))));
+    }
+
+    /// `robust` is ours (default true) and Embree's structure parameter; the tracers whose kernels
+    /// have the fast tests take `false`, the others refuse it naming themselves, and a baseline
+    /// that is not Embree does not know it.
+    #[test]
+    fn robust_is_parsed_once_and_refused_where_a_kernel_cannot_honour_it() {
+        let fast = Params::new().with(ROBUST, false);
+        let config = |name: &str, params: &Params| TracerInfo::find(name).unwrap().config(params);
+        assert_eq!(
+            config("reference", &Params::new()).unwrap(),
+            TracerConfig::Reference { robust: true }
+        );
+        assert_eq!(
+            config("reference", &fast).unwrap(),
+            TracerConfig::Reference { robust: false }
+        );
+        assert_eq!(
+            config("wide-single", &fast.clone().with("width", 4)).unwrap(),
+            TracerConfig::WideSingle {
+                width: wide_single::Width::Four,
+                robust: false
+            }
+        );
+        for name in ["packet", "stream", "cgt", "mft", "grid-dda"] {
+            assert!(
+                config(name, &Params::new().with(ROBUST, true)).is_ok(),
+                "{name}"
+            );
+            let err = config(name, &fast).unwrap_err();
+            assert!(matches!(err, Error::Usage(_)), "{name}: {err:?}");
+            assert!(
+                err.to_string()
+                    .starts_with(&format!("tracer {name}: robust = false")),
+                "{err}"
+            );
+        }
+        assert!(config("embree3-1", &fast).is_ok());
+        let err = config("obvhs", &fast).unwrap_err();
+        assert!(
+            err.to_string().contains("unknown parameter \"robust\""),
+            "{err}"
+        );
+        let bad = config("reference", &Params::new().with(ROBUST, "maybe")).unwrap_err();
+        assert!(matches!(bad, Error::Usage(_)), "{bad:?}");
     }
 
     #[test]

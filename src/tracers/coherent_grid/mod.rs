@@ -80,7 +80,7 @@ use std::sync::Arc;
 use crate::accel::Grid;
 use crate::error::{Error, Result};
 use crate::geometry::{Hit, Rays};
-use crate::lanes::WIDTHS;
+use crate::lanes::{with_lanes, WIDTHS};
 use crate::stats::{NoStats, Stats};
 use crate::tracers::grid_dda::GridDdaTracer;
 use crate::tracers::{Kernel, Params};
@@ -196,11 +196,9 @@ impl CgtTracer {
         stats: &mut S,
         observer: &mut O,
     ) {
-        match self.config.lanes {
-            4 => self.trace_lanes::<4, S, O, ANY>(rays, hits, stats, observer),
-            8 => self.trace_lanes::<8, S, O, ANY>(rays, hits, stats, observer),
-            _ => self.trace_lanes::<16, S, O, ANY>(rays, hits, stats, observer),
-        }
+        with_lanes!(self.config.lanes, L => {
+            self.trace_lanes::<L, S, O, ANY>(rays, hits, stats, observer)
+        })
     }
 
     fn trace_lanes<const L: usize, S: Stats, O: CellObserver, const ANY: bool>(

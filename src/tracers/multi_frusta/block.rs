@@ -14,11 +14,11 @@ use glam::Vec3;
 
 use crate::accel::Bvh;
 use crate::geometry::Ray;
+use crate::lanes::vector::{Native, Vector};
 use crate::lanes::SimdRay;
 use crate::stats::{Event, Stats};
 use crate::tracers::multi_frusta::descend::{keep_counted, next_leaf, start_at_root, FrustumTree};
 use crate::tracers::multi_frusta::frusta::{bits, Frusta, Margins};
-use crate::tracers::multi_frusta::vector::{Native, Vector};
 use crate::tracers::multi_frusta::MftConfig;
 use crate::tracers::visibility::{shadow_ray, ShadingPoint, VisibilityQuery};
 

@@ -23,8 +23,8 @@
 use glam::Vec3;
 
 use crate::geometry::Triangle;
+use crate::lanes::vector::{Native, Vector};
 use crate::tracers::multi_frusta::frusta::{Frusta, MAX_FRUSTA};
-use crate::tracers::multi_frusta::vector::{Native, Vector};
 
 /// Relative angle below which an edge-plane test does not cull, squared: `v − o` is rounded
 /// relative to its own length, as the watertight test rounds it, and the sample directions are

@@ -13,7 +13,7 @@
 use glam::Vec3;
 
 use crate::geometry::Aabb;
-use crate::tracers::multi_frusta::vector::{Native, Vector};
+use crate::lanes::vector::{Native, Vector};
 use crate::tracers::visibility::QuadLight;
 
 /// The most frusta traced together: the live mask of a block is one `u64`.
@@ -396,8 +396,8 @@ mod tests {
 
     #[test]
     fn derive_gives_the_scalar_formulas_bits_in_the_changed_lanes_only() {
+        use crate::lanes::vector::Portable;
         use crate::random::SplitMix64;
-        use crate::tracers::multi_frusta::vector::Portable;
         let mut rng = SplitMix64::new(21);
         let m = Margins::new(3.0);
         let bits_of = |v: Vec<f32>| v.into_iter().map(f32::to_bits).collect::<Vec<_>>();

@@ -11,8 +11,8 @@
 //!   for it, made from the per-query light points of its sample set (`block::sample_ray`, the same
 //!   expression as `VisibilityQuery::ray`, so bit-identical rays).
 //! - **Culling** (`cull`): boxes by interval arithmetic on the frusta's reciprocal directions plus
-//!   their side planes, one vector test for all frusta per box (`vector`: 16 lanes on AVX-512,
-//!   8 on AVX2); triangles by plane culling and corner-ray culling per frustum, and, with
+//!   their side planes, one vector test for all frusta per box (`lanes::vector`: 16 lanes on
+//!   AVX-512, 8 on AVX2); triangles by plane culling and corner-ray culling per frustum, and, with
 //!   `backface = true`, the paper's back-face culling (exact on closed meshes only; shadow
 //!   frusta).
 //! - **Shrinking** (§5.3, Table 2): `cr` recomputes a frustum's corner rays around its live
@@ -64,7 +64,6 @@ mod primary;
 mod primary_tests;
 #[cfg(test)]
 mod tests;
-mod vector;
 mod wide_walk;
 
 use std::cell::RefCell;

@@ -499,7 +499,7 @@ fn edgy(rng: &mut SplitMix64, lo: f32, hi: f32) -> f32 {
 /// and subnormal values poked in.
 #[test]
 fn vector_kernels_give_the_portable_lanes_masks() {
-    use super::vector::{Native, Portable, Vector};
+    use crate::lanes::vector::{Native, Portable, Vector};
     fn masks<V: Vector>(
         frusta: &Frusta,
         b: [&Aabb; 2],
@@ -587,7 +587,7 @@ fn vector_kernels_give_the_portable_lanes_masks() {
             );
             #[cfg(all(target_arch = "x86_64", target_feature = "avx2"))]
             assert_eq!(
-                masks::<super::vector::Avx2>(&frusta, bounds, &tri, candidates, &margins),
+                masks::<crate::lanes::vector::Avx2>(&frusta, bounds, &tri, candidates, &margins),
                 want
             );
             compared += 1;

@@ -65,6 +65,7 @@ use crate::accel::{Bvh, BvhOfWidth, WideNodes};
 use crate::error::{Error, Result};
 use crate::geometry::ray::prefetch;
 use crate::geometry::{Hit, Rays};
+use crate::lanes::with_lanes;
 use crate::stats::{Event, Stats};
 use crate::tracers::{Kernel, Params};
 
@@ -323,18 +324,10 @@ impl PacketTracer {
 
 impl Kernel for PacketTracer {
     fn intersect_with<S: Stats>(&self, rays: Rays<'_>, hits: &mut [Hit], stats: &mut S) {
-        match self.config.lanes {
-            4 => self.intersect_lanes::<4, S>(rays, hits, stats),
-            8 => self.intersect_lanes::<8, S>(rays, hits, stats),
-            _ => self.intersect_lanes::<16, S>(rays, hits, stats),
-        }
+        with_lanes!(self.config.lanes, L => self.intersect_lanes::<L, S>(rays, hits, stats))
     }
 
     fn occluded_with<S: Stats>(&self, rays: Rays<'_>, occluded: &mut [bool], stats: &mut S) {
-        match self.config.lanes {
-            4 => self.occluded_lanes::<4, S>(rays, occluded, stats),
-            8 => self.occluded_lanes::<8, S>(rays, occluded, stats),
-            _ => self.occluded_lanes::<16, S>(rays, occluded, stats),
-        }
+        with_lanes!(self.config.lanes, L => self.occluded_lanes::<L, S>(rays, occluded, stats))
     }
 }

@@ -7,7 +7,7 @@
 use std::sync::Arc;
 
 use crate::accel::{Bvh, BvhOfWidth, WideNodes, WideTree};
-use crate::geometry::{Hit, Rays};
+use crate::geometry::{Hit, Rays, Robust};
 use crate::stats::Stats;
 use crate::tracers::reference::trace_subtree;
 use crate::tracers::wide_single::trace_wide;
@@ -45,15 +45,15 @@ impl Handoff {
             None => {
                 let mut ray = input.ray(rays.id(at));
                 ray.tmax = rays.tmax(at);
-                trace_subtree::<S, ANY>(bvh, node, &ray, stats)
+                trace_subtree::<Robust, S, ANY>(bvh, node, &ray, stats)
             }
             Some(WideNodes::Four(wide)) => {
                 let start = wide.entry[node as usize];
-                trace_wide::<4, S, ANY>(bvh, wide, start, &rays.wide_ray(at), stats)
+                trace_wide::<4, Robust, S, ANY>(bvh, wide, start, &rays.wide_ray(at), stats)
             }
             Some(WideNodes::Eight(wide)) => {
                 let start = wide.entry[node as usize];
-                trace_wide::<8, S, ANY>(bvh, wide, start, &rays.wide_ray(at), stats)
+                trace_wide::<8, Robust, S, ANY>(bvh, wide, start, &rays.wide_ray(at), stats)
             }
         }
     }

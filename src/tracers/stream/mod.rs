@@ -55,7 +55,7 @@ use std::sync::Arc;
 use crate::accel::{Bvh, BvhOfWidth, WideNodes};
 use crate::error::{Error, Result};
 use crate::geometry::{Hit, Rays};
-use crate::lanes::SimdRay;
+use crate::lanes::{with_width, SimdRay};
 use crate::stats::Stats;
 use crate::tracers::packet::{ChildOrder, PacketConfig, TreeWidth};
 use crate::tracers::{Kernel, Params};
@@ -224,14 +224,9 @@ impl StreamTracer {
     }
 
     fn trace<S: Stats, A: Answer>(&self, rays: Rays<'_>, answers: &mut [A], stats: &mut S) {
-        match self.config.width {
-            4 => self.run::<4, 4, S, A>(rays, answers, stats),
-            8 => self.run::<8, 8, S, A>(rays, answers, stats),
-            12 => self.run::<16, 12, S, A>(rays, answers, stats),
-            16 => self.run::<16, 16, S, A>(rays, answers, stats),
-            32 => self.run::<16, 32, S, A>(rays, answers, stats),
-            _ => self.run::<16, 64, S, A>(rays, answers, stats),
-        }
+        with_width!(self.config.width, N in [4, 8, 12, 16, 32, 64] => {
+            self.run::<{ width::lanes_for(N) }, N, S, A>(rays, answers, stats)
+        })
     }
 }
 

@@ -6,6 +6,15 @@
 
 pub struct Width<const L: usize, const N: usize>;
 
+/// The lanes `L` width `N` runs on: its own where the lane layer has it (4, 8), else 16.
+pub const fn lanes_for(n: usize) -> usize {
+    if n <= 8 {
+        n
+    } else {
+        16
+    }
+}
+
 impl<const L: usize, const N: usize> Width<L, N> {
     /// Rays per `L`-lane group.
     pub const GROUP: usize = if N < L { N } else { L };
@@ -32,5 +41,9 @@ mod tests {
         assert_eq!(Width::<16, 12>::issued(13), 24);
         assert_eq!(Width::<16, 64>::issued(13), 64);
         assert_eq!(Width::<8, 8>::issued(0), 0);
+        assert_eq!(
+            [4, 8, 12, 16, 32, 64].map(lanes_for),
+            [4, 8, 16, 16, 16, 16]
+        );
     }
 }

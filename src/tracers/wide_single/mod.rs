@@ -5,7 +5,7 @@
 //! is the stream tracer's hand-off kernel (`stream`'s `single_tree`) and shows on its own, beside
 //! `embree3-1`, what one ray at a time costs on a wide tree.
 //!
-//! - **Node**: one slab test of the ray against all `W` children (`slab`: 8 at a time in AVX,
+//! - **Node**: one slab test of the ray against all `W` children (`slab`: 8 at a time in AVX2,
 //!   else SSE groups of 4), within `[tmin, tmax]` with `tmax` the current closest hit.
 //! - **Order**: a lone child met is entered at once (Embree's `BVHNNodeTraverser1Hit` does the
 //!   same; on incoherent rays it is the common case, and it saves the stack's store and load);
@@ -17,6 +17,9 @@
 //!   test, in the leaf's order, moving triangles at the ray's time), and the slab verdicts are the
 //!   reference's, so every ray gets the reference's closest hit (up to the order in which
 //!   triangles at exactly equal distance are met). Occlusion stops at the first hit.
+//! - **`robust`**: `true` (default) as above; `false` (`R = Fast`) plain slabs and Möller–Trumbore,
+//!   as Embree's non-robust mode, for a like-for-like comparison with it (`geometry::robustness`):
+//!   then the hits are `reference`'s with `robust = false`.
 //!
 //! Counters: `ray` per ray; `node(depth)` per wide node whose children are tested and per leaf
 //! whose triangles are; `aabb_test(depth)` per child slot tested (the children's depth);
@@ -25,12 +28,13 @@
 mod slab;
 
 use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+use std::marker::PhantomData;
 use std::mem::MaybeUninit;
 use std::sync::Arc;
 
 use crate::accel::{Bvh, BvhConfig, WideBvh, WideEntry, WideNode, WideNodes, WideTree};
 use crate::error::{Error, Result};
-use crate::geometry::{Hit, Ray, Triangle};
+use crate::geometry::{Fast, Hit, Ray, RayTests, Robust, Triangle};
 use crate::stats::Stats;
 use crate::tracers::reference::{intersect_leaf, LeafRange, LeafRay};
 use crate::tracers::{Params, SingleRayKernel};
@@ -38,15 +42,20 @@ use crate::tracers::{Params, SingleRayKernel};
 pub use slab::WideRayTest;
 
 /// Single rays through a wide tree of either width (the walk is generic over it; which one is a
-/// branch per ray, always taken the same way).
-pub struct WideSingleTracer {
+/// branch per ray, always taken the same way). `R`: the box and triangle tests (`robust`;
+/// `Robust` unless asked).
+pub struct WideSingleTracer<R: RayTests = Robust> {
     tree: Arc<WideTree>,
+    tests: PhantomData<R>,
 }
 
-impl WideSingleTracer {
+impl<R: RayTests> WideSingleTracer<R> {
     /// Over `tree`, built by the run as the structure of this tracer's `width`.
     pub fn new(tree: Arc<WideTree>) -> Self {
-        WideSingleTracer { tree }
+        WideSingleTracer {
+            tree,
+            tests: PhantomData,
+        }
     }
 }
 
@@ -82,7 +91,7 @@ impl Width {
     }
 }
 
-impl SingleRayKernel for WideSingleTracer {
+impl<R: RayTests> SingleRayKernel for WideSingleTracer<R> {
     #[inline(always)]
     fn trace<S: Stats, const ANY: bool>(&self, ray: &Ray, stats: &mut S) -> Hit {
         if S::ENABLED {
@@ -90,15 +99,15 @@ impl SingleRayKernel for WideSingleTracer {
         }
         let bvh = &self.tree.bvh;
         match &self.tree.nodes {
-            WideNodes::Four(wide) => trace_from_root::<4, S, ANY>(bvh, wide, ray, stats),
-            WideNodes::Eight(wide) => trace_from_root::<8, S, ANY>(bvh, wide, ray, stats),
+            WideNodes::Four(wide) => trace_from_root::<4, R, S, ANY>(bvh, wide, ray, stats),
+            WideNodes::Eight(wide) => trace_from_root::<8, R, S, ANY>(bvh, wide, ray, stats),
         }
     }
 }
 
 /// `ray` from the root of `wide` (a miss for an empty tree).
 #[inline(always)]
-fn trace_from_root<const W: usize, S: Stats, const ANY: bool>(
+fn trace_from_root<const W: usize, R: RayTests, S: Stats, const ANY: bool>(
     bvh: &Bvh,
     wide: &WideBvh<W>,
     ray: &Ray,
@@ -108,19 +117,19 @@ fn trace_from_root<const W: usize, S: Stats, const ANY: bool>(
         return Hit::MISS;
     }
     let root = wide.entry[Bvh::ROOT];
-    trace_wide::<W, S, ANY>(bvh, wide, root, &WideRay::new(ray), stats)
+    trace_wide::<W, R, S, ANY>(bvh, wide, root, &WideRay::<R>::new(ray), stats)
 }
 
 /// One ray as `trace_wide` reads it: its test of a wide node's children, what the leaf stage
 /// reads, and its segment's end.
 #[derive(Clone, Copy)]
-pub struct WideRay {
+pub struct WideRay<R: RayTests = Robust> {
     pub boxes: WideRayTest,
-    pub leaf: LeafRay,
+    pub leaf: LeafRay<R>,
     pub tmax: f32,
 }
 
-impl WideRay {
+impl<R: RayTests> WideRay<R> {
     #[inline(always)]
     pub fn new(ray: &Ray) -> Self {
         WideRay {
@@ -173,9 +182,9 @@ const LEAF_PREFETCH_LINES: usize = 3;
 
 /// A leaf's triangles (`intersect_leaf`), counted as a node at its depth: whether to stop.
 #[inline(always)]
-fn visit_leaf<S: Stats, const ANY: bool>(
+fn visit_leaf<R: RayTests, S: Stats, const ANY: bool>(
     bvh: &Bvh,
-    ray: &LeafRay,
+    ray: &LeafRay<R>,
     leaf: LeafRange,
     tmax: &mut f32,
     best: &mut Hit,
@@ -184,7 +193,7 @@ fn visit_leaf<S: Stats, const ANY: bool>(
     if S::ENABLED {
         stats.node(leaf.depth);
     }
-    intersect_leaf::<S, ANY>(bvh, ray, leaf, tmax, best, stats)
+    intersect_leaf::<R, S, ANY>(bvh, ray, leaf, tmax, best, stats)
 }
 
 /// The widest node this traversal takes.
@@ -198,12 +207,13 @@ const STACK: usize = MAX_WIDTH * (BvhConfig::DEPTH_LIMIT + 2);
 /// One ray's traversal (module doc) of the subtree at `start` (its slots of its wide node, whose
 /// boxes are tested here): the closest hit (`ANY`: the first found) within `[ray.leaf.tmin,
 /// ray.tmax]`, or a miss. `wide` was collapsed from `bvh`, whose triangles the leaves index.
+/// `R`: the box and triangle tests.
 #[inline(always)]
-pub fn trace_wide<const W: usize, S: Stats, const ANY: bool>(
+pub fn trace_wide<const W: usize, R: RayTests, S: Stats, const ANY: bool>(
     bvh: &Bvh,
     wide: &WideBvh<W>,
     start: WideEntry,
-    ray: &WideRay,
+    ray: &WideRay<R>,
     stats: &mut S,
 ) -> Hit {
     const {
@@ -234,7 +244,7 @@ pub fn trace_wide<const W: usize, S: Stats, const ANY: bool>(
             let tested = (slots & cell.used()).count_ones();
             (0..tested).for_each(|_| stats.aabb_test(depth as usize + 1));
         }
-        let (enter, hit) = boxes.test(cell, tmin, tmax);
+        let (enter, hit) = boxes.test::<R, W>(cell, tmin, tmax);
         let mut hit = hit & slots;
         if hit != 0 && hit & (hit - 1) == 0 {
             // One child met (the common case on incoherent rays): straight into it, no stack
@@ -250,7 +260,7 @@ pub fn trace_wide<const W: usize, S: Stats, const ANY: bool>(
                 count: cell.count[c],
                 depth: depth as usize + 1,
             };
-            if visit_leaf::<S, ANY>(bvh, &ray.leaf, leaf, &mut tmax, &mut best, stats) {
+            if visit_leaf::<R, S, ANY>(bvh, &ray.leaf, leaf, &mut tmax, &mut best, stats) {
                 return best;
             }
         } else {
@@ -313,7 +323,7 @@ pub fn trace_wide<const W: usize, S: Stats, const ANY: bool>(
                     0
                 },
             };
-            if visit_leaf::<S, ANY>(bvh, &ray.leaf, leaf, &mut tmax, &mut best, stats) {
+            if visit_leaf::<R, S, ANY>(bvh, &ray.leaf, leaf, &mut tmax, &mut best, stats) {
                 return best;
             }
         }

@@ -1,11 +1,15 @@
-//! The f32 lane vectors the frusta kernels (`Frusta::box_masks`, `cull::keep_mask`) are written
-//! against, one lane per frustum, so each kernel exists once and runs at the machine's full width
-//! (§4: "one SIMD test per node for all frusta"). Plain lane loops over the frusta only became
-//! 4- or 8-wide code with the frusta copied to the stack (LLVM prefers 256-bit vectors even on
-//! AVX-512 parts); explicit vectors load the frusta straight from their lanes.
+//! Explicit f32 lane vectors, for kernels that put something other than rays in the lanes and
+//! must run at a chosen width: the frusta kernels (`multi_frusta`'s `Frusta::box_masks`,
+//! `cull::keep_mask`: one lane per frustum, §4 "one SIMD test per node for all frusta"),
+//! `wide-single`'s test of a wide node's children and the reference tracer's child-pair test (one
+//! lane per box). Plain lane loops there became 4- or 8-wide code only with the data copied to the
+//! stack (LLVM prefers 256-bit vectors even on AVX-512 parts), or split the far planes into scalar
+//! loads and shuffles (the wide-node test, checked in the assembly); explicit vectors load the
+//! lanes straight from memory. Kernels are written once, generic over `Vector`.
 //!
 //! - `Avx512`: 16 lanes in a `__m512`, masks in a `__mmask16` (built with AVX-512F).
 //! - `Avx2`: 8 lanes in a `__m256`, masks as lane vectors (built with AVX2).
+//! - `Sse`: 4 lanes in a `__m128`, masks as lane vectors (SSE, the x86-64 baseline).
 //! - `Portable<N>`: `N` lanes in an array, masks as bits: the reference the others are tested
 //!   against, and the kernels' vector elsewhere.
 //!
@@ -13,7 +17,7 @@
 //! the build enables those features, so every call is sound (the `unsafe` blocks below).
 //!
 //! `Native` is the widest the build targets (`target-cpu=native`, `.cargo/config.toml`). Every
-//! operation is the IEEE operation of the portable lane, so all three give the same bits:
+//! operation is the IEEE operation of the portable lane, so all of them give the same bits:
 //! `min`/`max` are `x < y ? x : y` / `x > y ? x : y` (what MINPS/MAXPS compute, NaN included).
 
 use std::ops::{Add, BitAnd, BitOr, Div, Mul, Not, Sub};
@@ -350,19 +354,11 @@ mod avx512 {
     }
 }
 
-// On AVX-512 builds, `Avx2` is there for its test only.
-#[cfg(all(
-    target_arch = "x86_64",
-    target_feature = "avx2",
-    any(test, not(target_feature = "avx512f"))
-))]
+// On AVX-512 builds too: 8 lanes are the width of an 8-wide node's children (`wide_single`).
+#[cfg(all(target_arch = "x86_64", target_feature = "avx2"))]
 pub use avx2::Avx2;
 
-#[cfg(all(
-    target_arch = "x86_64",
-    target_feature = "avx2",
-    any(test, not(target_feature = "avx512f"))
-))]
+#[cfg(all(target_arch = "x86_64", target_feature = "avx2"))]
 mod avx2 {
     use std::arch::x86_64::*;
     use std::ops::{Add, BitAnd, BitOr, Div, Mul, Not, Sub};
@@ -494,6 +490,160 @@ mod avx2 {
     }
 }
 
+#[cfg(target_arch = "x86_64")]
+pub use sse::{Sse, SseMask};
+
+#[cfg(target_arch = "x86_64")]
+mod sse {
+    use std::arch::x86_64::*;
+    use std::ops::{Add, BitAnd, BitOr, Div, Mul, Not, Sub};
+
+    use super::Vector;
+
+    /// 4 lanes in a `__m128`.
+    #[derive(Clone, Copy, Debug)]
+    pub struct Sse(__m128);
+
+    /// `Sse`'s mask: all bits of a lane set where true.
+    #[derive(Clone, Copy, Debug)]
+    pub struct SseMask(__m128);
+
+    impl BitAnd for SseMask {
+        type Output = SseMask;
+        #[inline(always)]
+        fn bitand(self, y: SseMask) -> SseMask {
+            SseMask(unsafe { _mm_and_ps(self.0, y.0) })
+        }
+    }
+    impl BitOr for SseMask {
+        type Output = SseMask;
+        #[inline(always)]
+        fn bitor(self, y: SseMask) -> SseMask {
+            SseMask(unsafe { _mm_or_ps(self.0, y.0) })
+        }
+    }
+    impl Not for SseMask {
+        type Output = SseMask;
+        #[inline(always)]
+        fn not(self) -> SseMask {
+            let ones = unsafe { _mm_castsi128_ps(_mm_set1_epi32(-1)) };
+            SseMask(unsafe { _mm_xor_ps(self.0, ones) })
+        }
+    }
+
+    arithmetic!(
+        Sse,
+        |x: Sse, y: Sse| Sse(unsafe { _mm_add_ps(x.0, y.0) }),
+        |x: Sse, y: Sse| Sse(unsafe { _mm_sub_ps(x.0, y.0) }),
+        |x: Sse, y: Sse| Sse(unsafe { _mm_mul_ps(x.0, y.0) }),
+        |x: Sse, y: Sse| Sse(unsafe { _mm_div_ps(x.0, y.0) })
+    );
+
+    impl Sse {
+        /// The lanes `[x0, x1, x2, x3]`.
+        #[inline(always)]
+        pub fn new(x: [f32; 4]) -> Self {
+            Sse(unsafe { _mm_setr_ps(x[0], x[1], x[2], x[3]) })
+        }
+
+        /// Lanes 2, 3, 0, 1: the halves swapped (one SHUFPS).
+        #[inline(always)]
+        pub fn swap_halves(self) -> Self {
+            Sse(unsafe { _mm_shuffle_ps::<0b01_00_11_10>(self.0, self.0) })
+        }
+    }
+
+    impl Vector for Sse {
+        const WIDTH: usize = 4;
+        type Mask = SseMask;
+        #[inline(always)]
+        fn splat(x: f32) -> Self {
+            Sse(unsafe { _mm_set1_ps(x) })
+        }
+        #[inline(always)]
+        fn load(x: &[f32], at: usize) -> Self {
+            let lanes = &x[at..at + 4];
+            // SAFETY: `lanes` holds the 4 floats read (unaligned load).
+            Sse(unsafe { _mm_loadu_ps(lanes.as_ptr()) })
+        }
+        #[inline(always)]
+        fn abs(self) -> Self {
+            let magnitude = unsafe { _mm_castsi128_ps(_mm_set1_epi32(i32::MAX)) };
+            Sse(unsafe { _mm_and_ps(self.0, magnitude) })
+        }
+        #[inline(always)]
+        fn sqrt(self) -> Self {
+            Sse(unsafe { _mm_sqrt_ps(self.0) })
+        }
+        #[cfg(target_feature = "fma")]
+        #[inline(always)]
+        fn mul_add(self, a: Self, b: Self) -> Self {
+            Sse(unsafe { _mm_fmadd_ps(self.0, a.0, b.0) })
+        }
+        /// Without FMA instructions, lane by lane (`f32::mul_add`'s bits).
+        #[cfg(not(target_feature = "fma"))]
+        #[inline(always)]
+        fn mul_add(self, a: Self, b: Self) -> Self {
+            let lanes = |v: Self| {
+                let mut out = [0.0; 4];
+                v.store(&mut out);
+                out
+            };
+            let (x, y, z) = (lanes(self), lanes(a), lanes(b));
+            Sse::new(std::array::from_fn(|l| x[l].mul_add(y[l], z[l])))
+        }
+        #[inline(always)]
+        fn min(self, y: Self) -> Self {
+            Sse(unsafe { _mm_min_ps(self.0, y.0) })
+        }
+        #[inline(always)]
+        fn max(self, y: Self) -> Self {
+            Sse(unsafe { _mm_max_ps(self.0, y.0) })
+        }
+        // The SSE comparisons are ordered: false when either lane is NaN.
+        #[inline(always)]
+        fn lt(self, y: Self) -> SseMask {
+            SseMask(unsafe { _mm_cmplt_ps(self.0, y.0) })
+        }
+        #[inline(always)]
+        fn le(self, y: Self) -> SseMask {
+            SseMask(unsafe { _mm_cmple_ps(self.0, y.0) })
+        }
+        #[inline(always)]
+        fn gt(self, y: Self) -> SseMask {
+            SseMask(unsafe { _mm_cmpgt_ps(self.0, y.0) })
+        }
+        #[cfg(target_feature = "sse4.1")]
+        #[inline(always)]
+        fn select(m: SseMask, a: Self, b: Self) -> Self {
+            Sse(unsafe { _mm_blendv_ps(b.0, a.0, m.0) })
+        }
+        /// Without SSE4.1's BLENDVPS: `a & m | b & !m`.
+        #[cfg(not(target_feature = "sse4.1"))]
+        #[inline(always)]
+        fn select(m: SseMask, a: Self, b: Self) -> Self {
+            Sse(unsafe { _mm_or_ps(_mm_and_ps(m.0, a.0), _mm_andnot_ps(m.0, b.0)) })
+        }
+        #[inline(always)]
+        fn bits(m: SseMask) -> u64 {
+            unsafe { _mm_movemask_ps(m.0) as u32 as u64 }
+        }
+        #[inline(always)]
+        fn from_bits(bits: u64) -> SseMask {
+            // Lane `l` all ones where bit `l` is set: the broadcast bits against each lane's bit.
+            let lane_bits = unsafe { _mm_setr_epi32(1, 2, 4, 8) };
+            let set = unsafe { _mm_and_si128(_mm_set1_epi32(bits as i32), lane_bits) };
+            SseMask(unsafe { _mm_castsi128_ps(_mm_cmpeq_epi32(set, lane_bits)) })
+        }
+        #[inline(always)]
+        fn store(self, out: &mut [f32]) {
+            let out = &mut out[..4];
+            // SAFETY: `out` has room for the 4 floats written.
+            unsafe { _mm_storeu_ps(out.as_mut_ptr(), self.0) }
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -606,5 +756,15 @@ mod tests {
     #[test]
     fn avx2_lanes_agree_with_portable_lanes() {
         agrees_with_portable::<Avx2, 8>();
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn sse_lanes_agree_with_portable_lanes() {
+        agrees_with_portable::<Sse, 4>();
+        let x = Sse::new([1.0, 2.0, 3.0, 4.0]);
+        let mut out = [0.0; 4];
+        x.swap_halves().store(&mut out);
+        assert_eq!(out, [3.0, 4.0, 1.0, 2.0]);
     }
 }
