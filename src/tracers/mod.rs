@@ -11,6 +11,8 @@ pub mod packet;
 pub mod reference;
 pub mod registry;
 pub mod stream;
+#[cfg(tinybvh)]
+pub mod tinybvh;
 pub mod visibility;
 pub mod wide_single;
 
