@@ -11,6 +11,15 @@
 //! splits, `BuildHQ`), and `optimize` = N, tinybvh's `Optimize` (reinsertion, Meister & Bittner
 //! 2018) run N times after the build (0, the default: not run). Triangles keep the mesh's order:
 //! tinybvh's primitive index is the scene's.
+//!
+//! **Scale.** tinybvh's Möller–Trumbore tests reject a triangle as parallel to the ray when
+//! |e1 · (D × e2)| — twice its area, projected — is below an absolute 1e-6 (1e-7 in the packet
+//! kernel), so on a mesh of small triangles it misses most of them (dragon-202k, edges ~5e-4 scene
+//! units: a fifth of the camera rays). tinybvh is handed the scene scaled by a power of two
+//! (`TinyBvh::scale`) that brings the median triangle's doubled area to about 1: the scaling is
+//! exact in floating point (bar under- and overflow), every distance tinybvh computes is the
+//! unscaled one times the same power of two, and only those absolute thresholds move. Tracers scale
+//! ray origins and far ends in and hit distances out (`TinyBvh::to_tiny`, `TinyBvh::from_tiny`).
 
 pub mod ffi;
 
@@ -108,6 +117,8 @@ pub struct TinyBvh {
     pub layout: TinyLayout,
     pub config: TinyBvhConfig,
     pub triangles: usize,
+    /// The power of two tinybvh's copy of the scene is scaled by (see the module's notes).
+    pub scale: f32,
     /// Wall time of `build`: copying the vertices, tinybvh's build, conversion and optimisation.
     pub build_seconds: f64,
 }
@@ -166,12 +177,13 @@ impl TinyBvh {
         }
         let count = u32::try_from(triangles.len())
             .map_err(|_| Error::runtime("tinybvh indexes triangles with 32 bits"))?;
+        let scale = scale_for(triangles);
         let handle = if triangles.is_empty() {
             None
         } else {
             let vertices: Vec<[f32; 4]> = triangles
                 .iter()
-                .flat_map(|t| t.v.map(|p| [p.x, p.y, p.z, 0.0]))
+                .flat_map(|t| t.v.map(|p| [p.x * scale, p.y * scale, p.z * scale, 0.0]))
                 .collect();
             // SAFETY: `vertices` holds 3 × count float4; the shim copies them.
             let raw = unsafe {
@@ -195,8 +207,26 @@ impl TinyBvh {
             layout,
             config,
             triangles: triangles.len(),
+            scale,
             build_seconds: start.elapsed().as_secs_f64(),
         })
+    }
+
+    /// The ray from `origin` along `dir` up to `far` (scene units) as tinybvh takes it over its
+    /// scaled copy of the scene.
+    #[inline(always)]
+    pub fn to_tiny(&self, origin: glam::Vec3, dir: glam::Vec3, far: f32) -> TinyRay {
+        TinyRay::new(
+            (origin * self.scale).to_array(),
+            dir.to_array(),
+            far * self.scale,
+        )
+    }
+
+    /// A distance tinybvh found, in scene units.
+    #[inline(always)]
+    pub fn from_tiny(&self, t: f32) -> f32 {
+        t / self.scale
     }
 
     /// Closest hits: each ray's `t`, `u`, `v` and `prim` are those of its nearest triangle before
@@ -236,6 +266,78 @@ impl TinyBvh {
                 ffi::raylab_tinybvh_intersect256(handle.as_ptr(), packet.as_mut_ptr(), sse as u32)
                     == 1
             },
+        }
+    }
+}
+
+/// The power of two that brings the median triangle's doubled area (|e1 × e2|) to about 1, kept
+/// small enough that no scaled coordinate exceeds 2⁶⁰; 1 for a mesh of degenerate triangles.
+pub fn scale_for(triangles: &[Triangle]) -> f32 {
+    let mut doubled: Vec<f32> = triangles
+        .iter()
+        .map(|t| t.normal().length())
+        .filter(|a| a.is_finite() && *a > 0.0)
+        .collect();
+    if doubled.is_empty() {
+        return 1.0;
+    }
+    let middle = doubled.len() / 2;
+    let median = *doubled.select_nth_unstable_by(middle, f32::total_cmp).1;
+    let largest = triangles
+        .iter()
+        .flat_map(|t| t.v)
+        .map(|p| p.abs().max_element())
+        .fold(0.0f32, f32::max);
+    // Area scales with the square of lengths: half the exponent.
+    let mut exponent = (-0.5 * median.log2()).round() as i32;
+    if largest > 0.0 {
+        exponent = exponent.min(60 - largest.log2().ceil() as i32);
+    }
+    2f32.powi(exponent.clamp(-100, 100))
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::Vec3;
+
+    use super::*;
+
+    fn triangle(edge: f32, at: Vec3) -> Triangle {
+        Triangle::new(at, at + Vec3::X * edge, at + Vec3::Y * edge)
+    }
+
+    #[test]
+    fn the_scale_is_a_power_of_two_bringing_triangles_to_unit_size() {
+        let small: Vec<Triangle> = (0..5).map(|i| triangle(1e-3, Vec3::X * i as f32)).collect();
+        let s = scale_for(&small);
+        assert_eq!(s, 2f32.powi(10), "edges 1e-3: doubled area 1e-6 ≈ 2^-20");
+        assert_eq!(s.log2().fract(), 0.0);
+        assert_eq!(scale_for(&[triangle(1.0, Vec3::ZERO)]), 1.0);
+        // Far from the origin, coordinates stay below 2^60 scaled.
+        let far = [triangle(1e-3, Vec3::splat(1e17))];
+        assert!(scale_for(&far) * 1e17 <= 2f32.powi(60));
+        assert_eq!(scale_for(&[triangle(0.0, Vec3::ZERO)]), 1.0, "degenerate");
+        assert_eq!(scale_for(&[]), 1.0);
+    }
+
+    /// A ray down onto a triangle of edge 1e-3: tinybvh's unscaled test would call it parallel
+    /// (|det| = 1e-6 is not above its threshold); scaled, every layout finds it at the right
+    /// distance.
+    #[test]
+    fn small_triangles_are_hit_at_their_distance_in_every_layout() {
+        let tris = [triangle(1e-3, Vec3::ZERO)];
+        for layout in [TinyLayout::Binary, TinyLayout::Wide4, TinyLayout::Wide8] {
+            let bvh = TinyBvh::build(&tris, layout, TinyBvhConfig::default()).unwrap();
+            let origin = Vec3::new(2e-4, 3e-4, 0.5);
+            let mut rays = [bvh.to_tiny(origin, Vec3::NEG_Z, f32::INFINITY)];
+            rays[0].prim = u32::MAX;
+            bvh.intersect(&mut rays);
+            assert_eq!(rays[0].prim, 0, "{layout:?}");
+            assert!((bvh.from_tiny(rays[0].t) - 0.5).abs() < 1e-6, "{layout:?}");
+            let mut flags = [0u8];
+            let mut fresh = [bvh.to_tiny(origin, Vec3::NEG_Z, f32::INFINITY)];
+            bvh.occluded(&mut fresh, &mut flags);
+            assert_eq!(flags, [1], "{layout:?}");
         }
     }
 }

@@ -10,6 +10,8 @@
 //!   over from `origin + tmin·dir` with far end `tmax − tmin`, and the hit distance is shifted
 //!   back; tmin = 0, every camera ray, goes over unchanged.
 //! - **tmax = ∞.** tinybvh's far end is finite (`ffi::BVH_FAR` = 1e30): hits beyond it are lost.
+//! - **Scale.** tinybvh traces a copy of the scene scaled by a power of two (`accel::tinybvh`,
+//!   *Scale*): origins and far ends are scaled in, hit distances out, exactly.
 //! - **Ill-formed rays** (`Ray::is_well_formed`) are not handed over: they miss, as for every
 //!   tracer (tinybvh would exit on a NaN).
 //!
@@ -42,17 +44,17 @@ fn count_rays<S: Stats>(n: usize, stats: &mut S) {
     }
 }
 
-/// Ray `i` as tinybvh takes it, with the tmin it was shifted by; `None` for an ill-formed ray.
+/// Ray `i` as `bvh` takes it, with the tmin it was shifted by; `None` for an ill-formed ray.
 #[inline(always)]
-fn tiny_ray(rays: &Rays<'_>, i: usize) -> Option<(TinyRay, f32)> {
+fn tiny_ray(bvh: &TinyBvh, rays: &Rays<'_>, i: usize) -> Option<(TinyRay, f32)> {
     let r = rays.ray(i);
     if !r.is_well_formed() {
         return None;
     }
     let mut ray = if r.tmin > 0.0 {
-        TinyRay::new(r.at(r.tmin).to_array(), r.dir.to_array(), r.tmax - r.tmin)
+        bvh.to_tiny(r.at(r.tmin), r.dir, r.tmax - r.tmin)
     } else {
-        TinyRay::new(r.origin.to_array(), r.dir.to_array(), r.tmax)
+        bvh.to_tiny(r.origin, r.dir, r.tmax)
     };
     // No triangle index is this: a ray still carrying it after tracing missed.
     ray.prim = Hit::NO_PRIM;
@@ -61,12 +63,12 @@ fn tiny_ray(rays: &Rays<'_>, i: usize) -> Option<(TinyRay, f32)> {
 
 /// The hit tinybvh left in `ray`, handed over with its tmin shifted by `shift`.
 #[inline(always)]
-fn hit_of(ray: &TinyRay, shift: f32) -> Hit {
+fn hit_of(bvh: &TinyBvh, ray: &TinyRay, shift: f32) -> Hit {
     if ray.prim == Hit::NO_PRIM {
         return Hit::MISS;
     }
     Hit {
-        t: ray.t + shift,
+        t: bvh.from_tiny(ray.t) + shift,
         prim: ray.prim,
         u: ray.u,
         v: ray.v,
@@ -87,6 +89,7 @@ impl SingleTracer {
 /// The well-formed rays of `range` in `buffer` (their tmin shifts in `shifts`, their indices in
 /// `index`); how many there are.
 fn gather(
+    bvh: &TinyBvh,
     rays: &Rays<'_>,
     range: std::ops::Range<usize>,
     buffer: &mut [TinyRay; BLOCK],
@@ -95,7 +98,7 @@ fn gather(
 ) -> usize {
     let mut n = 0;
     for i in range {
-        if let Some((ray, shift)) = tiny_ray(rays, i) {
+        if let Some((ray, shift)) = tiny_ray(bvh, rays, i) {
             (buffer[n], shifts[n], index[n]) = (ray, shift, i);
             n += 1;
         }
@@ -110,10 +113,10 @@ pub(crate) fn intersect_single(bvh: &TinyBvh, rays: &Rays<'_>, hits: &mut [Hit])
     for start in (0..hits.len()).step_by(BLOCK) {
         let range = start..hits.len().min(start + BLOCK);
         hits[range.clone()].fill(Hit::MISS);
-        let n = gather(rays, range, &mut buffer, &mut shifts, &mut index);
+        let n = gather(bvh, rays, range, &mut buffer, &mut shifts, &mut index);
         bvh.intersect(&mut buffer[..n]);
         for k in 0..n {
-            hits[index[k]] = hit_of(&buffer[k], shifts[k]);
+            hits[index[k]] = hit_of(bvh, &buffer[k], shifts[k]);
         }
     }
 }
@@ -140,7 +143,7 @@ pub(crate) fn occluded_single(bvh: &TinyBvh, rays: &Rays<'_>, occluded: &mut [bo
     for start in (0..occluded.len()).step_by(BLOCK) {
         let range = start..occluded.len().min(start + BLOCK);
         occluded[range.clone()].fill(false);
-        let n = gather(rays, range, &mut buffer, &mut shifts, &mut index);
+        let n = gather(bvh, rays, range, &mut buffer, &mut shifts, &mut index);
         bvh.occluded(&mut buffer[..n], &mut flags[..n]);
         for k in 0..n {
             occluded[index[k]] = flags[k] != 0;

@@ -108,10 +108,10 @@ impl TileTracer {
 
     /// The 256 rays of `rays` laid out in `packet`, and each ray's slot; `None` when they are
     /// not a 16×16 block of camera rays from one origin with tmin = 0.
-    fn packet(rays: &Rays<'_>, packet: &mut [TinyRay; PACKET]) -> Option<[u8; PACKET]> {
+    fn packet(&self, rays: &Rays<'_>, packet: &mut [TinyRay; PACKET]) -> Option<[u8; PACKET]> {
         let slots = block_slots(rays.camera?, rays.pixel)?;
         for (i, &slot) in slots.iter().enumerate() {
-            match tiny_ray(rays, i) {
+            match tiny_ray(&self.bvh, rays, i) {
                 Some((ray, 0.0)) => packet[slot as usize] = ray,
                 _ => return None,
             }
@@ -130,10 +130,10 @@ impl Kernel for TileTracer {
             let range = start..hits.len().min(start + PACKET);
             let block = rays.slice(range.clone());
             let hits = &mut hits[range];
-            match Self::packet(&block, &mut packet) {
+            match self.packet(&block, &mut packet) {
                 Some(slots) if self.bvh.intersect256(&mut packet, self.config.sse) => {
                     for (hit, &slot) in hits.iter_mut().zip(&slots) {
-                        *hit = hit_of(&packet[slot as usize], 0.0);
+                        *hit = hit_of(&self.bvh, &packet[slot as usize], 0.0);
                     }
                 }
                 _ => intersect_single(&self.bvh, &block, hits),
