@@ -9,7 +9,7 @@ use crate::accel::embree::{Embree3, EMBREE4_BUILT, EMBREE4_HINT};
 use crate::accel::TinyLayout;
 use crate::accel::{Accel, AccelKind};
 use crate::error::{Error, Result};
-use crate::geometry::{Hit, Rays};
+use crate::geometry::{Hit, RayKind, Rays};
 use crate::scene::{Frame, Mesh};
 use crate::stats::Counters;
 use crate::tracers::chunked::CHUNK_RAYS;
@@ -204,6 +204,30 @@ fn missing_because(name: &str) -> Option<&'static str> {
     } else {
         None
     }
+}
+
+/// What a plan says of tracer `name` on rays of `kinds`, when the tracer answers some of them by
+/// another method than its name says: `tinybvh-256` traces only blocks of pinhole camera rays
+/// with its packet kernel.
+pub fn plan_note(name: &str, kinds: &[RayKind]) -> Option<String> {
+    let others: Vec<&str> = kinds
+        .iter()
+        .filter(|&&k| k != RayKind::Primary)
+        .map(|k| k.name())
+        .collect();
+    (name == "tinybvh-256").then(|| {
+        let others = match others.is_empty() {
+            true => String::new(),
+            false => format!(
+                "; its {} rays by single rays (as tinybvh-2)",
+                others.join(", ")
+            ),
+        };
+        format!(
+            "tinybvh-256 traces 16×16 blocks of pinhole camera rays with Intersect256Rays, any \
+             other camera rays (partial blocks at image edges, a thin lens) by single rays{others}"
+        )
+    })
 }
 
 /// Whether this build has the tinybvh tracers (`build.rs` compiled the shim over the header of
