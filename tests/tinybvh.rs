@@ -13,6 +13,7 @@ use raylab::scene::library::load_scene;
 use raylab::tracers::chunked::trace_hits;
 use raylab::tracers::tinybvh::tile::{block_slots, mirrored, PACKET};
 use raylab::tracers::{tracer_for_frame, Params};
+use raylab::verify::stability::cases::Case;
 use raylab::verify::stability::{generate, run, CaseKind, Contender, Status, Sweep};
 
 /// A camera batch of full 32×32 tiles: every aligned run of 256 rays is a 16×16 block, in the
@@ -78,11 +79,21 @@ fn tinybvh_answers_every_stiff_case_without_a_crash() {
             params: Params::new(),
         })
         .collect();
+    // Each case is named before it runs: a crash (tinybvh's cannot be caught) shows which.
+    let progress = |case: &Case, c: &Contender| {
+        eprintln!(
+            "{} {:?} {} ({} triangles)",
+            c.label,
+            case.kind,
+            case.variant,
+            case.mesh.len()
+        )
+    };
     let outcomes = run(
         generate(&sweep),
         &contenders,
         Duration::from_secs(120),
-        &|_, _| {},
+        &progress,
     );
     assert!(!outcomes.is_empty());
     for o in &outcomes {

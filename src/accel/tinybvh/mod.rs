@@ -35,6 +35,13 @@ use ffi::TinyRay;
 /// Where the header was fetched from, as build.rs found it.
 pub const SOURCE: &str = env!("RAYLAB_TINYBVH_SOURCE");
 
+/// The linked tinybvh's version, as its header states it ("1.6.8").
+pub fn version() -> String {
+    // SAFETY: a plain query of the linked shim.
+    let v = unsafe { ffi::raylab_tinybvh_version() };
+    format!("{}.{}.{}", v >> 16, (v >> 8) & 255, v & 255)
+}
+
 /// Which of tinybvh's layouts a tracer traverses (the number is its width).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum TinyLayout {

@@ -9,6 +9,7 @@
 #define TINYBVH_IMPLEMENTATION
 #include "tiny_bvh.h"
 
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <new>
@@ -48,6 +49,30 @@ struct raylab_tinybvh {
   BVH4_CPU wide4;
   BVH8_CPU wide8;
 };
+
+// Sets rD as tinybvh's own Ray constructor does (tinybvh_rcp: 1/D, ±1e30 for a component within
+// 1e-12 of 0), and keeps the ray clear of what tinybvh's wide layouts put in empty child slots: a
+// box at (1e30, 1e30, 1e30) (BVH4_CPU/BVH8_CPU::ConvertFrom). A ray whose direction has three
+// positive components and whose far end reaches that box — one along (1, 1, 1) from the origin
+// with tinybvh's own far end BVH_FAR, say — "hits" the slot, and the traversal reads outside its
+// nodes (a crash, found by the stability suite's watertight cube). Real geometry lies within
+// 2^60 of the origin (`scale_for`), so a far end of 1e29 / max(D) cuts off nothing but that box.
+// O·rD is kept finite likewise: the wide layouts' slabs are box·rD − O·rD, and ±inf there would
+// make the empty slots' slabs NaN.
+static inline void prepare(Ray& ray) {
+  ray.rD = tinybvh::tinybvh_rcp(ray.D);
+  const auto keep_finite = [](float o, float& rd) {
+    const float limit = 1e37f;
+    if (std::fabs(o) * std::fabs(rd) > limit) rd = std::copysign(limit / std::fabs(o), rd);
+  };
+  keep_finite(ray.O.x, ray.rD.x);
+  keep_finite(ray.O.y, ray.rD.y);
+  keep_finite(ray.O.z, ray.rD.z);
+  if (ray.D.x > 0 && ray.D.y > 0 && ray.D.z > 0) {
+    const float reach = 1e29f / std::fmax(ray.D.x, std::fmax(ray.D.y, ray.D.z));
+    if (ray.hit.t > reach) ray.hit.t = reach;
+  }
+}
 
 extern "C" {
 
@@ -104,12 +129,12 @@ raylab_tinybvh* raylab_tinybvh_build(const float* triangles, uint32_t count, uin
 
 void raylab_tinybvh_free(raylab_tinybvh* bvh) noexcept { delete bvh; }
 
-// Closest hits: each ray's O, D and hit.t (the far end) are set; rD is set here, as tinybvh's
-// own Ray constructor does (tinybvh_rcp), and hit is filled where a triangle is nearer.
+// Closest hits: each ray's O, D and hit.t (the far end) are set; rD is set here (`prepare`), and
+// hit is filled where a triangle is nearer.
 void raylab_tinybvh_intersect(const raylab_tinybvh* bvh, Ray* rays, size_t count) noexcept {
   for (size_t i = 0; i < count; i++) {
     Ray& ray = rays[i];
-    ray.rD = tinybvh::tinybvh_rcp(ray.D);
+    prepare(ray);
     switch (bvh->layout) {
       case BINARY: bvh->binary.Intersect(ray); break;
       case WIDE4: bvh->wide4.Intersect(ray); break;
@@ -123,7 +148,7 @@ void raylab_tinybvh_occluded(const raylab_tinybvh* bvh, Ray* rays, size_t count,
                              uint8_t* occluded) noexcept {
   for (size_t i = 0; i < count; i++) {
     Ray& ray = rays[i];
-    ray.rD = tinybvh::tinybvh_rcp(ray.D);
+    prepare(ray);
     bool any = false;
     switch (bvh->layout) {
       case BINARY: any = bvh->binary.IsOccluded(ray); break;
@@ -140,7 +165,7 @@ void raylab_tinybvh_occluded(const raylab_tinybvh* bvh, Ray* rays, size_t count,
 uint32_t raylab_tinybvh_intersect256(const raylab_tinybvh* bvh, Ray* packet,
                                      uint32_t sse) noexcept {
   if (bvh->layout != BINARY) return 0;
-  for (size_t i = 0; i < 256; i++) packet[i].rD = tinybvh::tinybvh_rcp(packet[i].D);
+  for (size_t i = 0; i < 256; i++) prepare(packet[i]);
 #ifdef BVH_USEAVX
   if (sse) {
     bvh->binary.Intersect256RaysSSE(packet);
