@@ -882,9 +882,9 @@ mod tests {
         let md = Summary::read(&results("no-reference", &runs))
             .unwrap()
             .markdown();
-        assert!(md.contains("| × Embree best | obvhs Mrays/s | checked against Embree |\n|---|---|---|---:|---:|---|---:|---:|---:|---|\n"), "{md}");
+        assert!(md.contains("| × Embree best | baseline best | Mrays/s | × baseline best | obvhs Mrays/s | checked against Embree |\n|---|---|---|---:|---:|---|---:|---:|---|---:|---:|---:|---|\n"), "{md}");
         assert!(
-            md.contains("| 0.50× | 25.0 | **0 ours wrong, 1 undecided**"),
+            md.contains("| 0.50× | embree16 (context coherent) | 100.0 | 0.50× | 25.0 | **0 ours wrong, 1 undecided**"),
             "{md}"
         );
     }
