@@ -6,6 +6,12 @@
 //! cfg `embree4`. Embree 4 exports the same C symbols as Embree 3, so it cannot be linked beside
 //! it: raylab loads it at run time from the absolute path recorded here (`accel::embree::v4`).
 //! Without the cache the build goes on with Embree 3 only, saying so in one warning.
+//!
+//! With the feature `tinybvh` (on by default) it compiles raylab's C++ shim over tinybvh
+//! (`src/accel/tinybvh/shim.cpp`) against the `tiny_bvh.h` of the cache `.ci/fetch-tinybvh` fills
+//! ($RAYLAB_TINYBVH_DIR or ~/.cache/raylab/tinybvh), with `-march=native` (its 8-wide layout
+//! needs AVX2 + FMA; results are per machine anyway), and sets the cfg `tinybvh`. Without the
+//! cache or a C++ compiler the build goes on without the tinybvh tracers, saying so in one warning.
 
 use std::env;
 use std::fs;
@@ -25,6 +31,7 @@ const EMBREE4_FUNCTIONS: &str = "rtc(NewDevice|ReleaseDevice|GetDeviceError|SetD
 fn main() {
     println!("cargo:rerun-if-changed=build.rs");
     println!("cargo::rustc-check-cfg=cfg(embree4)");
+    println!("cargo::rustc-check-cfg=cfg(tinybvh)");
     println!("cargo:rustc-link-lib=dylib=embree3");
     let out = PathBuf::from(env::var("OUT_DIR").expect("cargo sets OUT_DIR"));
 
@@ -43,6 +50,44 @@ fn main() {
             ),
         }
     }
+
+    if env::var_os("CARGO_FEATURE_TINYBVH").is_some() {
+        match tinybvh() {
+            Ok(()) => println!("cargo:rustc-cfg=tinybvh"),
+            Err(why) => println!(
+                "cargo:warning=tinybvh is off ({why}): raylab builds without the tinybvh tracers; \
+                 `bash .ci/fetch-tinybvh` fetches it (and a C++ compiler builds it)"
+            ),
+        }
+    }
+}
+
+/// The shim over the cache's `tiny_bvh.h`, compiled and linked statically.
+fn tinybvh() -> Result<(), String> {
+    const SHIM: &str = "src/accel/tinybvh/shim.cpp";
+    println!("cargo:rerun-if-env-changed=RAYLAB_TINYBVH_DIR");
+    println!("cargo:rerun-if-changed={SHIM}");
+    let dir = match env::var_os("RAYLAB_TINYBVH_DIR") {
+        Some(dir) => PathBuf::from(dir),
+        None => PathBuf::from(env::var_os("HOME").ok_or("no HOME to find its cache in")?)
+            .join(".cache/raylab/tinybvh"),
+    };
+    let source = fs::read_to_string(dir.join("SOURCE"))
+        .map_err(|_| format!("no tinybvh cache in {}", dir.display()))?;
+    println!("cargo:rerun-if-changed={}", dir.display());
+    cc::Build::new()
+        .cpp(true)
+        .std("c++20")
+        .file(SHIM)
+        .include(dir.join("include"))
+        .flag("-march=native")
+        // tiny_bvh.h's own notes (e.g. on SIMD it falls back from) are not raylab's warnings.
+        .warnings(false)
+        .cargo_warnings(false)
+        .try_compile("raylab_tinybvh")
+        .map_err(|e| format!("cannot compile {SHIM}: {e}"))?;
+    println!("cargo:rustc-env=RAYLAB_TINYBVH_SOURCE={}", source.trim());
+    Ok(())
 }
 
 /// Bindings for the Embree 4 headers of the cache, loaded at run time from its library.

@@ -8,6 +8,7 @@
 use raylab::accel::embree::{EMBREE4_BUILT, EMBREE4_HINT};
 use raylab::geometry::RayKind;
 use raylab::scene::library::load_scene;
+use raylab::tracers::registry::{TINYBVH_BUILT, TINYBVH_HINT};
 use raylab::tracers::{oracle_params, tracer_for_frame, Params, ORACLE};
 use raylab::verify::{
     compare_batches, format_table, verification_batches, verify_frame, Tolerance,
@@ -134,6 +135,24 @@ fn fast_tests_agree_with_embree_without_robust_mode() {
 #[test]
 fn obvhs_agrees_with_embree() {
     agrees_with_embree("obvhs");
+}
+
+/// `raylab verify --tracer tinybvh-<layout>`: tinybvh's single-ray kernels over each of its CPU
+/// layouts, with its default build and with spatial splits plus reinsertion, and its 256-ray
+/// packet kernel (SSE and scalar) on the camera rays' 16×16 blocks.
+#[test]
+fn tinybvh_agrees_with_embree() {
+    if !TINYBVH_BUILT {
+        println!("SKIPPED: {TINYBVH_HINT}");
+        return;
+    }
+    for tracer in ["tinybvh-2", "tinybvh-4", "tinybvh-8"] {
+        agrees_with_embree(tracer);
+    }
+    let hq = Params::new().with("builder", "sbvh").with("optimize", 5);
+    agrees_with_embree_with("tinybvh-8", &hq);
+    agrees_with_embree("tinybvh-256");
+    agrees_with_embree_with("tinybvh-256", &Params::new().with("sse", false));
 }
 
 #[test]

@@ -1,5 +1,5 @@
 //! The light-visibility query gives every tracer the same rays, so every tracer must give the same
-//! occlusion bits: reference, packet (each traversal), stream, obvhs, cgt, grid-dda, mft (multi-
+//! occlusion bits: reference, packet (each traversal), stream, obvhs, tinybvh, cgt, grid-dda, mft (multi-
 //! frusta, answering natively: with and without CR / FS) and Embree (robust), on the room and the conference room with a quad light and on a BART scene with one added —
 //! the soft-shadow workload of the runner (16 interleaved light samples per primary hit).
 
@@ -78,7 +78,7 @@ fn visibility(scene: &Scene, tracer: &str, params: &Params) -> (Visibility, usiz
 #[test]
 fn every_tracer_sees_the_same_light_samples() {
     let packet = |traversal: &str| Params::new().with("traversal", traversal).with("packet", 4);
-    let tracers = [
+    let mut tracers = vec![
         ("reference", Params::new()),
         ("obvhs", Params::new()),
         ("grid-dda", Params::new()),
@@ -102,6 +102,11 @@ fn every_tracer_sees_the_same_light_samples() {
         ("mft", Params::new().with("width", 4)),
         ("mft", Params::new().with("width", 8).with("block", 64)),
     ];
+    if raylab::tracers::registry::TINYBVH_BUILT {
+        for name in ["tinybvh-2", "tinybvh-4", "tinybvh-8", "tinybvh-256"] {
+            tracers.push((name, Params::new()));
+        }
+    }
     for (name, scene) in scenes() {
         let (expected, rays) = visibility(&scene, "embree16", &oracle_params());
         let occluded = expected.total_occluded();

@@ -226,7 +226,8 @@ fn bad_width_and_empty_trees() {
     let message = err.err().unwrap().to_string();
     assert!(message.contains("robust = \"yes\""), "{message}");
     // An empty tree: every ray misses, nothing is occluded.
-    let empty = WideSingleTracer::<Robust>::new(wide(Arc::new(Bvh::build(&[], BvhConfig::default())), 8));
+    let empty =
+        WideSingleTracer::<Robust>::new(wide(Arc::new(Bvh::build(&[], BvhConfig::default())), 8));
     let batch = batch_of(Ray::new(Vec3::ZERO, Vec3::X, 0.0, 10.0));
     assert_eq!(trace_hits(&empty, &batch), vec![Hit::MISS]);
     assert_eq!(trace_occlusion(&empty, &batch), vec![false]);

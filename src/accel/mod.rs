@@ -9,6 +9,8 @@ pub mod grid;
 pub mod obvhs;
 pub mod presplit;
 pub mod spatial_split;
+#[cfg(tinybvh)]
+pub mod tinybvh;
 pub mod wide_bvh;
 pub mod wide_tree;
 
@@ -24,6 +26,8 @@ use embree::{BuildQuality, Device, EmbreeConfig, EmbreeScene};
 pub use self::obvhs::{ObvhsBvh, ObvhsQuality};
 pub use bvh::{Bvh, BvhBuilder, BvhConfig, BvhNode};
 pub use grid::{Grid, GridConfig};
+#[cfg(tinybvh)]
+pub use tinybvh::{TinyBvh, TinyBvhConfig, TinyLayout};
 pub use wide_bvh::{WideBvh, WideChild, WideEntry, WideNode};
 pub use wide_tree::{BvhOfWidth, WideNodes, WideTree};
 
@@ -43,6 +47,9 @@ pub enum AccelKind {
     Obvhs,
     /// Uniform grid with macrocells, rebuilt from scratch every frame (Wald et al. 2006, §3).
     Grid,
+    /// One of tinybvh's layouts, built by tinybvh's own builders (`accel::tinybvh`).
+    #[cfg(tinybvh)]
+    TinyBvh(TinyLayout),
 }
 
 impl AccelKind {
@@ -55,6 +62,8 @@ impl AccelKind {
             AccelKind::Embree4 => "embree4",
             AccelKind::Obvhs => "obvhs",
             AccelKind::Grid => "grid",
+            #[cfg(tinybvh)]
+            AccelKind::TinyBvh(layout) => layout.name(),
         }
     }
 
@@ -68,6 +77,8 @@ impl AccelKind {
             AccelKind::Embree4 => EmbreeConfig::PARAMS,
             AccelKind::Obvhs => ObvhsQuality::PARAMS,
             AccelKind::Grid => GridConfig::PARAMS,
+            #[cfg(tinybvh)]
+            AccelKind::TinyBvh(_) => TinyBvhConfig::PARAMS,
         }
     }
 
@@ -83,6 +94,8 @@ impl AccelKind {
             AccelKind::Embree4 => EmbreeConfig::from_params(params).map(drop),
             AccelKind::Obvhs => ObvhsQuality::from_params(params).map(drop),
             AccelKind::Grid => GridConfig::from_params(params).map(drop),
+            #[cfg(tinybvh)]
+            AccelKind::TinyBvh(_) => TinyBvhConfig::from_params(params).map(drop),
         }
     }
 
@@ -118,6 +131,12 @@ impl AccelKind {
                 &mesh.triangles,
                 GridConfig::from_params(params)?,
             ))),
+            #[cfg(tinybvh)]
+            AccelKind::TinyBvh(layout) => Accel::TinyBvh(Arc::new(TinyBvh::build(
+                &mesh.triangles,
+                layout,
+                TinyBvhConfig::from_params(params)?,
+            )?)),
         })
     }
 }
@@ -161,6 +180,11 @@ impl AccelKind {
                 close,
                 EmbreeConfig::from_params(params)?,
             )?))),
+            #[cfg(tinybvh)]
+            AccelKind::TinyBvh(_) => Err(Error::usage(format!(
+                "the {} structure has no motion blur (moving geometry needs bvh or embree)",
+                self.name()
+            ))),
             AccelKind::Obvhs | AccelKind::Grid => Err(Error::usage(format!(
                 "the {} structure has no motion blur (moving geometry needs bvh or embree)",
                 self.name()
@@ -199,6 +223,8 @@ impl AccelKind {
             #[cfg(embree4)]
             AccelKind::Embree4 => true,
             AccelKind::Bvh | AccelKind::Wide | AccelKind::Obvhs | AccelKind::Grid => false,
+            #[cfg(tinybvh)]
+            AccelKind::TinyBvh(_) => false,
         }
     }
 
@@ -219,6 +245,8 @@ pub enum Accel {
     Embree4(Arc<EmbreeScene<Embree4>>),
     Obvhs(Arc<ObvhsBvh>),
     Grid(Arc<Grid>),
+    #[cfg(tinybvh)]
+    TinyBvh(Arc<TinyBvh>),
 }
 
 impl Accel {
@@ -231,6 +259,8 @@ impl Accel {
             #[cfg(embree4)]
             Accel::Embree4(s) => s.is_moving(),
             Accel::Obvhs(_) | Accel::Grid(_) => false,
+            #[cfg(tinybvh)]
+            Accel::TinyBvh(_) => false,
         }
     }
 
@@ -281,6 +311,15 @@ impl Accel {
         }
     }
 
+    /// tinybvh's structure of `layout`.
+    #[cfg(tinybvh)]
+    pub fn tinybvh(&self, layout: TinyLayout) -> Result<&Arc<TinyBvh>> {
+        match self {
+            Accel::TinyBvh(b) if b.layout == layout => Ok(b),
+            other => Err(other.not(AccelKind::TinyBvh(layout))),
+        }
+    }
+
     pub fn kind(&self) -> AccelKind {
         match self {
             Accel::Bvh(_) => AccelKind::Bvh,
@@ -290,6 +329,8 @@ impl Accel {
             Accel::Embree4(_) => AccelKind::Embree4,
             Accel::Obvhs(_) => AccelKind::Obvhs,
             Accel::Grid(_) => AccelKind::Grid,
+            #[cfg(tinybvh)]
+            Accel::TinyBvh(b) => AccelKind::TinyBvh(b.layout),
         }
     }
 
@@ -321,6 +362,8 @@ impl Accel {
             Accel::Embree4(s) => s.build_seconds,
             Accel::Obvhs(b) => b.build_seconds,
             Accel::Grid(g) => g.build_seconds,
+            #[cfg(tinybvh)]
+            Accel::TinyBvh(b) => b.build_seconds,
         }
     }
 }

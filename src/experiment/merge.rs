@@ -297,6 +297,7 @@ mod tests {
         "seconds_min",
         "seconds_median",
         "mrays_per_s",
+        "generation_seconds",
         "build_seconds",
         "build_mtris_per_s",
         "build_plus_trace_seconds",
@@ -308,6 +309,9 @@ mod tests {
         "embree_best_build_plus_trace_seconds",
         "embree_best_build_plus_trace_config",
         "x_embree_best_build_plus_trace",
+        "baseline_best_seconds",
+        "baseline_best_config",
+        "x_baseline_best",
     ];
 
     fn scratch(name: &str) -> PathBuf {

@@ -12,6 +12,8 @@ pub mod reference;
 pub mod registry;
 pub mod staged;
 pub mod stream;
+#[cfg(tinybvh)]
+pub mod tinybvh;
 pub mod visibility;
 pub mod wide_single;
 

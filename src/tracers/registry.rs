@@ -7,9 +7,11 @@ use crate::accel::embree::Embree4;
 use crate::accel::embree::{Embree3, EMBREE4_BUILT, EMBREE4_HINT};
 use std::ops::Range;
 
+#[cfg(tinybvh)]
+use crate::accel::TinyLayout;
 use crate::accel::{Accel, AccelKind, BvhOfWidth};
 use crate::error::{Error, Result};
-use crate::geometry::{Fast, Hit, Rays, Robust};
+use crate::geometry::{Fast, Hit, RayKind, Rays, Robust};
 use crate::scene::{Frame, Mesh};
 use crate::stats::Counters;
 use crate::tracers::chunked::CHUNK_RAYS;
@@ -20,6 +22,8 @@ use crate::tracers::embree::{
 use crate::tracers::multi_frusta::{MftConfig, MftTracer};
 use crate::tracers::packet::{PacketConfig, PacketTracer, TreeWidth};
 use crate::tracers::stream::{StreamConfig, StreamTracer};
+#[cfg(tinybvh)]
+use crate::tracers::tinybvh::{tile::TileConfig, SingleTracer, TileTracer};
 use crate::tracers::{
     grid_dda::GridDdaTracer, obvhs::ObvhsTracer, reference::ReferenceTracer, wide_single,
     wide_single::WideSingleTracer, Params, StagedRays, Tracer, VisibilityQuery,
@@ -60,6 +64,9 @@ pub enum TracerConfig {
     },
     Mft(MftConfig),
     Stream(StreamConfig),
+    /// `tinybvh-256`: which of tinybvh's packet kernels.
+    #[cfg(tinybvh)]
+    TinyTile(TileConfig),
 }
 
 impl TracerConfig {
@@ -177,6 +184,29 @@ const fn embree_entry(
     }
 }
 
+/// A tinybvh tracer's entry: a baseline over one of tinybvh's layouts, counting only rays, for
+/// geometry of one instant.
+#[cfg(tinybvh)]
+const fn tinybvh_entry(
+    name: &'static str,
+    layout: TinyLayout,
+    about: &'static str,
+    make: Make,
+) -> TracerInfo {
+    TracerInfo {
+        name,
+        role: Role::Baseline,
+        accel: AccelKind::TinyBvh(layout),
+        params: &[],
+        about,
+        parse: plain,
+        make,
+        counts_internals: false,
+        motion_blur: false,
+        chunk_rays: CHUNK_RAYS,
+    }
+}
+
 /// The names the Embree 3 tracers had before Embree 4 came (`embree4` was rtcIntersect4!), kept
 /// as aliases so existing experiment files still run; rows carry the new names.
 pub const ALIASES: &[(&str, &str)] = &[
@@ -196,10 +226,57 @@ pub fn canonical_name(name: &str) -> &str {
 }
 
 /// Whether `name` is a tracer this build lacks but another build has: Embree 4's, when
-/// `build.rs` did not find Embree 4.
+/// `build.rs` did not find Embree 4, and tinybvh's, when it could not build the shim.
 pub fn not_built(name: &str) -> bool {
-    !EMBREE4_BUILT && EMBREE4_TRACERS.contains(&name)
+    missing_because(name).is_some()
 }
+
+/// What to do to get tracer `name` into this build, when this build lacks it.
+fn missing_because(name: &str) -> Option<&'static str> {
+    if !EMBREE4_BUILT && EMBREE4_TRACERS.contains(&name) {
+        Some(EMBREE4_HINT)
+    } else if !TINYBVH_BUILT && TINYBVH_TRACERS.contains(&name) {
+        Some(TINYBVH_HINT)
+    } else {
+        None
+    }
+}
+
+/// What a plan says of tracer `name` on rays of `kinds`, when the tracer answers some of them by
+/// another method than its name says: `tinybvh-256` traces only blocks of pinhole camera rays
+/// with its packet kernel.
+pub fn plan_note(name: &str, kinds: &[RayKind]) -> Option<String> {
+    let others: Vec<&str> = kinds
+        .iter()
+        .filter(|&&k| k != RayKind::Primary)
+        .map(|k| k.name())
+        .collect();
+    (name == "tinybvh-256").then(|| {
+        let others = match others.is_empty() {
+            true => String::new(),
+            false => format!(
+                "; its {} rays by single rays (as tinybvh-2)",
+                others.join(", ")
+            ),
+        };
+        format!(
+            "tinybvh-256 traces 16×16 blocks of pinhole camera rays with Intersect256Rays, any \
+             other camera rays (partial blocks at image edges, a thin lens) by single rays{others}"
+        )
+    })
+}
+
+/// Whether this build has the tinybvh tracers (`build.rs` compiled the shim over the header of
+/// the cache `.ci/fetch-tinybvh` fills).
+pub const TINYBVH_BUILT: bool = cfg!(tinybvh);
+
+/// What to do to get tinybvh into a build without it.
+pub const TINYBVH_HINT: &str = "tinybvh was not built into this raylab: run `bash \
+     .ci/fetch-tinybvh`, make sure a C++ compiler (g++) is installed, and rebuild (with the \
+     default feature `tinybvh`)";
+
+/// The tinybvh tracers, which a build without tinybvh lacks.
+pub const TINYBVH_TRACERS: &[&str] = &["tinybvh-2", "tinybvh-4", "tinybvh-8", "tinybvh-256"];
 
 /// The role of the tracer a runs.csv row names, also of one this build lacks (Embree 4's);
 /// `None` for a name no build has.
@@ -344,6 +421,46 @@ pub const TRACERS: &[TracerInfo] = &[
         motion_blur: false,
         chunk_rays: CHUNK_RAYS,
     },
+    #[cfg(tinybvh)]
+    tinybvh_entry(
+        "tinybvh-2",
+        TinyLayout::Binary,
+        "tinybvh 1.6.8 baseline: single rays, BVH (2-wide, 32-byte nodes) Intersect / IsOccluded; tinybvh's builders (builder = sah|sbvh, optimize = rounds of reinsertion); Möller–Trumbore triangles",
+        |_, accel| Ok(Box::new(SingleTracer::new(accel.tinybvh(TinyLayout::Binary)?.clone()))),
+    ),
+    #[cfg(tinybvh)]
+    tinybvh_entry(
+        "tinybvh-4",
+        TinyLayout::Wide4,
+        "tinybvh 1.6.8 baseline: single rays, BVH4_CPU (4-wide SSE nodes, triangles 4 per leaf block) Intersect / IsOccluded; tinybvh's builders as tinybvh-2",
+        |_, accel| Ok(Box::new(SingleTracer::new(accel.tinybvh(TinyLayout::Wide4)?.clone()))),
+    ),
+    #[cfg(tinybvh)]
+    tinybvh_entry(
+        "tinybvh-8",
+        TinyLayout::Wide8,
+        "tinybvh 1.6.8 baseline: single rays, BVH8_CPU (8-wide AVX2 + FMA nodes after Fuetterling et al. 2017) Intersect / IsOccluded; tinybvh's builders as tinybvh-2",
+        |_, accel| Ok(Box::new(SingleTracer::new(accel.tinybvh(TinyLayout::Wide8)?.clone()))),
+    ),
+    #[cfg(tinybvh)]
+    TracerInfo {
+        name: "tinybvh-256",
+        params: TileConfig::PARAMS,
+        about: "tinybvh 1.6.8 baseline: BVH::Intersect256Rays (after Overbeck et al. 2008: first-hit test, 4-plane frustum, first/last active ray) on 16×16 blocks of pinhole camera rays (sse = true: its SSE version); other rays and occlusion by single rays as tinybvh-2",
+        parse: |params| TileConfig::from_params(params).map(TracerConfig::TinyTile),
+        make: |config, accel| match *config {
+            TracerConfig::TinyTile(c) => Ok(Box::new(TileTracer::new(
+                accel.tinybvh(TinyLayout::Binary)?.clone(),
+                c,
+            )?)),
+            _ => Err(other_family(config)),
+        },
+        role: Role::Baseline,
+        accel: AccelKind::TinyBvh(TinyLayout::Binary),
+        counts_internals: false,
+        motion_blur: false,
+        chunk_rays: CHUNK_RAYS,
+    },
     TracerInfo {
         name: "grid-dda",
         role: Role::Paper,
@@ -433,8 +550,8 @@ impl TracerInfo {
         if let Some(info) = TRACERS.iter().find(|t| t.name == canonical) {
             return Ok(info);
         }
-        if not_built(name) {
-            return Err(Error::usage(format!("tracer {name:?}: {EMBREE4_HINT}")));
+        if let Some(hint) = missing_because(name) {
+            return Err(Error::usage(format!("tracer {name:?}: {hint}")));
         }
         let known: Vec<&str> = TRACERS.iter().map(|t| t.name).collect();
         Err(Error::usage(format!(
@@ -624,17 +741,25 @@ mod tests {
         assert_eq!(TracerInfo::find("embree4").unwrap().name, "embree3-4");
     }
 
+    /// The optional baselines' tracers (Embree 4's, tinybvh's) exist exactly when the build has
+    /// them, are baselines, and otherwise name the script that fetches them.
     #[test]
-    fn embree_4_tracers_exist_exactly_when_it_was_built() {
-        for name in EMBREE4_TRACERS {
-            let found = TracerInfo::find(name);
-            assert_eq!(found.is_ok(), EMBREE4_BUILT, "{name}");
-            assert_eq!(not_built(name), !EMBREE4_BUILT, "{name}");
-            match found {
-                Ok(info) => assert_eq!((info.name, info.accel.is_embree()), (*name, true)),
-                Err(err) => {
-                    assert!(matches!(err, Error::Usage(_)), "{err}");
-                    assert!(err.to_string().contains(".ci/fetch-embree4"), "{err}");
+    fn optional_baselines_exist_exactly_when_they_were_built() {
+        let optional = [
+            (EMBREE4_TRACERS, EMBREE4_BUILT, ".ci/fetch-embree4"),
+            (TINYBVH_TRACERS, TINYBVH_BUILT, ".ci/fetch-tinybvh"),
+        ];
+        for (names, built, fetch) in optional {
+            for name in names {
+                let found = TracerInfo::find(name);
+                assert_eq!(found.is_ok(), built, "{name}");
+                assert_eq!(not_built(name), !built, "{name}");
+                match found {
+                    Ok(info) => assert_eq!((info.name, info.role), (*name, Role::Baseline)),
+                    Err(err) => {
+                        assert!(matches!(err, Error::Usage(_)), "{err}");
+                        assert!(err.to_string().contains(fetch), "{err}");
+                    }
                 }
             }
         }
@@ -672,10 +797,12 @@ mod tests {
             assert_eq!(tracer.counts_internals(), t.counts_internals, "{}", t.name);
             assert_eq!(t.accel.is_embree(), is_embree(t.name), "{}", t.name);
             assert_eq!(role_of(t.name), Some(t.role), "{}", t.name);
-            // Baselines are the production libraries: Embree's and obvhs.
+            // Baselines are the production libraries: Embree's, obvhs and tinybvh.
             assert_eq!(
                 t.role == Role::Baseline,
-                t.accel.is_embree() || t.accel == AccelKind::Obvhs,
+                t.accel.is_embree()
+                    || t.accel == AccelKind::Obvhs
+                    || TINYBVH_TRACERS.contains(&t.name),
                 "{}",
                 t.name
             );

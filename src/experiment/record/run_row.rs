@@ -5,7 +5,8 @@
 //!
 //! Counts a tracer cannot measure (Embree's box and triangle tests) are `None` (empty cells, not
 //! zeros). Derived columns (`mrays_per_s`, per-ray counts, `build_plus_trace_seconds`,
-//! `counting_overhead`, `x_embree_best`…) are computed from the fields when written, never stored.
+//! `counting_overhead`, `x_embree_best`, `x_baseline_best`…) are computed from the fields when
+//! written, never stored.
 
 use std::path::Path;
 
@@ -55,6 +56,9 @@ pub const RUNS_COLUMNS: &[&str] = &[
     "embree_best_build_plus_trace_seconds",
     "embree_best_build_plus_trace_config",
     "x_embree_best_build_plus_trace",
+    "baseline_best_seconds",
+    "baseline_best_config",
+    "x_baseline_best",
 ];
 
 /// runs.csv's columns: the fixed ones, then one per `Event`.
@@ -137,6 +141,9 @@ pub struct RunRow {
     /// Filled from the run's Embree rows (`results::embree_best`).
     pub embree_best: Option<Best>,
     pub embree_best_build_plus_trace: Option<Best>,
+    /// The fastest production baseline on the row's work (Embree best, obvhs, tinybvh), filled
+    /// with `embree_best` (`results::embree_best`).
+    pub baseline_best: Option<Best>,
 }
 
 fn cell<T: ToString>(value: Option<T>) -> String {
@@ -213,6 +220,9 @@ impl RunRow {
                 self.embree_best_build_plus_trace.as_ref(),
                 self.build_plus_trace_seconds(),
             )),
+            cell(self.baseline_best.as_ref().map(|b| b.seconds)),
+            cell(self.baseline_best.as_ref().map(|b| &b.config)),
+            cell(Best::ratio(self.baseline_best.as_ref(), self.seconds_min)),
         ];
         let events = self.events.iter().map(|&v| cell(v));
         fixed.into_iter().chain(events).collect()
@@ -282,6 +292,11 @@ impl RunRow {
                 "embree_best_build_plus_trace_seconds",
                 "embree_best_build_plus_trace_config",
             )?,
+            // runs.csv files written before baseline best have no such columns.
+            baseline_best: match cells.0.contains_key("baseline_best_seconds") {
+                true => best("baseline_best_seconds", "baseline_best_config")?,
+                false => None,
+            },
         })
     }
 }
@@ -334,6 +349,10 @@ mod tests {
                 config: "embree3-16 (context coherent)".into(),
             }),
             embree_best_build_plus_trace: None,
+            baseline_best: Some(Best {
+                seconds: 0.125,
+                config: "tinybvh-8 builder=sbvh".into(),
+            }),
         }
     }
 
@@ -343,12 +362,27 @@ mod tests {
         let fields = row.fields();
         assert_eq!(fields.len(), runs_columns().len());
         assert_eq!(fields["x_embree_best"], (0.25 / (0.1 + 0.2)).to_string());
+        assert_eq!(fields["x_baseline_best"], (0.125 / (0.1 + 0.2)).to_string());
         let back = RunRow::parse(&Cells(&fields)).unwrap();
         assert_eq!(back, row);
         assert_eq!(back.seconds_min.to_bits(), (0.1f64 + 0.2).to_bits());
         let mut bad = fields.clone();
         bad.insert("build".into(), "maybe".into());
         assert!(RunRow::parse(&Cells(&bad)).unwrap_err().contains("build"));
+        // A runs.csv from before baseline best reads back without it.
+        let mut old = fields.clone();
+        for column in [
+            "baseline_best_seconds",
+            "baseline_best_config",
+            "x_baseline_best",
+        ] {
+            old.remove(column);
+        }
+        let old = RunRow::parse(&Cells(&old)).unwrap();
+        assert_eq!(
+            (old.baseline_best, old.embree_best),
+            (None, row.embree_best.clone())
+        );
         bad.remove("hits");
         assert_eq!(
             RunRow::parse(&Cells(&bad)).unwrap_err(),

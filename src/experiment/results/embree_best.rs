@@ -6,6 +6,10 @@
 //! (`x_embree_best`), never against one Embree configuration that happens to be slow. Groups the
 //! run did not measure with Embree get empty cells. Computed from rows, so a merged sweep compares
 //! with the fastest Embree row of the whole sweep, whichever shard measured it.
+//!
+//! Beside it, "baseline best": the fastest production baseline on the same work — the Embree
+//! best, or a row of another baseline library (obvhs, tinybvh: `Role::Baseline`) when faster,
+//! named by its tracer and parameters (`baseline_best_*`, `x_baseline_best`).
 
 use std::collections::HashMap;
 
@@ -13,7 +17,8 @@ use crate::experiment::record::{Best, RunRow};
 use crate::experiment::spec::plan::{InstancePlan, Plan};
 use crate::geometry::RayKind;
 use crate::tracers::embree::Coherence;
-use crate::tracers::TracerConfig;
+use crate::tracers::registry::role_of;
+use crate::tracers::{Role, TracerConfig};
 
 /// Same scene (and size), frame, work and thread count.
 type Group = (
@@ -56,10 +61,29 @@ pub fn fill(plan: &Plan, rows: &mut [RunRow]) {
         let seconds = row.build_plus_trace_seconds();
         keep_faster(&mut build_plus_trace, group(row), seconds, &config);
     }
+    // Embree best first, so Embree stays baseline best on a tie.
+    let mut baseline = trace.clone();
+    for row in rows.iter() {
+        if role_of(&row.tracer) == Some(Role::Baseline) && plan_is_not_embree(plan, row) {
+            let config = match row.parameters.is_empty() {
+                true => row.tracer.clone(),
+                false => format!("{} {}", row.tracer, row.parameters),
+            };
+            keep_faster(&mut baseline, group(row), row.seconds_min, &config);
+        }
+    }
     for row in rows.iter_mut() {
         row.embree_best = trace.get(&group(row)).cloned();
         row.embree_best_build_plus_trace = build_plus_trace.get(&group(row)).cloned();
+        row.baseline_best = baseline.get(&group(row)).cloned();
     }
+}
+
+/// Whether the row's instance traverses a structure other than an Embree scene (obvhs's,
+/// tinybvh's): those baseline rows are not in the Embree best.
+fn plan_is_not_embree(plan: &Plan, row: &RunRow) -> bool {
+    plan.instance_of(&row.tracer, &row.parameters)
+        .is_some_and(|i| !plan.instances[i].structure.kind.is_embree())
 }
 
 fn keep_faster(map: &mut HashMap<Group, Best>, group: Group, seconds: f64, config: &str) {
@@ -147,6 +171,7 @@ mod tests {
                 events: Vec::new(),
                 embree_best: None,
                 embree_best_build_plus_trace: None,
+                baseline_best: None,
             })
             .collect()
     }
@@ -199,6 +224,30 @@ mod tests {
         // embree1 0.9 against embree16 1.4.
         let bt = |r: usize| all[r].embree_best_build_plus_trace.clone().unwrap().seconds;
         assert_eq!((bt(0), bt(1)), (1.1, 0.9));
+    }
+
+    /// Baseline best: obvhs beats Embree at 2 threads and is named there; Embree stays baseline
+    /// best where it is faster; the reference tracer, no baseline, is never it.
+    #[test]
+    fn baseline_best_is_the_fastest_production_baseline() {
+        let exp = experiment(
+            "scenes = [\"lit\"]\nrays = [\"primary\"]\n\
+             tracers = [\"reference\", \"embree1\", \"obvhs\"]\nthreads = [1, 2]\n",
+        );
+        let plan = Plan::derive(&exp, &load_quads).unwrap();
+        let p = RayKind::Primary;
+        let mut all = [
+            rows(&plan, 0, "lit", p, 0.5, &[(1, 0.1), (2, 0.05)]),
+            rows(&plan, 1, "lit", p, 0.1, &[(1, 1.0), (2, 0.8)]),
+            rows(&plan, 2, "lit", p, 0.2, &[(1, 1.5), (2, 0.4)]),
+        ]
+        .concat();
+        fill(&plan, &mut all);
+        let best = |r: usize| all[r].baseline_best.clone().unwrap();
+        assert_eq!(best(0).config, "embree3-1 (context coherent)");
+        assert_eq!((best(1).seconds, best(1).config.as_str()), (0.4, "obvhs"));
+        assert_eq!(all[1].embree_best.as_ref().unwrap().seconds, 0.8);
+        assert_eq!(Best::ratio(all[1].baseline_best.as_ref(), 0.05), Some(8.0));
     }
 
     /// Embree 3 and Embree 4 on the same work: the best is whichever is faster at each thread

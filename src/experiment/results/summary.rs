@@ -1,10 +1,12 @@
 //! The summary of a run, computed from its results directory alone (runs.csv, verify.csv,
 //! meta.json), so it can be printed again (`raylab summary DIR`) or recomputed for any directory of
 //! those files. Per scene and ray kind, at the run's largest thread count: the fastest of our
-//! tracers (the from-scratch ones after the papers: everything but Embree, obvhs and the reference
-//! tracer), Embree at its best, their ratio, our tracer's box and triangle tests per ray (the
-//! counters that explain the ratio), the obvhs and reference speeds beside them, and whether our
-//! tracer's hits were checked against Embree in the run (`sampled_check`).
+//! tracers (the from-scratch ones after the papers: everything but the baselines — Embree, obvhs,
+//! tinybvh — and the reference tracer), Embree at its best, their ratio, the baseline best (the
+//! fastest production baseline: Embree at its best or the fastest configuration of obvhs or
+//! tinybvh) and its ratio, our tracer's box and triangle tests per ray (the counters that explain
+//! the ratio), the obvhs and reference speeds beside them, and whether our tracer's hits were
+//! checked against Embree in the run (`sampled_check`).
 //!
 //! Every speed is over all of the run's frames: rays summed over frames / the fastest pass summed
 //! over frames, per tracer configuration (tracer + parameters). Embree's side is the
@@ -58,6 +60,11 @@ pub struct SummaryRow {
     pub embree_best: Option<EmbreeBest>,
     /// Embree-best's seconds over ours (> 1: ours faster).
     pub x_embree_best: Option<f64>,
+    /// The fastest production baseline on these rays: Embree at its best, or the fastest
+    /// configuration of another baseline library (obvhs, tinybvh) when it beats Embree.
+    pub baseline_best: Option<EmbreeBest>,
+    /// Baseline-best's seconds over ours (> 1: ours faster).
+    pub x_baseline_best: Option<f64>,
     pub obvhs: Option<Contender>,
     pub reference: Option<Contender>,
 }
@@ -75,9 +82,12 @@ pub struct Contender {
     pub checked: Option<Checks>,
 }
 
+/// A best configuration over all frames: Embree's (`embree_best`) or any baseline's
+/// (`baseline_best`).
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct EmbreeBest {
-    /// The fastest Embree configuration of each frame, distinct ones joined by " / ".
+    /// The fastest Embree configuration of each frame, distinct ones joined by " / "; for another
+    /// baseline, its tracer and parameters.
     pub config: String,
     pub seconds: f64,
     pub mrays_per_s: f64,
@@ -284,6 +294,7 @@ impl Summary {
             s,
             "At {} thread{}{}, over {} frame{}: Mrays/s = rays / fastest pass, both summed over frames. \
              Ours = the fastest of the papers' tracers; × = Embree best's time / ours (> 1: ours faster); \
+             baseline best = the fastest production baseline (Embree best, obvhs, tinybvh); \
              tests per ray are ours; checked = ours against Embree (robust) on sampled rays.\n",
             self.threads,
             plural(self.threads),
@@ -303,12 +314,12 @@ impl Summary {
         };
         let _ = writeln!(
             s,
-            "| scene | rays | ours: fastest | Mrays/s | box / tri tests per ray | Embree best | Mrays/s | × Embree best |{} checked against Embree |",
+            "| scene | rays | ours: fastest | Mrays/s | box / tri tests per ray | Embree best | Mrays/s | × Embree best | baseline best | Mrays/s | × baseline best |{} checked against Embree |",
             optional(["obvhs Mrays/s", "reference Mrays/s"])
         );
         let _ = writeln!(
             s,
-            "|---|---|---|---:|---:|---|---:|---:|{}---|",
+            "|---|---|---|---:|---:|---|---:|---:|---|---:|---:|{}---|",
             optional(["---:", "---:"]).replace(' ', "")
         );
         for r in &self.rows {
@@ -316,7 +327,7 @@ impl Summary {
             let tests = ours.and_then(|o| Some((o.aabb_tests_per_ray?, o.triangle_tests_per_ray?)));
             let _ = writeln!(
                 s,
-                "| {} ({} tris) | {} | {} | {} | {} | {} | {} | {} |{} {} |",
+                "| {} ({} tris) | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |{} {} |",
                 r.scene,
                 r.triangles,
                 r.ray_kind,
@@ -326,6 +337,9 @@ impl Summary {
                 r.embree_best.as_ref().map_or("—", |e| e.config.as_str()),
                 mrays(r.embree_best.as_ref().map(|e| e.mrays_per_s)),
                 r.x_embree_best.map_or("—".into(), |x| format!("{x:.2}×")),
+                r.baseline_best.as_ref().map_or("—", |e| e.config.as_str()),
+                mrays(r.baseline_best.as_ref().map(|e| e.mrays_per_s)),
+                r.x_baseline_best.map_or("—".into(), |x| format!("{x:.2}×")),
                 optional([
                     &mrays(r.obvhs.as_ref().map(|o| o.mrays_per_s)),
                     &mrays(r.reference.as_ref().map(|o| o.mrays_per_s)),
@@ -624,6 +638,25 @@ fn summary_row(
         (Some(o), Some(e)) if o.seconds > 0.0 => Some(e.seconds / o.seconds),
         _ => None,
     };
+    // Embree at its best against every configuration of the other baselines; Embree on a tie.
+    let others = group
+        .configs
+        .iter()
+        .filter(|((tracer, _), _)| role_of(tracer) == Some(Role::Baseline) && !is_embree(tracer))
+        .map(|((tracer, parameters), t)| EmbreeBest {
+            config: configuration(tracer, parameters),
+            seconds: t.seconds,
+            mrays_per_s: speed(rays, t.seconds),
+        });
+    let baseline_best = embree_best
+        .clone()
+        .into_iter()
+        .chain(others)
+        .min_by(|a, b| a.seconds.total_cmp(&b.seconds));
+    let x_baseline_best = match (&ours, &baseline_best) {
+        (Some(o), Some(b)) if o.seconds > 0.0 => Some(b.seconds / o.seconds),
+        _ => None,
+    };
     SummaryRow {
         scene: key.0.clone(),
         triangles: key.1,
@@ -632,8 +665,9 @@ fn summary_row(
         ours,
         embree_best,
         x_embree_best,
-        // The production baseline that is not Embree.
-        obvhs: fastest(&|tracer, _| role_of(tracer) == Some(Role::Baseline) && !is_embree(tracer)),
+        baseline_best,
+        x_baseline_best,
+        obvhs: fastest(&|tracer, _| tracer == "obvhs"),
         reference: fastest(&|tracer, _| role_of(tracer) == Some(Role::Reference)),
     }
 }
@@ -726,6 +760,32 @@ mod tests {
             .contains("no ray batch measured at 3 threads (batches measured at: 1, 2)"));
     }
 
+    /// tinybvh faster than Embree at its best on the primary rays (0.005 s a frame against 0.008
+    /// and 0.012): it is baseline best there, named, and the ratio is against it; the obvhs column
+    /// stays obvhs's; on the shadow rays Embree is still baseline best.
+    #[test]
+    fn a_baseline_faster_than_embree_is_baseline_best() {
+        let tinybvh = [
+            "room,864,0,tinybvh-8,builder=sbvh,tinybvh-bvh8-cpu,,primary,2,1000000,0.005,1000000,,,0.008,embree16 (context coherent)",
+            "room,864,1,tinybvh-8,builder=sbvh,tinybvh-bvh8-cpu,,primary,2,1000000,0.005,1000000,,,0.012,embree16 (context coherent)",
+            "room,864,0,tinybvh-8,builder=sbvh,tinybvh-bvh8-cpu,,shadow,2,1000000,0.05,1000000,,,0.01,embree1 (context incoherent)",
+        ];
+        let runs = [RUNS, &tinybvh[..]].concat();
+        let summary = Summary::read(&results("baseline-best", &runs)).unwrap();
+        let primary = &summary.rows[0];
+        let best = primary.baseline_best.as_ref().unwrap();
+        assert_eq!(best.config, "tinybvh-8 builder=sbvh");
+        assert!((best.mrays_per_s - 200.0).abs() < 1e-9);
+        assert!((primary.x_baseline_best.unwrap() - 0.25).abs() < 1e-12);
+        assert!((primary.x_embree_best.unwrap() - 0.5).abs() < 1e-12);
+        assert_eq!(primary.obvhs.as_ref().unwrap().tracer, "obvhs");
+        let shadow = &summary.rows[1];
+        assert_eq!(shadow.baseline_best, shadow.embree_best);
+        assert!(summary
+            .markdown()
+            .contains("| embree16 (context coherent) | 100.0 | 0.50× | tinybvh-8 builder=sbvh | 200.0 | 0.25× |"));
+    }
+
     #[test]
     fn a_run_of_renders_only_says_so_instead_of_an_empty_table() {
         let summary = Summary::read(&results("renders-only", &[])).unwrap();
@@ -789,11 +849,11 @@ mod tests {
             "**t** run R1 (2026-11-24T12:00:00Z), commit 0123456 (dirty), CPU X (2 logical cores)"
         );
         assert!(lines.contains(
-            &"| room (864 tris) | primary | packet lanes=16;packet=8 | 50.0 | 21.0 / 2.5 | embree16 (context coherent) | 100.0 | 0.50× | 25.0 | 20.0 | **0 ours wrong, 1 undecided** of 8192 rays (3 ties, 0 ours right, 0 within rounding) |"
+            &"| room (864 tris) | primary | packet lanes=16;packet=8 | 50.0 | 21.0 / 2.5 | embree16 (context coherent) | 100.0 | 0.50× | embree16 (context coherent) | 100.0 | 0.50× | 25.0 | 20.0 | **0 ours wrong, 1 undecided** of 8192 rays (3 ties, 0 ours right, 0 within rounding) |"
         ), "{md}");
         // No paper tracer on shadow rays; Embree's best was another configuration each frame.
         assert!(lines.contains(
-            &"| room (864 tris) | shadow | — | — | — | embree1 (context incoherent) / embree16 (context coherent) | 100.0 | — | — | 10.0 | — |"
+            &"| room (864 tris) | shadow | — | — | — | embree1 (context incoherent) / embree16 (context coherent) | 100.0 | — | embree1 (context incoherent) / embree16 (context coherent) | 100.0 | — | — | 10.0 | — |"
         ), "{md}");
         // verify.csv without the truth's columns (written before it judged): undecided.
         assert!(md.contains("12288 rays compared with Embree, 3 ties, 1 disagreement no tie explains, judged by the f64 truth: 0 ours right, 0 ours wrong, 0 both within rounding, 1 undecided."), "{md}");
@@ -822,9 +882,9 @@ mod tests {
         let md = Summary::read(&results("no-reference", &runs))
             .unwrap()
             .markdown();
-        assert!(md.contains("| × Embree best | obvhs Mrays/s | checked against Embree |\n|---|---|---|---:|---:|---|---:|---:|---:|---|\n"), "{md}");
+        assert!(md.contains("| × Embree best | baseline best | Mrays/s | × baseline best | obvhs Mrays/s | checked against Embree |\n|---|---|---|---:|---:|---|---:|---:|---|---:|---:|---:|---|\n"), "{md}");
         assert!(
-            md.contains("| 0.50× | 25.0 | **0 ours wrong, 1 undecided**"),
+            md.contains("| 0.50× | embree16 (context coherent) | 100.0 | 0.50× | 25.0 | **0 ours wrong, 1 undecided**"),
             "{md}"
         );
     }

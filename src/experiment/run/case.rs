@@ -137,6 +137,7 @@ impl Case {
             events: Event::ALL.iter().map(|&e| internal(c.get(e))).collect(),
             embree_best: None,
             embree_best_build_plus_trace: None,
+            baseline_best: None,
         })
     }
 

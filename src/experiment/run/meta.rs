@@ -232,6 +232,7 @@ fn versions() -> BTreeMap<&'static str, String> {
     let embree = version::<Embree3>().unwrap_or_else(|e| format!("unavailable: {e}"));
     v.insert("embree", embree);
     v.insert("embree4", embree4_version());
+    v.insert("tinybvh", tinybvh_version());
     v.insert("raylab", env!("CARGO_PKG_VERSION").to_string());
     v.insert(
         "obvhs",
@@ -253,6 +254,18 @@ fn embree4_version() -> String {
         Ok(library) => format!("{library} (headers {headers}; {})", v4::SOURCE),
         Err(e) => format!("unavailable: {e} ({} headers {headers})", Embree4::NAME),
     }
+}
+
+/// The tinybvh compiled into this build and where its header came from; or why there is none.
+fn tinybvh_version() -> String {
+    #[cfg(tinybvh)]
+    return format!(
+        "{} ({}, compiled -march=native)",
+        crate::accel::tinybvh::version(),
+        crate::accel::tinybvh::SOURCE
+    );
+    #[cfg(not(tinybvh))]
+    format!("not built: {}", crate::tracers::registry::TINYBVH_HINT)
 }
 
 #[cfg(not(embree4))]

@@ -288,6 +288,13 @@ fn plan_scene(
         }
     }
 
+    for instance in &exp.instances {
+        let note = crate::tracers::registry::plan_note(instance.info.name, &ray_kinds);
+        if let Some(note) = note.filter(|n| !notes.contains(n)) {
+            notes.push(note);
+        }
+    }
+
     let mut structures: Vec<StructurePlan> = Vec::new();
     for (i, instance) in exp.instances.iter().enumerate() {
         let key = instance.structure();

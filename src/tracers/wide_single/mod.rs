@@ -34,7 +34,7 @@ use std::sync::Arc;
 
 use crate::accel::{Bvh, BvhConfig, WideBvh, WideEntry, WideNode, WideNodes, WideTree};
 use crate::error::{Error, Result};
-use crate::geometry::{Fast, Hit, Ray, RayTests, Robust, Triangle};
+use crate::geometry::{Hit, Ray, RayTests, Robust, Triangle};
 use crate::stats::Stats;
 use crate::tracers::reference::{intersect_leaf, LeafRange, LeafRay};
 use crate::tracers::{Params, SingleRayKernel};
