@@ -50,6 +50,20 @@ impl Soup {
     }
 }
 
+/// `small` with 40 long diagonal slivers laid across the box [0, 10]³: their boxes cover the whole
+/// scene, so every object split leaves heavily overlapping children (where spatial splits pay).
+pub fn with_slivers(mut small: Vec<Triangle>) -> Vec<Triangle> {
+    for i in 0..40 {
+        let o = Vec3::new(0.0, i as f32 * 0.25, 0.0);
+        small.push(Triangle::new(
+            o,
+            o + Vec3::new(10.0, 0.0, 10.0),
+            o + Vec3::new(10.0, 0.1, 10.0),
+        ));
+    }
+    small
+}
+
 /// Whether `got` is `want`, or an exact tie: the same distance, and the ray's watertight test
 /// really hits `got`'s triangle at that distance (two triangles meeting at an edge).
 pub fn same_or_tie(triangles: &[Triangle], ray: &Ray, got: &Hit, want: &Hit) -> bool {

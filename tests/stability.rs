@@ -8,7 +8,10 @@
 use std::time::Duration;
 
 use raylab::tracers::Params;
-use raylab::verify::stability::{generate, run, CaseKind, Contender, Status, Sweep};
+use raylab::verify::stability::{generate, run, CaseKind, Contender, Status};
+
+mod common;
+use common::smaller_sweep;
 
 fn contender(name: &'static str, params: &[(&str, &str)]) -> Contender {
     let params = params.iter().fold(Params::new(), |p, (k, v)| p.with(k, v));
@@ -21,13 +24,7 @@ fn contender(name: &'static str, params: &[(&str, &str)]) -> Contender {
 
 #[test]
 fn from_scratch_tracers_pass_every_stiff_case() {
-    let sweep = Sweep {
-        offsets: vec![0.0, 1e5],
-        scales: vec![1e-3, 1.0],
-        ratios: vec![1e3, 1e6],
-        bounces: 3,
-        ..Sweep::default()
-    };
+    let sweep = smaller_sweep();
     let cases = generate(&sweep);
     let contenders = [
         contender("reference", &[]),

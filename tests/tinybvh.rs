@@ -14,7 +14,10 @@ use raylab::tracers::chunked::trace_hits;
 use raylab::tracers::tinybvh::tile::{block_slots, mirrored, PACKET};
 use raylab::tracers::{tracer_for_frame, Params};
 use raylab::verify::stability::cases::Case;
-use raylab::verify::stability::{generate, run, CaseKind, Contender, Status, Sweep};
+use raylab::verify::stability::{generate, run, CaseKind, Contender, Status};
+
+mod common;
+use common::smaller_sweep;
 
 /// A camera batch of full 32×32 tiles: every aligned run of 256 rays is a 16×16 block, in the
 /// slots Intersect256Rays expects; raylab's cameras are the handedness it must mirror. At an edge
@@ -64,13 +67,7 @@ fn camera_of<'a>(rays: &raylab::geometry::Rays<'a>) -> &'a raylab::geometry::Cam
 
 #[test]
 fn tinybvh_answers_every_stiff_case_without_a_crash() {
-    let sweep = Sweep {
-        offsets: vec![0.0, 1e5],
-        scales: vec![1e-3, 1.0],
-        ratios: vec![1e3, 1e6],
-        bounces: 3,
-        ..Sweep::default()
-    };
+    let sweep = smaller_sweep();
     let contenders: Vec<Contender> = ["tinybvh-2", "tinybvh-4", "tinybvh-8", "tinybvh-256"]
         .into_iter()
         .map(|name| Contender {

@@ -546,6 +546,7 @@ mod tests {
     use super::*;
     use crate::geometry::{RayBoxTest, WatertightRay};
     use crate::random::SplitMix64;
+    use crate::test_util::with_slivers;
 
     fn grid_of_triangles(n: usize) -> Vec<Triangle> {
         let mut tris = Vec::new();
@@ -707,16 +708,7 @@ mod tests {
     /// Long diagonal slivers crossing a field of small triangles: their boxes cover the whole
     /// scene, so every object split leaves heavily overlapping children.
     fn slivers_over_small_triangles() -> Vec<Triangle> {
-        let mut tris = grid_of_triangles(2000);
-        for i in 0..40 {
-            let o = Vec3::new(0.0, i as f32 * 0.25, 0.0);
-            tris.push(Triangle::new(
-                o,
-                o + Vec3::new(10.0, 0.0, 10.0),
-                o + Vec3::new(10.0, 0.1, 10.0),
-            ));
-        }
-        tris
+        with_slivers(grid_of_triangles(2000))
     }
 
     fn spatial(alpha: f32) -> BvhConfig {

@@ -1,5 +1,6 @@
 //! Fixtures shared by the tracers' integration tests (`packet.rs`, `stream.rs`, `wide_single.rs`):
-//! a scene's ray batches with the reference tracer's answers, and the moving room.
+//! a scene's ray batches with the reference tracer's answers, the moving room, and the stability
+//! sweep the stability tests run (`stability.rs`, `tinybvh.rs`).
 
 // Each test crate uses the part of these fixtures it needs.
 #![allow(dead_code)]
@@ -15,6 +16,7 @@ use raylab::scene::Mesh;
 use raylab::tracers::chunked::{trace_hits, trace_occlusion};
 use raylab::tracers::reference::ReferenceTracer;
 use raylab::tracers::Params;
+use raylab::verify::stability::Sweep;
 
 /// A scene's SAH BVH and three batches traced by the reference tracer over it: 128² camera rays,
 /// point-light shadow rays and diffuse rays from their hits (over 1000 each), with the
@@ -99,4 +101,16 @@ pub fn moving_room() -> MovingRoom {
 /// Equal hits, or a tie at exactly the same distance (two moving triangles meeting at an edge).
 pub fn same_or_tie_moving(got: &Hit, want: &Hit) -> bool {
     got == want || (got.is_hit() && want.is_hit() && got.t == want.t)
+}
+
+/// The stability suite's sweep at fewer magnitudes: every case kind, offsets 0 and 10⁵, scales
+/// 10⁻³ and 1, ratios 10³ and 10⁶, 3 bounces.
+pub fn smaller_sweep() -> Sweep {
+    Sweep {
+        offsets: vec![0.0, 1e5],
+        scales: vec![1e-3, 1.0],
+        ratios: vec![1e3, 1e6],
+        bounces: 3,
+        ..Sweep::default()
+    }
 }

@@ -364,6 +364,7 @@ mod tests {
     use crate::geometry::{RayBoxTest, WatertightRay};
     use crate::params::Params;
     use crate::random::SplitMix64;
+    use crate::test_util::with_slivers;
 
     fn embree(max_leaf_size: usize) -> BvhConfig {
         BvhConfig {
@@ -377,21 +378,14 @@ mod tests {
     /// everything (where spatial splits pay).
     fn slivers_over_small_triangles(seed: u64) -> Vec<Triangle> {
         let mut rng = SplitMix64::new(seed);
-        let mut tris: Vec<Triangle> = (0..2000)
-            .map(|_| {
-                let p = rng.vec3(0.0, 10.0);
-                Triangle::new(p, p + rng.vec3(0.0, 0.5), p + rng.vec3(0.0, 0.5))
-            })
-            .collect();
-        for i in 0..40 {
-            let o = Vec3::new(0.0, i as f32 * 0.25, 0.0);
-            tris.push(Triangle::new(
-                o,
-                o + Vec3::new(10.0, 0.0, 10.0),
-                o + Vec3::new(10.0, 0.1, 10.0),
-            ));
-        }
-        tris
+        with_slivers(
+            (0..2000)
+                .map(|_| {
+                    let p = rng.vec3(0.0, 10.0);
+                    Triangle::new(p, p + rng.vec3(0.0, 0.5), p + rng.vec3(0.0, 0.5))
+                })
+                .collect(),
+        )
     }
 
     /// Our layout's invariants, and every sampled point of every triangle in a leaf of it.
