@@ -45,3 +45,28 @@ impl<C: Send> Chunks<C> {
             .for_each(|(chunk, part)| trace(chunk, part));
     }
 }
+
+/// A batch staged by a closure per chunk and traced by another: a tracer whose staged data is
+/// one value per chunk needs nothing more.
+struct StagedBy<'t, C, T> {
+    chunks: Chunks<C>,
+    trace: Box<dyn Fn(&mut C, &mut [T]) + Send + Sync + 't>,
+}
+
+impl<C: Send, T: Send> StagedRays<T> for StagedBy<'_, C, T> {
+    fn trace(&mut self, out: &mut [T]) {
+        self.chunks.trace(out, &self.trace);
+    }
+}
+
+/// `ranges` staged by `stage` (in the current pool), each chunk traced by `trace`.
+pub fn staged_by<'t, C: Send + 't, T: Send + 't>(
+    ranges: Vec<Range<usize>>,
+    stage: impl Fn(Range<usize>) -> C + Sync,
+    trace: impl Fn(&mut C, &mut [T]) + Send + Sync + 't,
+) -> Box<dyn StagedRays<T> + 't> {
+    Box::new(StagedBy {
+        chunks: Chunks::stage(ranges, stage),
+        trace: Box::new(trace),
+    })
+}

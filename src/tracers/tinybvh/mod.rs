@@ -17,22 +17,23 @@
 //!
 //! tinybvh's triangle test is Möller–Trumbore, not watertight: the stability suite says what that
 //! costs. Counters: rays only (`COUNTS_INTERNALS = false`), as for Embree: tinybvh's kernels
-//! count nothing.
+//! count nothing. As for Embree, a timed pass traces rays staged beforehand in tinybvh's layout
+//! (`tiny_rays`; for `tinybvh-256`, its packets), so the clock covers only tinybvh's calls.
 
 pub mod tile;
+mod tiny_rays;
 
+use std::ops::Range;
 use std::sync::Arc;
 
-use crate::accel::tinybvh::ffi::TinyRay;
 use crate::accel::TinyBvh;
 use crate::geometry::{Hit, Rays};
 use crate::stats::Stats;
+use crate::tracers::staged::{staged_by, StagedRays};
 use crate::tracers::Kernel;
 
 pub use tile::TileTracer;
-
-/// Rays handed to tinybvh per call: a stack buffer of 32 KiB.
-const BLOCK: usize = 256;
+use tiny_rays::TinyRays;
 
 /// tinybvh's kernels count nothing: rays are all we count.
 #[inline(always)]
@@ -44,38 +45,7 @@ fn count_rays<S: Stats>(n: usize, stats: &mut S) {
     }
 }
 
-/// Ray `i` as `bvh` takes it, with the tmin it was shifted by; `None` for an ill-formed ray.
-#[inline(always)]
-fn tiny_ray(bvh: &TinyBvh, rays: &Rays<'_>, i: usize) -> Option<(TinyRay, f32)> {
-    let r = rays.ray(i);
-    if !r.is_well_formed() {
-        return None;
-    }
-    let mut ray = if r.tmin > 0.0 {
-        bvh.to_tiny(r.at(r.tmin), r.dir, r.tmax - r.tmin)
-    } else {
-        bvh.to_tiny(r.origin, r.dir, r.tmax)
-    };
-    // No triangle index is this: a ray still carrying it after tracing missed.
-    ray.prim = Hit::NO_PRIM;
-    Some((ray, r.tmin))
-}
-
-/// The hit tinybvh left in `ray`, handed over with its tmin shifted by `shift`.
-#[inline(always)]
-fn hit_of(bvh: &TinyBvh, ray: &TinyRay, shift: f32) -> Hit {
-    if ray.prim == Hit::NO_PRIM {
-        return Hit::MISS;
-    }
-    Hit {
-        t: bvh.from_tiny(ray.t) + shift,
-        prim: ray.prim,
-        u: ray.u,
-        v: ray.v,
-    }
-}
-
-/// Single rays through one tinybvh layout: `Intersect` and `IsOccluded`, `BLOCK` rays per call.
+/// Single rays through one tinybvh layout: `Intersect` and `IsOccluded`, one call per ray.
 pub struct SingleTracer {
     bvh: Arc<TinyBvh>,
 }
@@ -86,39 +56,18 @@ impl SingleTracer {
     }
 }
 
-/// The well-formed rays of `range` in `buffer` (their tmin shifts in `shifts`, their indices in
-/// `index`); how many there are.
-fn gather(
-    bvh: &TinyBvh,
-    rays: &Rays<'_>,
-    range: std::ops::Range<usize>,
-    buffer: &mut [TinyRay; BLOCK],
-    shifts: &mut [f32; BLOCK],
-    index: &mut [usize; BLOCK],
-) -> usize {
-    let mut n = 0;
-    for i in range {
-        if let Some((ray, shift)) = tiny_ray(bvh, rays, i) {
-            (buffer[n], shifts[n], index[n]) = (ray, shift, i);
-            n += 1;
-        }
-    }
-    n
-}
-
-/// Closest hits of `rays` by single rays through `bvh`.
-pub(crate) fn intersect_single(bvh: &TinyBvh, rays: &Rays<'_>, hits: &mut [Hit]) {
-    let mut buffer = [TinyRay::new([0.0; 3], [1.0, 0.0, 0.0], 0.0); BLOCK];
-    let (mut shifts, mut index) = ([0.0; BLOCK], [0; BLOCK]);
-    for start in (0..hits.len()).step_by(BLOCK) {
-        let range = start..hits.len().min(start + BLOCK);
-        hits[range.clone()].fill(Hit::MISS);
-        let n = gather(bvh, rays, range, &mut buffer, &mut shifts, &mut index);
-        bvh.intersect(&mut buffer[..n]);
-        for k in 0..n {
-            hits[index[k]] = hit_of(bvh, &buffer[k], shifts[k]);
-        }
-    }
+/// `rays` staged chunk by chunk for single-ray occlusion through `bvh` (every layout's and
+/// `tinybvh-256`'s occlusion query).
+fn stage_occlusion_single<'t>(
+    bvh: &'t TinyBvh,
+    rays: Rays<'_>,
+    chunks: Vec<Range<usize>>,
+) -> Box<dyn StagedRays<bool> + 't> {
+    staged_by(
+        chunks,
+        |range| TinyRays::stage(bvh, &rays.slice(range)),
+        move |staged: &mut TinyRays, out: &mut [bool]| staged.occluded(bvh, out),
+    )
 }
 
 impl Kernel for SingleTracer {
@@ -126,27 +75,32 @@ impl Kernel for SingleTracer {
 
     fn intersect_with<S: Stats>(&self, rays: Rays<'_>, hits: &mut [Hit], stats: &mut S) {
         count_rays(hits.len(), stats);
-        intersect_single(&self.bvh, &rays, hits);
+        TinyRays::stage(&self.bvh, &rays).intersect(&self.bvh, hits);
     }
 
     fn occluded_with<S: Stats>(&self, rays: Rays<'_>, occluded: &mut [bool], stats: &mut S) {
         count_rays(occluded.len(), stats);
-        occluded_single(&self.bvh, &rays, occluded);
+        TinyRays::stage(&self.bvh, &rays).occluded(&self.bvh, occluded);
     }
-}
 
-/// Occlusion of `rays` by single rays through `bvh`.
-pub(crate) fn occluded_single(bvh: &TinyBvh, rays: &Rays<'_>, occluded: &mut [bool]) {
-    let mut buffer = [TinyRay::new([0.0; 3], [1.0, 0.0, 0.0], 0.0); BLOCK];
-    let (mut shifts, mut index) = ([0.0; BLOCK], [0; BLOCK]);
-    let mut flags = [0u8; BLOCK];
-    for start in (0..occluded.len()).step_by(BLOCK) {
-        let range = start..occluded.len().min(start + BLOCK);
-        occluded[range.clone()].fill(false);
-        let n = gather(bvh, rays, range, &mut buffer, &mut shifts, &mut index);
-        bvh.occluded(&mut buffer[..n], &mut flags[..n]);
-        for k in 0..n {
-            occluded[index[k]] = flags[k] != 0;
-        }
+    fn stage_closest(
+        &self,
+        rays: Rays<'_>,
+        chunks: Vec<Range<usize>>,
+    ) -> Option<Box<dyn StagedRays<Hit> + '_>> {
+        let bvh = &*self.bvh;
+        Some(staged_by(
+            chunks,
+            |range| TinyRays::stage(bvh, &rays.slice(range)),
+            move |staged: &mut TinyRays, out: &mut [Hit]| staged.intersect(bvh, out),
+        ))
+    }
+
+    fn stage_occlusion(
+        &self,
+        rays: Rays<'_>,
+        chunks: Vec<Range<usize>>,
+    ) -> Option<Box<dyn StagedRays<bool> + '_>> {
+        Some(stage_occlusion_single(&self.bvh, rays, chunks))
     }
 }

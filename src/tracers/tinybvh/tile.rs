@@ -14,15 +14,18 @@
 //! The parameter `sse` (default true) picks `Intersect256RaysSSE`, tinybvh's SSE version of the
 //! same traversal, over the scalar `Intersect256Rays`.
 
+use std::ops::Range;
 use std::sync::Arc;
 
-use super::{count_rays, hit_of, intersect_single, occluded_single, tiny_ray};
+use super::tiny_rays::{hit_of, tiny_ray, TinyRays};
+use super::{count_rays, stage_occlusion_single};
 use crate::accel::tinybvh::ffi::TinyRay;
 use crate::accel::TinyBvh;
 use crate::error::{Error, Result};
 use crate::geometry::{CameraGrid, Hit, Rays};
 use crate::params::Params;
 use crate::stats::Stats;
+use crate::tracers::staged::{staged_by, StagedRays};
 use crate::tracers::Kernel;
 
 /// The rays of one packet: a 16×16 block.
@@ -120,30 +123,84 @@ impl TileTracer {
     }
 }
 
+/// One block of a staged batch: a 16×16 tile in `Intersect256Rays`' order with each ray's slot,
+/// or rays that go by single rays.
+enum Block {
+    Packet(Box<[TinyRay; PACKET]>, [u8; PACKET]),
+    Single(TinyRays),
+}
+
+impl TileTracer {
+    /// `rays` cut into blocks of `PACKET` rays, each staged as a packet when it is one.
+    fn stage(&self, rays: &Rays<'_>) -> Vec<(Range<usize>, Block)> {
+        (0..rays.len())
+            .step_by(PACKET)
+            .map(|start| {
+                let range = start..rays.len().min(start + PACKET);
+                let block = rays.slice(range.clone());
+                let mut packet = Box::new([TinyRay::new([0.0; 3], [1.0, 0.0, 0.0], 0.0); PACKET]);
+                let staged = match self.packet(&block, &mut packet) {
+                    Some(slots) => Block::Packet(packet, slots),
+                    None => Block::Single(TinyRays::stage(&self.bvh, &block)),
+                };
+                (range, staged)
+            })
+            .collect()
+    }
+
+    /// Closest hits of staged `blocks`, `hits[i]` for ray `i` of the batch they were staged from.
+    fn intersect_staged(&self, blocks: &mut [(Range<usize>, Block)], hits: &mut [Hit]) {
+        for (range, block) in blocks {
+            let hits = &mut hits[range.clone()];
+            match block {
+                Block::Packet(packet, slots) => {
+                    if !self.bvh.intersect256(packet, self.config.sse) {
+                        // Not reached: `new` takes the binary layout only. The same rays, singly.
+                        self.bvh.intersect(&mut packet[..]);
+                    }
+                    for (hit, &slot) in hits.iter_mut().zip(slots.iter()) {
+                        *hit = hit_of(&self.bvh, &packet[slot as usize], 0.0);
+                    }
+                }
+                Block::Single(rays) => rays.intersect(&self.bvh, hits),
+            }
+        }
+    }
+}
+
 impl Kernel for TileTracer {
     const COUNTS_INTERNALS: bool = false;
 
     fn intersect_with<S: Stats>(&self, rays: Rays<'_>, hits: &mut [Hit], stats: &mut S) {
         count_rays(hits.len(), stats);
-        let mut packet = [TinyRay::new([0.0; 3], [1.0, 0.0, 0.0], 0.0); PACKET];
-        for start in (0..hits.len()).step_by(PACKET) {
-            let range = start..hits.len().min(start + PACKET);
-            let block = rays.slice(range.clone());
-            let hits = &mut hits[range];
-            match self.packet(&block, &mut packet) {
-                Some(slots) if self.bvh.intersect256(&mut packet, self.config.sse) => {
-                    for (hit, &slot) in hits.iter_mut().zip(&slots) {
-                        *hit = hit_of(&self.bvh, &packet[slot as usize], 0.0);
-                    }
-                }
-                _ => intersect_single(&self.bvh, &block, hits),
-            }
-        }
+        self.intersect_staged(&mut self.stage(&rays), hits);
     }
 
     fn occluded_with<S: Stats>(&self, rays: Rays<'_>, occluded: &mut [bool], stats: &mut S) {
         count_rays(occluded.len(), stats);
-        occluded_single(&self.bvh, &rays, occluded);
+        TinyRays::stage(&self.bvh, &rays).occluded(&self.bvh, occluded);
+    }
+
+    fn stage_closest(
+        &self,
+        rays: Rays<'_>,
+        chunks: Vec<Range<usize>>,
+    ) -> Option<Box<dyn StagedRays<Hit> + '_>> {
+        Some(staged_by(
+            chunks,
+            |range| self.stage(&rays.slice(range)),
+            move |blocks: &mut Vec<(Range<usize>, Block)>, out: &mut [Hit]| {
+                self.intersect_staged(blocks, out)
+            },
+        ))
+    }
+
+    fn stage_occlusion(
+        &self,
+        rays: Rays<'_>,
+        chunks: Vec<Range<usize>>,
+    ) -> Option<Box<dyn StagedRays<bool> + '_>> {
+        Some(stage_occlusion_single(&self.bvh, rays, chunks))
     }
 }
 
