@@ -17,6 +17,7 @@ use raylab::experiment::spec::table_spec::RowsSpec;
 use raylab::experiment::{run, Chatter, Experiment, Plan, RunOverrides, SceneLoader, SceneSpec};
 use raylab::scene::library::load_scene;
 use raylab::scene::Scene;
+use raylab::tracers::registry::TINYBVH_BUILT;
 
 fn scratch(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("raylab-run-{name}-{}", std::process::id()));
@@ -590,6 +591,45 @@ fn every_committed_experiment_parses() {
 /// 1/4/8/16) × 2 contexts × 2 build qualities.
 const EMBREE_BEST_CONFIGURATIONS: usize = if EMBREE4_BUILT { 36 } else { 20 };
 
+/// `baseline-best`'s baselines beside Embree's: obvhs, and tinybvh-8 when built.
+const BASELINE_BEST_OTHERS: usize = 1 + TINYBVH_BUILT as usize;
+
+/// `baseline-best` is `embree-best` (the entry's params reach the Embree tracers) plus tinybvh-8
+/// over its highest-quality build and obvhs, at those settings whatever the entry's and the
+/// shared params say.
+#[test]
+fn baseline_best_adds_the_other_baselines_at_their_recommended_settings() {
+    let text = r#"name = "b"
+scenes = ["room"]
+tracers = ["reference", { name = "baseline-best", params = { quality = ["high"] } }]
+# Reference reads this `builder` (our builder); tinybvh-8 keeps its own.
+params = { builder = ["raylab"] }
+rays = ["primary"]
+resolution = { width = 8, height = 8 }
+"#;
+    let exp = Experiment::parse(Path::new("t.toml"), text).unwrap();
+    let labels: Vec<String> = exp.instances.iter().map(|i| i.to_string()).collect();
+    let embree: Vec<&String> = labels.iter().filter(|l| l.starts_with("embree")).collect();
+    assert_eq!(embree.len(), EMBREE_BEST_CONFIGURATIONS / 2, "{labels:?}");
+    assert!(
+        embree.iter().all(|l| l.contains("quality=high")),
+        "{embree:?}"
+    );
+    let others: Vec<&str> = labels[1 + embree.len()..]
+        .iter()
+        .map(|l| l.as_str())
+        .collect();
+    let expected = match TINYBVH_BUILT {
+        true => vec!["tinybvh-8[builder=sbvh;optimize=25]", "obvhs"],
+        false => vec!["obvhs"],
+    };
+    assert_eq!(others, expected);
+    assert_eq!(
+        labels.len(),
+        1 + EMBREE_BEST_CONFIGURATIONS / 2 + BASELINE_BEST_OTHERS
+    );
+}
+
 #[test]
 fn the_quick_experiment_plans_as_documented() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("experiments/quick.toml");
@@ -801,9 +841,9 @@ fn the_wald06_experiments_parse_with_their_tables_and_figures() {
 #[test]
 fn the_boulos07_experiments_parse_and_select_their_own_workloads() {
     for (file, instances, renders, tables, figures) in [
-        // Plus embree-best's Embree configurations (below).
-        ("boulos07.toml", 6, 12, 3, 1),
-        ("boulos07-drt.toml", 3, 8, 2, 1),
+        // Plus baseline-best's baselines (below).
+        ("boulos07.toml", 5, 12, 3, 1),
+        ("boulos07-drt.toml", 2, 8, 2, 1),
         ("boulos07-fig8.toml", 1, 2, 1, 2),
     ] {
         let exp = Experiment::load(
@@ -814,7 +854,7 @@ fn the_boulos07_experiments_parse_and_select_their_own_workloads() {
         .unwrap();
         let embree = match file {
             "boulos07-fig8.toml" => 0,
-            _ => EMBREE_BEST_CONFIGURATIONS,
+            _ => EMBREE_BEST_CONFIGURATIONS + BASELINE_BEST_OTHERS,
         };
         assert_eq!(exp.instances.len(), instances + embree, "{file}");
         assert_eq!(exp.renders.len(), renders, "{file}");

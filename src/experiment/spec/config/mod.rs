@@ -115,7 +115,7 @@ pub use renders::{DistributionWorkload, RenderWorkload};
 pub use scenes::SceneSpec;
 pub use soft_shadow::DEFAULT_SOFT_SHADOW_SAMPLES;
 pub use stability::StabilitySettings;
-pub use tracers::{StructureKey, TracerInstance, EMBREE_BEST};
+pub use tracers::{StructureKey, TracerInstance, BASELINE_BEST, EMBREE_BEST};
 
 use rays::RayEntry;
 use soft_shadow::SoftShadowSpec;

@@ -1,6 +1,7 @@
 //! `tracers = [...]` and the shared `params` grid: each tracer × the cartesian product of its
 //! parameter lists, checked against the registry, each instance at most once; `embree-best`
-//! expands to every Embree configuration.
+//! expands to every Embree configuration, `baseline-best` to those and every other production
+//! baseline at its recommended settings.
 
 use std::collections::BTreeMap;
 use std::fmt;
@@ -105,12 +106,18 @@ pub(super) fn expand_tracers(src: &Source, file: &ExperimentFile) -> Result<Vec<
     };
     let mut used_shared = vec![false; shared.len()];
     let mut instances: Vec<TracerInstance> = Vec::new();
-    for (entry, info, sweep) in tracer_entries(src, file)? {
+    for TracerEntry {
+        entry,
+        info,
+        sweep,
+        fixed,
+    } in tracer_entries(src, file)?
+    {
         let table = &entry.get_ref().0;
         let accepts = info.accepts();
         let mut axes = match &table.params {
-            Some(params) => src.param_axes(params)?,
-            None => BTreeMap::new(),
+            Some(params) if !fixed => src.param_axes(params)?,
+            _ => BTreeMap::new(),
         };
         for &(key, values) in sweep {
             axes.entry(key.to_string())
@@ -127,7 +134,7 @@ pub(super) fn expand_tracers(src: &Source, file: &ExperimentFile) -> Result<Vec<
             ));
         }
         for (i, (key, values)) in shared.iter().enumerate() {
-            if accepts.contains(&key.as_str()) {
+            if !fixed && accepts.contains(&key.as_str()) {
                 used_shared[i] = true;
                 axes.entry(key.clone()).or_insert_with(|| values.clone());
             }
@@ -186,6 +193,12 @@ pub(super) fn expand_tracers(src: &Source, file: &ExperimentFile) -> Result<Vec<
 /// ["low", "refit"]` for per-frame rebuilds); the entry points share one scene per quality.
 pub const EMBREE_BEST: &str = "embree-best";
 
+/// The shorthand tracer entry for the production baselines at their best: `embree-best`, plus
+/// tinybvh and obvhs at their recommended settings (`BASELINE_BEST_OTHERS`), so that runs.csv's
+/// `baseline_best` is the fastest production library on the rays, not only the fastest Embree.
+/// The entry's own `params` go to its Embree tracers, as `embree-best`'s do.
+pub const BASELINE_BEST: &str = "baseline-best";
+
 /// Parameter axes given in code: (key, values).
 type Axes = &'static [(&'static str, &'static [&'static str])];
 
@@ -195,20 +208,58 @@ const EMBREE_BEST_AXES: Axes = &[
     ("quality", &["medium", "high"]),
 ];
 
-/// A tracer entry of the file, one tracer it names, and the axes it sweeps by default.
-type TracerEntry<'f> = (&'f Spanned<NameOr<TracerTable>>, &'static TracerInfo, Axes);
+/// `baseline-best`'s other baselines, each with the only settings it runs with: tinybvh's
+/// fastest single-ray layout (`BVH8_CPU`) over its highest-quality build (spatial splits, then
+/// reinsertion: tiny_bvh.h's `BuildHQ` and `Optimize`), when built; obvhs's defaults.
+const BASELINE_BEST_OTHERS: &[(&str, Axes)] = &[
+    (
+        "tinybvh-8",
+        &[("builder", &["sbvh"]), ("optimize", &["25"])],
+    ),
+    ("obvhs", &[]),
+];
 
-/// Each tracer entry with the tracer it names (`embree-best` names every Embree tracer).
+/// A tracer entry of the file and one tracer it names, with the axes it sweeps by default;
+/// `fixed`: those axes are all it runs with (neither the entry's nor the shared `params` apply).
+struct TracerEntry<'f> {
+    entry: &'f Spanned<NameOr<TracerTable>>,
+    info: &'static TracerInfo,
+    sweep: Axes,
+    fixed: bool,
+}
+
+/// Each tracer entry with the tracer it names (`embree-best` names every Embree tracer,
+/// `baseline-best` those and `BASELINE_BEST_OTHERS` that are built).
 fn tracer_entries<'f>(src: &Source, file: &'f ExperimentFile) -> Result<Vec<TracerEntry<'f>>> {
     let mut entries = Vec::new();
     for entry in file.tracers.get_ref() {
         let name = &entry.get_ref().0.name;
-        if name == EMBREE_BEST {
-            let embree = TRACERS.iter().filter(|t| t.accel.is_embree());
-            entries.extend(embree.map(|info| (entry, info, EMBREE_BEST_AXES)));
-        } else {
-            match TracerInfo::find(name) {
-                Ok(info) => entries.push((entry, info, &[][..])),
+        let named = |info, sweep, fixed| TracerEntry {
+            entry,
+            info,
+            sweep,
+            fixed,
+        };
+        match name.as_str() {
+            EMBREE_BEST | BASELINE_BEST => {
+                let embree = TRACERS.iter().filter(|t| t.accel.is_embree());
+                entries.extend(embree.map(|info| named(info, EMBREE_BEST_AXES, false)));
+                let others = match name.as_str() {
+                    BASELINE_BEST => BASELINE_BEST_OTHERS,
+                    _ => &[],
+                };
+                for &(other, axes) in others {
+                    match TracerInfo::find(other) {
+                        Ok(info) => entries.push(named(info, axes, true)),
+                        Err(e) if not_built(other) => {
+                            eprintln!("note: {}: {name} without {e}", src.path.display())
+                        }
+                        Err(e) => return Err(src.usage_error(&entry.span(), e)),
+                    }
+                }
+            }
+            _ => match TracerInfo::find(name) {
+                Ok(info) => entries.push(named(info, &[], false)),
                 Err(e) if entry.get_ref().0.if_built && not_built(name) => {
                     eprintln!(
                         "note: {}: skipping {name} (if_built): {e}",
@@ -216,7 +267,7 @@ fn tracer_entries<'f>(src: &Source, file: &'f ExperimentFile) -> Result<Vec<Trac
                     )
                 }
                 Err(e) => return Err(src.usage_error(&entry.span(), e)),
-            }
+            },
         }
     }
     Ok(entries)
