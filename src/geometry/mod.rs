@@ -5,6 +5,7 @@ pub mod camera_grid;
 pub mod moller;
 pub mod ray;
 pub mod ray_file;
+pub mod ray_slots;
 pub mod robustness;
 pub mod triangle;
 

@@ -274,52 +274,6 @@ impl RayBatch {
         *self.packet_start.last_mut().expect("just pushed") = true;
     }
 
-    /// A batch of `kind` generated in `parts`, their rays in order. Explicit packets and ray
-    /// times carry over: a part without them gets them as `push_packet_start` and `push_lanes`
-    /// would have made them (the part's rays one packet; time 0).
-    pub fn concat(kind: RayKind, parts: Vec<RayBatch>) -> RayBatch {
-        let parts: Vec<RayBatch> = parts.into_iter().filter(|p| !p.is_empty()).collect();
-        let total = parts.iter().map(RayBatch::len).sum();
-        let packets = parts.iter().any(|p| !p.packet_start.is_empty());
-        let timed = parts.iter().any(|p| !p.time.is_empty());
-        let mut batch = RayBatch::with_capacity(kind, total);
-        if packets {
-            batch.packet_start.reserve(total);
-        }
-        if timed {
-            batch.time.reserve(total);
-        }
-        for part in parts {
-            let n = part.len();
-            for (to, from) in [
-                (&mut batch.ox, &part.ox),
-                (&mut batch.oy, &part.oy),
-                (&mut batch.oz, &part.oz),
-                (&mut batch.dx, &part.dx),
-                (&mut batch.dy, &part.dy),
-                (&mut batch.dz, &part.dz),
-                (&mut batch.tmin, &part.tmin),
-                (&mut batch.tmax, &part.tmax),
-            ] {
-                to.extend_from_slice(from);
-            }
-            batch.pixel.extend_from_slice(&part.pixel);
-            if packets {
-                match !part.packet_start.is_empty() {
-                    true => batch.packet_start.extend_from_slice(&part.packet_start),
-                    false => batch.packet_start.extend((0..n).map(|i| i == 0)),
-                }
-            }
-            if timed {
-                match part.time.is_empty() {
-                    false => batch.time.extend_from_slice(&part.time),
-                    true => batch.time.resize(batch.time.len() + n, 0.0),
-                }
-            }
-        }
-        batch
-    }
-
     pub fn len(&self) -> usize {
         self.ox.len()
     }

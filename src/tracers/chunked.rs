@@ -133,22 +133,28 @@ fn visibility_chunks<'a, 'q>(
 }
 
 /// The shadow rays of `query` (`VisibilityQuery::rays`: point by point, sample by sample, one
-/// explicit packet per packet of points), generated in parallel chunks of whole packets in the
-/// current pool: the query's rays made once for every tracer that traces them as a batch.
-pub fn query_rays(query: VisibilityQuery<'_>) -> RayBatch {
-    let parts: Vec<RayBatch> = packet_chunks(query.len(), query.packet_start, 1024)
-        .into_par_iter()
+/// explicit packet per packet of points) into `batch`, reusing its memory, generated in parallel
+/// chunks of whole packets in the current pool: the query's rays made once for every tracer that
+/// traces them as a batch. Each chunk counts its rays, then writes them in place
+/// (`RayBatch::slots`).
+pub fn query_rays(query: VisibilityQuery<'_>, batch: &mut RayBatch) {
+    let chunks = packet_chunks(query.len(), query.packet_start, 1024);
+    let (lens, timed): (Vec<usize>, Vec<bool>) = chunks
+        .par_iter()
         .map(|range| {
-            let first = range.start as u32;
-            let rays = range.len() * query.samples.per_point();
-            let mut part = RayBatch::with_capacity(RayKind::SoftShadow, rays);
-            query.slice(range).rays(&mut part, &mut Vec::new());
-            // `rays` numbers points from the slice's start: number them in the whole query.
-            part.pixel.iter_mut().for_each(|p| *p += first);
-            part
+            let chunk = query.slice(range.clone());
+            (chunk.ray_count(), chunk.timed())
         })
-        .collect();
-    RayBatch::concat(RayKind::SoftShadow, parts)
+        .unzip();
+    let timed = timed.contains(&true);
+    let slots = batch.slots(RayKind::SoftShadow, &lens, true, timed);
+    chunks
+        .into_par_iter()
+        .zip(slots)
+        .for_each(|(range, mut slots)| {
+            let first = range.start as u32;
+            query.slice(range).write_rays(&mut slots, first)
+        });
 }
 
 /// One light-visibility pass, chunk by chunk, in the current pool; with `counters`, the counting
@@ -255,5 +261,60 @@ mod tests {
             }
         });
         assert!(out.iter().enumerate().all(|(i, &t)| t == i as f32));
+    }
+
+    /// The query's rays made in parallel chunks, in place, over a batch holding other rays, are
+    /// the rays of the serial `VisibilityQuery::rays`: order, packets, times and pixels.
+    #[test]
+    fn query_rays_are_the_serial_rays_in_place() {
+        use crate::tracers::visibility::{LightSamples, QuadLight, ShadingPoint, ShadingPoints};
+        let light = QuadLight {
+            corner: Vec3::new(0.0, 4.0, 0.0),
+            edge_u: Vec3::new(2.0, 0.0, 0.0),
+            edge_v: Vec3::new(0.0, 0.0, 2.0),
+        };
+        let uv = (0..32)
+            .map(|i| [(i % 8) as f32 / 7.0, (i / 8) as f32 / 3.0])
+            .collect();
+        let samples = LightSamples::new(16, uv).unwrap();
+        let mut points = ShadingPoints::default();
+        // 5000 points (five chunks): every seventh faces away (no rays), every third starts a
+        // packet, the later ones at a time of their own.
+        for i in 0..5000 {
+            let position = Vec3::new(i as f32 * 1e-3, 0.0, 1.0);
+            let point = ShadingPoint {
+                position,
+                normal: if i % 7 == 0 { -Vec3::Y } else { Vec3::Y },
+                origin: position + Vec3::Y * 1e-4,
+                time: if i > 2500 { 0.25 } else { 0.0 },
+                set: i % 2,
+            };
+            points.push(point, i % 3 == 0);
+        }
+        let query = VisibilityQuery::new(&points, light, &samples).unwrap();
+        let mut serial = RayBatch::default();
+        query.rays(&mut serial, &mut Vec::new());
+        let mut parallel = batch(100_000, Some(5));
+        query_rays(query, &mut parallel);
+        let fields = |b: &RayBatch| {
+            let f = [
+                &b.ox, &b.oy, &b.oz, &b.dx, &b.dy, &b.dz, &b.tmin, &b.tmax, &b.time,
+            ];
+            (
+                b.kind,
+                f.map(|v| v.clone()),
+                b.pixel.clone(),
+                b.packet_start.clone(),
+            )
+        };
+        assert_eq!(serial.len(), query.ray_count());
+        assert!(!serial.time.is_empty() && serial.len() < 5000 * 16);
+        assert_eq!(fields(&parallel), fields(&serial));
+        // A query at time 0 only: no ray times, though the batch had none to drop either.
+        let early = query.slice(0..2000);
+        early.rays(&mut serial, &mut Vec::new());
+        query_rays(early, &mut parallel);
+        assert!(parallel.time.is_empty());
+        assert_eq!(fields(&parallel), fields(&serial));
     }
 }

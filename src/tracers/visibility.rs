@@ -16,6 +16,7 @@ use std::ops::Range;
 use glam::Vec3;
 
 use crate::error::{Error, Result};
+use crate::geometry::ray_slots::RaySlots;
 use crate::geometry::{Ray, RayBatch, RayKind};
 use crate::scene::Light;
 use crate::stats::Stats;
@@ -245,40 +246,70 @@ impl<'a> VisibilityQuery<'a> {
             .map(|r| r.at_time(p.time))
     }
 
+    /// Every ray of the points in order, sample by sample, one explicit packet per packet of
+    /// points: `f(point, sample, ray, starts_packet)`.
+    #[inline(always)]
+    fn each_ray(&self, mut f: impl FnMut(u32, u32, Ray, bool)) {
+        let mut start_pending = false;
+        for i in 0..self.len() {
+            start_pending |= self.packet_start[i];
+            for sample in 0..self.samples.per_point() {
+                if let Some(ray) = self.ray(i, sample) {
+                    f(
+                        i as u32,
+                        sample as u32,
+                        ray,
+                        std::mem::take(&mut start_pending),
+                    );
+                }
+            }
+        }
+    }
+
     /// The rays of points in order, sample by sample, one explicit packet per packet of points;
     /// `traced[k]` is the (point, sample) of ray `k`. Both are cleared first.
     pub fn rays(&self, batch: &mut RayBatch, traced: &mut Vec<(u32, u32)>) {
         batch.clear(RayKind::SoftShadow);
         traced.clear();
-        let mut start_pending = false;
-        for i in 0..self.len() {
-            start_pending |= self.packet_start[i];
-            for sample in 0..self.samples.per_point() {
-                let Some(ray) = self.ray(i, sample) else {
-                    continue;
-                };
-                if std::mem::take(&mut start_pending) {
-                    batch.push_packet_start(ray, i as u32);
-                } else {
-                    batch.push(ray, i as u32);
-                }
-                traced.push((i as u32, sample as u32));
+        self.each_ray(|point, sample, ray, starts_packet| {
+            match starts_packet {
+                true => batch.push_packet_start(ray, point),
+                false => batch.push(ray, point),
             }
-        }
+            traced.push((point, sample));
+        });
     }
 
-    /// How many samples cast a ray (are in front of their point's surface: `shadow_ray`'s test).
+    /// The rays `rays` makes, into `slots` (which hold `ray_count` of them), their points
+    /// numbered from `first`; the first ray starts a packet (as the first pushed one does).
+    pub fn write_rays(&self, slots: &mut RaySlots<'_>, first: u32) {
+        let mut k = 0;
+        self.each_ray(|point, _, ray, starts_packet| {
+            slots.set(k, &ray, first + point, starts_packet || k == 0);
+            k += 1;
+        });
+    }
+
+    /// How many of point `i`'s samples cast a ray (are in front of its surface: `shadow_ray`'s
+    /// test).
+    #[inline]
+    fn point_rays(&self, i: usize) -> usize {
+        let p = &self.points[i];
+        let target = |&[s, t]: &[f32; 2]| self.light.point(s, t);
+        let samples = self.samples.set(p.set).iter();
+        samples
+            .filter(|uv| (target(uv) - p.position).dot(p.normal) > 0.0)
+            .count()
+    }
+
+    /// How many samples cast a ray.
     pub fn ray_count(&self) -> usize {
-        self.points
-            .iter()
-            .map(|p| {
-                let samples = self.samples.set(p.set).iter();
-                let target = |&[s, t]: &[f32; 2]| self.light.point(s, t);
-                samples
-                    .filter(|uv| (target(uv) - p.position).dot(p.normal) > 0.0)
-                    .count()
-            })
-            .sum()
+        (0..self.len()).map(|i| self.point_rays(i)).sum()
+    }
+
+    /// Whether a ray of the query has a time other than 0 (motion blur).
+    pub fn timed(&self) -> bool {
+        (0..self.len()).any(|i| self.points[i].time != 0.0 && self.point_rays(i) > 0)
     }
 }
 
