@@ -92,7 +92,7 @@ impl RayBatch {
         let mut pixel = cut(&mut self.pixel, lens).into_iter();
         let mut packet_start = cut(&mut self.packet_start, &packet_lens).into_iter();
         let mut time = cut(&mut self.time, &time_lens).into_iter();
-        let mut next = move || -> Option<RaySlots<'_>> {
+        let next = move || -> Option<RaySlots<'_>> {
             Some(RaySlots {
                 origin: [ox.next()?, oy.next()?, oz.next()?],
                 dir: [dx.next()?, dy.next()?, dz.next()?],
@@ -103,7 +103,7 @@ impl RayBatch {
                 time: time.next()?,
             })
         };
-        std::iter::from_fn(move || next()).collect()
+        std::iter::from_fn(next).collect()
     }
 }
 

@@ -48,12 +48,12 @@ impl<C: Send> Chunks<C> {
 
 /// A batch staged by a closure per chunk and traced by another: a tracer whose staged data is
 /// one value per chunk needs nothing more.
-struct StagedBy<'t, C, T> {
+struct StagedBy<C, F> {
     chunks: Chunks<C>,
-    trace: Box<dyn Fn(&mut C, &mut [T]) + Send + Sync + 't>,
+    trace: F,
 }
 
-impl<C: Send, T: Send> StagedRays<T> for StagedBy<'_, C, T> {
+impl<C: Send, T: Send, F: Fn(&mut C, &mut [T]) + Send + Sync> StagedRays<T> for StagedBy<C, F> {
     fn trace(&mut self, out: &mut [T]) {
         self.chunks.trace(out, &self.trace);
     }
@@ -67,6 +67,6 @@ pub fn staged_by<'t, C: Send + 't, T: Send + 't>(
 ) -> Box<dyn StagedRays<T> + 't> {
     Box::new(StagedBy {
         chunks: Chunks::stage(ranges, stage),
-        trace: Box::new(trace),
+        trace,
     })
 }
