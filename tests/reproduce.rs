@@ -65,28 +65,34 @@ fn a_quick_reproduction_runs_reports_and_resumes() {
     let full = plan(&paper, &experiments, Scale::Paper).unwrap();
     assert_eq!(full[0].rays, 512 * 512 * 2 * 2 * 4);
 
-    let written = reproduce(
-        "toy2026",
-        &results,
-        &experiments,
-        Scale::Quick,
-        false,
-        Chatter::Quiet,
-    )
-    .unwrap();
+    let quick = |paper: &str| {
+        reproduce(
+            paper,
+            &results,
+            &experiments,
+            Scale::Quick,
+            false,
+            Chatter::Quiet,
+        )
+    };
+    let meta = || -> serde_json::Value {
+        let text = fs::read_to_string(paper.join("tiny/meta.json")).unwrap();
+        serde_json::from_str(&text).unwrap()
+    };
+    let written = quick("toy2026").unwrap();
     assert_eq!(written, [paper.join(REPORT_MD), results.join(VERDICTS_MD)]);
-    let meta = fs::read_to_string(paper.join("tiny/meta.json")).unwrap();
-    let meta: serde_json::Value = serde_json::from_str(&meta).unwrap();
+    let first = meta();
     assert_eq!(
-        meta.pointer("/overrides/scale").and_then(|v| v.as_str()),
+        first.pointer("/overrides/scale").and_then(|v| v.as_str()),
         Some("quick")
     );
     assert_eq!(
-        meta.pointer("/overrides/resolution/0")
+        first
+            .pointer("/overrides/resolution/0")
             .and_then(|v| v.as_u64()),
         Some(64)
     );
-    let run_id = meta["run_id"].clone();
+    let run_id = first["run_id"].clone();
     // Nothing is left of the staging directory.
     let left: Vec<_> = fs::read_dir(&paper)
         .unwrap()
@@ -114,28 +120,10 @@ fn a_quick_reproduction_runs_reports_and_resumes() {
     // Resumed: the run is from this source at this scale, so it is kept, not made again.
     assert!(plan(&paper, &experiments, Scale::Quick).unwrap()[0].done);
     assert!(!plan(&paper, &experiments, Scale::Paper).unwrap()[0].done);
-    reproduce(
-        "toy2026",
-        &results,
-        &experiments,
-        Scale::Quick,
-        false,
-        Chatter::Quiet,
-    )
-    .unwrap();
-    let again = fs::read_to_string(paper.join("tiny/meta.json")).unwrap();
-    let again: serde_json::Value = serde_json::from_str(&again).unwrap();
-    assert_eq!(again["run_id"], run_id);
+    quick("toy2026").unwrap();
+    assert_eq!(meta()["run_id"], run_id);
 
-    let e = reproduce(
-        "nope",
-        &results,
-        &experiments,
-        Scale::Quick,
-        false,
-        Chatter::Quiet,
-    )
-    .unwrap_err();
+    let e = quick("nope").unwrap_err();
     assert_eq!(e.exit_code(), 2);
     assert!(e.to_string().contains("papers: toy2026, or all"), "{e}");
     let _ = fs::remove_dir_all(&root);
