@@ -97,7 +97,8 @@ enum Command {
         /// gribble2008, benthin2009, ...) or `all`.
         paper: String,
         /// `paper`: the experiment files' own settings; `quick`: 64² images, one frame, one pass,
-        /// one thread (a smoke test; its reports say so).
+        /// one thread (a smoke test in RESULTS/.quick/, never over the committed runs; its reports
+        /// say so).
         #[arg(long, value_enum, default_value_t = Scale::Paper)]
         scale: Scale,
         /// Results root holding the papers' directories.

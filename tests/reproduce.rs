@@ -1,13 +1,13 @@
 //! `raylab reproduce` end to end at `--scale quick` on a paper of one small experiment (the
-//! built-in room, the reference tracer): the run lands in `results/<paper>/<experiment>/`
-//! recorded as quick, the report is regenerated with the claim's verdict computed from it and
+//! built-in room, the reference tracer): the run lands in `results/.quick/<paper>/<experiment>/`
+//! (never over the committed runs) recorded as quick, the report is regenerated with the claim's verdict computed from it and
 //! labelled a smoke test, a second call keeps the run (resume), and an unknown paper is a usage
 //! error naming the papers there are.
 
 use std::fs;
 use std::path::PathBuf;
 
-use raylab::experiment::reproduce::{plan, reproduce};
+use raylab::experiment::reproduce::{plan, reproduce, QUICK_DIR};
 use raylab::experiment::results::report::{REPORT_MD, VERDICTS_MD};
 use raylab::experiment::spec::overrides::Scale;
 use raylab::experiment::Chatter;
@@ -55,14 +55,15 @@ fn a_quick_reproduction_runs_reports_and_resumes() {
     let (results, experiments) = (root.join("results"), root.join("experiments"));
     fs::write(experiments.join("tiny.toml"), EXPERIMENT).unwrap();
     fs::write(results.join("toy2026/claims.toml"), CLAIMS).unwrap();
-    let paper = results.join("toy2026");
-    let steps = plan(&paper, &experiments, Scale::Quick).unwrap();
+    let committed = results.join("toy2026");
+    let paper = results.join(QUICK_DIR).join("toy2026");
+    let steps = plan(&committed, &experiments, Scale::Quick).unwrap();
     assert_eq!(steps.len(), 1);
     // 64² camera rays × 1 workload × 1 scene × 1 frame × 1 instance × 1 thread count × 1 pass.
     assert_eq!(steps[0].rays, 64 * 64);
     assert!(!steps[0].done);
     // At the file's own scale: 512² × 2 frames × 2 thread counts × 4 passes.
-    let full = plan(&paper, &experiments, Scale::Paper).unwrap();
+    let full = plan(&committed, &experiments, Scale::Paper).unwrap();
     assert_eq!(full[0].rays, 512 * 512 * 2 * 2 * 4);
 
     let quick = |paper: &str| {
@@ -80,7 +81,16 @@ fn a_quick_reproduction_runs_reports_and_resumes() {
         serde_json::from_str(&text).unwrap()
     };
     let written = quick("toy2026").unwrap();
-    assert_eq!(written, [paper.join(REPORT_MD), results.join(VERDICTS_MD)]);
+    assert_eq!(
+        written,
+        [
+            paper.join(REPORT_MD),
+            results.join(QUICK_DIR).join(VERDICTS_MD)
+        ]
+    );
+    // The committed paper directory is untouched.
+    let committed_files: Vec<_> = fs::read_dir(&committed).unwrap().collect();
+    assert_eq!(committed_files.len(), 1, "{committed_files:?}"); // claims.toml
     let first = meta();
     assert_eq!(
         first.pointer("/overrides/scale").and_then(|v| v.as_str()),
@@ -111,7 +121,7 @@ fn a_quick_reproduction_runs_reports_and_resumes() {
         ),
         "{report}"
     );
-    let index = fs::read_to_string(results.join(VERDICTS_MD)).unwrap();
+    let index = fs::read_to_string(results.join(QUICK_DIR).join(VERDICTS_MD)).unwrap();
     assert!(
         index.contains("toy2026/REPORT.md) | 1 | 0 | 1 | 0 | 0 |"),
         "{index}"

@@ -3,6 +3,8 @@
 //! the paper's REPORT.md and the index of verdicts regenerated. The plan comes first, with an
 //! estimated time per file; a run already made from this source at this scale is kept, so a
 //! killed reproduction resumes where it stopped (a run is moved into place only once complete).
+//! A quick (smoke-test) reproduction works in `results/.quick/<paper>/` with a copy of the
+//! claims, never over the committed runs.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -24,6 +26,9 @@ use crate::experiment::{run_experiment, Chatter, Experiment, RunOverrides};
 /// 1–3 million rays/s on 2 threads; ray batches run at tens of millions). An estimate, not a
 /// promise: the progress line corrects it by the time the finished files took.
 pub const ESTIMATED_RAYS_PER_SECOND: f64 = 1.0e6;
+
+/// Where under the results root a quick reproduction works (`results/.quick/<paper>/`).
+pub const QUICK_DIR: &str = ".quick";
 
 /// The overrides of a scale: none for the paper's settings; for `quick`, 64² images, one frame,
 /// no warm-up, one pass, one thread.
@@ -152,8 +157,18 @@ pub fn reproduce(
             vec![dir]
         }
     };
+    let root = match scale {
+        Scale::Paper => results.to_path_buf(),
+        Scale::Quick => results.join(QUICK_DIR),
+    };
     let mut reports = Vec::new();
-    for paper in &papers {
+    for source in &papers {
+        let paper = &root.join(source.file_name().unwrap_or_default());
+        if paper != source {
+            std::fs::create_dir_all(paper).map_err(|e| Error::io(paper, e))?;
+            let claims = paper.join(CLAIMS_TOML);
+            std::fs::copy(source.join(CLAIMS_TOML), &claims).map_err(|e| Error::io(&claims, e))?;
+        }
         let steps = plan(paper, experiments, scale)?;
         let mut text = format!(
             "reproduce {} at {} scale ({} rays/s assumed):\n",
@@ -213,7 +228,7 @@ pub fn reproduce(
         reports.push(write(std::slice::from_ref(paper), true, None)?);
     }
     if !dry_run {
-        reports.push(write(&[results.to_path_buf()], true, None)?);
+        reports.push(write(&[root], true, None)?);
     }
     Ok(reports)
 }

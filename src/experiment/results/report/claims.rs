@@ -136,8 +136,9 @@ impl Claims {
     }
 }
 
+/// The 1-based line of byte offset `at` in `text`.
 fn line_of(text: &str, at: usize) -> usize {
-    text[..at].lines().count().max(1)
+    text[..at].matches('\n').count() + 1
 }
 
 /// The line of `text` that states the claim `claim` (`claim = "…"`), for error messages.
@@ -145,7 +146,7 @@ pub fn claim_line(text: &str, claim: &str) -> Option<usize> {
     let stated = format!("claim = {}", toml::Value::from(claim));
     text.find(&stated)
         .or_else(|| text.find(claim))
-        .map(|at| text[..at].matches('\n').count() + 1)
+        .map(|at| line_of(text, at))
 }
 
 /// `{{[experiment |] table | row | column}}`.
@@ -311,7 +312,12 @@ impl Test {
             let [low, high] = bounds[..] else {
                 return Err("a range is written [LOW, HIGH]".into());
             };
-            if !(low <= high) {
+            if !(low.is_finite() && high.is_finite()) {
+                return Err(format!(
+                    "a range's bounds must be finite (got [{low}, {high}])"
+                ));
+            }
+            if low > high {
                 return Err(format!("empty range [{low}, {high}]"));
             }
             return Ok(Test::Within(Expression::parse(value)?, low, high));
@@ -377,6 +383,7 @@ mod tests {
             ("{{T | r | c}} < three", "neither a number"),
             ("{{T | r | c < 3", "unclosed"),
             ("{{T | r | c}} in [4, 1]", "empty range"),
+            ("{{T | r | c}} in [NaN, 1]", "must be finite"),
             ("{{T | r | c}} in 1..4", "[LOW, HIGH]"),
             ("{{T | r | c}} + 1 < 3", "expected * or /"),
         ] {
