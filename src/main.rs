@@ -10,6 +10,7 @@ use raylab::error::{Error, Result};
 use raylab::experiment::record::files::SUMMARY_MD;
 use raylab::experiment::record::results_dir::PendingResults;
 use raylab::experiment::results::summary::Summary;
+use raylab::experiment::spec::overrides::Scale;
 use raylab::experiment::spec::shard::Shard;
 use raylab::experiment::{run_experiment, Chatter, RunOverrides};
 use raylab::geometry::ray_file::{hits_csv, occlusion_csv, read_rays};
@@ -87,9 +88,32 @@ enum Command {
         #[arg(long)]
         out: Option<PathBuf>,
     },
+    /// Run every experiment file of a paper (results/<paper>/claims.toml lists them) into
+    /// results/<paper>/<experiment>/, then regenerate its REPORT.md and results/VERDICTS.md. Prints
+    /// the plan with an estimated time per file first; keeps runs already made from this source
+    /// at this scale, so a killed reproduction resumes where it stopped.
+    Reproduce {
+        /// A paper's directory name under results/ (overbeck2008, boulos2007, wald2006,
+        /// gribble2008, benthin2009, ...) or `all`.
+        paper: String,
+        /// `paper`: the experiment files' own settings; `quick`: 64² images, one frame, one pass,
+        /// one thread (a smoke test in RESULTS/.quick/, never over the committed runs; its reports
+        /// say so).
+        #[arg(long, value_enum, default_value_t = Scale::Paper)]
+        scale: Scale,
+        /// Results root holding the papers' directories.
+        #[arg(long, default_value = "results")]
+        results: PathBuf,
+        /// Where the experiment files are.
+        #[arg(long, default_value = "experiments")]
+        experiments: PathBuf,
+        /// Print the plan and stop.
+        #[arg(long)]
+        dry_run: bool,
+    },
     /// Report on results directories: a self-contained HTML page (several directories side by
-    /// side), or with --markdown the reproduction report REPORT.md of one directory, its verdicts
-    /// from verdicts.toml there.
+    /// side), or with --markdown the reproduction report REPORT.md of a paper's directory (its
+    /// verdicts computed from its claims.toml), or of results/ the index VERDICTS.md.
     Report {
         #[arg(required = true)]
         dirs: Vec<PathBuf>,
@@ -411,6 +435,7 @@ fn execute(command: Command) -> Result<bool> {
                 dump_rays,
                 shard,
                 chatter,
+                scale: None,
             };
             let dir = run_experiment(&experiment, &overrides)?;
             // A stability run has no summary.
@@ -438,6 +463,25 @@ fn execute(command: Command) -> Result<bool> {
             let load = |spec: &raylab::experiment::SceneSpec| load_scene(&spec.name, spec.size);
             let dir = raylab::experiment::merge::merge(&dirs, out.as_deref(), &load)?;
             println!("results: {}", dir.display());
+        }
+        Command::Reproduce {
+            paper,
+            scale,
+            results,
+            experiments,
+            dry_run,
+        } => {
+            let written = raylab::experiment::reproduce::reproduce(
+                &paper,
+                &results,
+                &experiments,
+                scale,
+                dry_run,
+                Chatter::Normal,
+            )?;
+            for path in written {
+                println!("report: {}", path.display());
+            }
         }
         Command::Report {
             dirs, check: true, ..

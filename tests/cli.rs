@@ -568,16 +568,22 @@ fn shards_merge_and_reports_refuse_bad_input() {
     fails_with(
         &dir,
         &["report", "--markdown", s0, s1],
-        "one results directory",
+        "one directory at a time",
+    );
+    // A run directory is no paper; a paper's claims file with a bad field names its line.
+    fails_with(
+        &dir,
+        &["report", "--markdown", merged.to_str().unwrap()],
+        "claims.toml",
     );
     std::fs::write(
-        merged.join("verdicts.toml"),
-        "[[verdicts]]\nconclusion = 1\n",
+        merged.join("claims.toml"),
+        "title = \"t\"\npaper = \"p\"\nexperiments = 1\n",
     )
     .unwrap();
     fails_with(
         &dir,
-        &["report", merged.to_str().unwrap()],
-        "verdicts.toml:2",
+        &["report", "--markdown", merged.to_str().unwrap()],
+        "claims.toml:3",
     );
 }

@@ -941,6 +941,7 @@ fn overrides_replace_settings_and_reject_zeros() {
         dump_rays: false,
         shard: None,
         chatter: Chatter::Quiet,
+        scale: None,
     };
     overrides.apply(&mut exp).unwrap();
     assert_eq!(

@@ -1,55 +1,61 @@
-//! Every committed reproduction report (`results/**/REPORT.md`) is what `raylab report --markdown`
-//! makes of the results beside it today: regenerated from its results directory, it must come out
-//! byte for byte the same. A hand edit, a changed runs.csv or tables.md, or a changed generator
-//! fails here; the fix is to rerun the command in the report's first line.
+//! Every committed reproduction report (`results/<paper>/REPORT.md`) is what
+//! `raylab report --markdown` makes of the paper's claims and runs today: regenerated, it must come
+//! out byte for byte the same, and so must the index of verdict counts (`results/VERDICTS.md`,
+//! pasted into the README). A hand edit, a changed claim, runs.csv or tables.md, or a changed
+//! generator fails here; the fix is to rerun the command in the report's first line.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
-use raylab::experiment::results::report::{markdown, Results, REPORT_MD};
+use raylab::experiment::results::report::paper::{papers_under, Paper};
+use raylab::experiment::results::report::{markdown, REPORT_MD, VERDICTS_MD};
 
-fn reports(dir: &Path, found: &mut Vec<PathBuf>) {
-    for entry in std::fs::read_dir(dir).unwrap() {
-        let path = entry.unwrap().path();
-        if path.is_dir() {
-            reports(&path, found);
-        } else if path.file_name().is_some_and(|n| n == REPORT_MD) {
-            found.push(path);
-        }
-    }
+fn regenerates(file: &Path, make: impl Fn(&Path) -> (String, String)) {
+    let text = std::fs::read_to_string(file)
+        .unwrap_or_else(|e| panic!("{}: {e}; run `raylab report --markdown`", file.display()));
+    let (dir, digest) = markdown::generated_by(&text).unwrap_or_else(|| {
+        panic!(
+            "{}: no generated-by header: reports are made by `raylab report --markdown`",
+            file.display()
+        )
+    });
+    assert_eq!(
+        Some(dir.as_path()),
+        file.parent(),
+        "{} names another directory",
+        file.display()
+    );
+    let (now, digest_now) = make(&dir);
+    assert_eq!(
+        digest_now,
+        digest,
+        "{}: the results changed since it was generated; run `raylab report --markdown {}`",
+        file.display(),
+        dir.display()
+    );
+    assert!(
+        now == text,
+        "{} differs from what `raylab report --markdown {}` writes",
+        file.display(),
+        dir.display()
+    );
 }
 
 #[test]
-fn every_committed_report_regenerates_unchanged() {
-    let mut found = Vec::new();
-    reports(Path::new("results"), &mut found);
-    assert!(!found.is_empty(), "no results/**/REPORT.md");
-    for report in found {
-        let text = std::fs::read_to_string(&report).unwrap();
-        let (dir, digest) = markdown::generated_by(&text).unwrap_or_else(|| {
-            panic!(
-                "{}: no generated-by header: reports are made by `raylab report --markdown`",
-                report.display()
-            )
+fn every_committed_report_and_the_index_regenerate_unchanged() {
+    let papers = papers_under(Path::new("results")).unwrap();
+    assert!(papers.len() >= 5, "the five papers have claims: {papers:?}");
+    for dir in &papers {
+        regenerates(&dir.join(REPORT_MD), |d| {
+            let paper = Paper::read(d).unwrap_or_else(|e| panic!("{e}"));
+            (markdown::report(&paper), paper.digest)
         });
-        assert_eq!(
-            Some(dir.as_path()),
-            report.parent(),
-            "{} names another directory",
-            report.display()
-        );
-        let results = Results::read(&dir).unwrap();
-        assert_eq!(
-            results.digest,
-            digest,
-            "{}: the results changed since the report was generated; run `raylab report --markdown {}`",
-            report.display(),
-            dir.display()
-        );
-        assert!(
-            markdown::report(&results) == text,
-            "{} differs from what `raylab report --markdown {}` writes",
-            report.display(),
-            dir.display()
-        );
     }
+    regenerates(&Path::new("results").join(VERDICTS_MD), |root| {
+        let read: Vec<Paper> = papers_under(root)
+            .unwrap()
+            .iter()
+            .map(|d| Paper::read(d).unwrap_or_else(|e| panic!("{e}")))
+            .collect();
+        (markdown::index(root, &read), markdown::index_digest(&read))
+    });
 }

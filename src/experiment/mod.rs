@@ -5,6 +5,7 @@
 
 pub mod merge;
 pub mod record;
+pub mod reproduce;
 pub mod results;
 pub mod run;
 pub mod spec;

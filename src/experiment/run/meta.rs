@@ -129,7 +129,7 @@ pub fn write(dir: &Path, meta: &Meta) -> crate::error::Result<()> {
 }
 
 /// The commit of the source tree this binary was built from, read when the run starts.
-fn commit() -> Commit {
+pub fn commit() -> Commit {
     let git = |args: &[&str]| -> Option<String> {
         let out = Command::new("git")
             .arg("-C")

@@ -30,6 +30,29 @@ pub struct RunOverrides {
     /// Not a setting: where the plan and the progress bar go.
     #[serde(skip)]
     pub chatter: Chatter,
+    /// Set by `raylab reproduce`: the scale the run was made at (recorded in meta.json, so a
+    /// report can say a run is a smoke test).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scale: Option<Scale>,
+}
+
+/// `raylab reproduce --scale`: the paper's settings as the experiment file states them, or a
+/// smoke test (`quick`: small images, one frame, one pass, one thread).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum Scale {
+    #[default]
+    Paper,
+    Quick,
+}
+
+impl Scale {
+    pub fn name(self) -> &'static str {
+        match self {
+            Scale::Paper => "paper",
+            Scale::Quick => "quick",
+        }
+    }
 }
 
 /// What a run shows while it runs.

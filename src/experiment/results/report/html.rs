@@ -1,6 +1,6 @@
 //! The HTML report: one file, nothing fetched — the figures are `data:` URIs, the style is inline
 //! and there is no script. One column per results directory, so two machines or two commits read
-//! side by side: first a table of their machines and plans, then per section (verdicts, summary,
+//! side by side: first a table of their machines and plans, then per section (summary,
 //! paper-vs-ours tables, figures, data) each run's content in its column.
 
 use std::fmt::Write;
@@ -15,8 +15,7 @@ table{border-collapse:collapse;margin:.6em 0}td,th{border:1px solid #bbb;padding
 th{background:#eee}td.num{text-align:right;font-variant-numeric:tabular-nums}\
 .runs{display:grid;gap:1.2em}.run{min-width:0;overflow-x:auto}\
 img{max-width:100%;border:1px solid #ccc}figure{margin:.6em 0}\
-.holds{color:#176117;font-weight:bold}.differs{color:#a31515;font-weight:bold}\
-.cannot-be-tested{color:#7a5b00;font-weight:bold}pre{background:#f4f4f4;padding:.5em;overflow-x:auto}";
+pre{background:#f4f4f4;padding:.5em;overflow-x:auto}";
 
 /// Writes one run's part of a section.
 type Section = fn(&mut String, &Results);
@@ -40,9 +39,8 @@ pub fn page(runs: &[Results], command: &str) -> String {
         "<div class=\"runs\" style=\"grid-template-columns:repeat({},minmax(0,1fr))\">",
         runs.len()
     );
-    let sections: [(&str, Section); 6] = [
+    let sections: [(&str, Section); 5] = [
         ("Plan", plan),
-        ("Verdicts", verdicts),
         ("Summary", |out, r| blocks(out, &r.summary)),
         ("Tables: paper vs ours", |out, r| blocks(out, &r.tables)),
         ("Figures", figures),
@@ -120,30 +118,6 @@ fn plan(out: &mut String, run: &Results) {
             esc(&contents)
         );
     }
-}
-
-fn verdicts(out: &mut String, run: &Results) {
-    let Some(v) = &run.verdicts else {
-        return;
-    };
-    if let Some(paper) = &v.paper {
-        let _ = writeln!(out, "<p>{}</p>", esc(paper));
-    }
-    out.push_str(
-        "<table class=\"verdicts\"><tr><th>conclusion</th><th>verdict</th><th>why</th></tr>\n",
-    );
-    for (verdict, because) in v.verdicts.iter().zip(&run.because) {
-        let judgement = verdict.verdict.to_string();
-        let _ = writeln!(
-            out,
-            "<tr><td>{}</td><td class=\"{}\">{}</td><td>{}</td></tr>",
-            esc(&verdict.conclusion),
-            judgement.replace(' ', "-"),
-            esc(&judgement),
-            esc(because)
-        );
-    }
-    out.push_str("</table>\n");
 }
 
 fn figures(out: &mut String, run: &Results) {

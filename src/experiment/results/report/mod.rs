@@ -3,18 +3,22 @@
 //! - HTML (`html`): one self-contained page — figures embedded as `data:` URIs, no script, no
 //!   network — with the machine and plan of each run, its verdicts, summary, paper-vs-ours tables,
 //!   figures and data, several runs side by side in columns (two machines, two commits).
-//! - Markdown (`markdown`): the committed reproduction report of one results directory
-//!   (`results/<paper>/REPORT.md`), with a generated-by header naming the command and the
-//!   digest of the files it was made from, so a test can regenerate it and compare.
+//! - Markdown (`markdown`): the committed reproduction report of a paper
+//!   (`results/<paper>/REPORT.md`) over its claims (`claims`, judged by `judge`) and the run of
+//!   each of its experiment files (`paper`), with a generated-by header naming the command and
+//!   the digest of the files it was made from, so a test can regenerate it and compare; over a
+//!   directory of papers, the index of their verdict counts (`results/VERDICTS.md`).
 //!
 //! A results directory is read as it is: meta.json (required), runs.csv or stability.csv,
-//! tables.md, summary.md, verdicts.toml and the PNG figures, each when present.
+//! tables.md, summary.md and the PNG figures, each when present.
 
 pub mod blocks;
+pub mod claims;
 pub mod encode;
 pub mod html;
+pub mod judge;
 pub mod markdown;
-pub mod verdicts;
+pub mod paper;
 
 use std::path::{Path, PathBuf};
 
@@ -28,10 +32,12 @@ use crate::experiment::record::files::STABILITY_CSV;
 use crate::experiment::record::files::TABLES_MD;
 use crate::experiment::record::files::{RUNS_CSV, SUMMARY_MD};
 use blocks::Block;
-use verdicts::{Verdicts, VERDICTS_TOML};
+use paper::{papers_under, Paper};
 
-/// The generated reproduction report of a committed results directory.
+/// The generated reproduction report of a paper's results directory.
 pub const REPORT_MD: &str = "REPORT.md";
+/// The generated table of every paper's verdict counts, in the directory of the papers.
+pub const VERDICTS_MD: &str = "VERDICTS.md";
 
 /// One results directory, read.
 pub struct Results {
@@ -44,9 +50,6 @@ pub struct Results {
     pub summary: Vec<Block>,
     /// PNG files by name, in name order.
     pub figures: Vec<(String, Vec<u8>)>,
-    pub verdicts: Option<Verdicts>,
-    /// Each verdict's `because`, its table references filled in.
-    pub because: Vec<String>,
     /// `digest` of every file above: what a generated report was made from.
     pub digest: String,
 }
@@ -78,8 +81,6 @@ impl Results {
         };
         let tables_text = read_optional(&dir.join(TABLES_MD))?.unwrap_or_default();
         let summary_text = read_optional(&dir.join(SUMMARY_MD))?.unwrap_or_default();
-        let verdicts_path = dir.join(VERDICTS_TOML);
-        let verdicts_text = read_optional(&verdicts_path)?;
         let mut figures = Vec::new();
         for entry in std::fs::read_dir(dir).map_err(|e| Error::io(dir, e))? {
             let path = entry.map_err(|e| Error::io(dir, e))?.path();
@@ -93,21 +94,11 @@ impl Results {
         }
         figures.sort();
         let tables = blocks::parse(&tables_text);
-        let (verdicts, because) = match &verdicts_text {
-            Some(text) => {
-                let verdicts = Verdicts::read(&verdicts_path)?;
-                let found: Vec<&blocks::Table> = blocks::tables(&tables).collect();
-                let because = verdicts.resolve(&found, &verdicts_path, text)?;
-                (Some(verdicts), because)
-            }
-            None => (None, Vec::new()),
-        };
         let mut parts: Vec<&[u8]> = vec![
             meta_text.as_bytes(),
             data.as_ref().map_or(&[], |(_, t)| t.as_bytes()),
             tables_text.as_bytes(),
             summary_text.as_bytes(),
-            verdicts_text.as_deref().unwrap_or_default().as_bytes(),
         ];
         for (name, bytes) in &figures {
             parts.push(name.as_bytes());
@@ -121,8 +112,6 @@ impl Results {
             tables,
             summary: blocks::parse(&summary_text),
             figures,
-            verdicts,
-            because,
             digest,
         })
     }
@@ -144,12 +133,9 @@ impl Results {
         }
     }
 
-    /// The title: the verdicts' own, else the experiment's name.
+    /// The title: the experiment's name.
     pub fn title(&self) -> String {
-        self.verdicts
-            .as_ref()
-            .and_then(|v| v.title.clone())
-            .unwrap_or_else(|| format!("{}: reproduction report", self.text("/experiment")))
+        format!("{}: results", self.text("/experiment"))
     }
 
     /// The machine and build facts, as (label, value) rows, the same labels for every run (values
@@ -270,21 +256,37 @@ pub fn read_all(dirs: &[PathBuf]) -> Result<Vec<Results>> {
 }
 
 /// `raylab report [--markdown] DIR… [--output FILE]`: writes the report and returns its path. The
-/// markdown report is of one directory and goes to `DIR/REPORT.md` by default; the HTML page to
-/// `DIR/report.html` for one directory, `report.html` for several.
+/// markdown report is of one paper's directory (`DIR/REPORT.md` by default), or, of a directory
+/// of papers, their verdict counts (`DIR/VERDICTS.md`); the HTML page is of results directories,
+/// `DIR/report.html` for one, `report.html` for several.
 pub fn write(dirs: &[PathBuf], as_markdown: bool, output: Option<&Path>) -> Result<PathBuf> {
-    let runs = read_all(dirs)?;
-    let (text, default) = match (as_markdown, &runs[..]) {
-        (true, [run]) => (markdown::report(run), run.dir.join(REPORT_MD)),
+    let (text, default) = match (as_markdown, dirs) {
+        (true, [dir]) if Paper::is_paper(dir) => {
+            (markdown::report(&Paper::read(dir)?), dir.join(REPORT_MD))
+        }
+        (true, [dir]) => {
+            let papers = papers_under(dir)?
+                .iter()
+                .map(|p| Paper::read(p))
+                .collect::<Result<Vec<_>>>()?;
+            if papers.is_empty() {
+                return Err(Error::usage(format!(
+                    "report --markdown {}: neither a paper's directory (with claims.toml) nor one holding papers",
+                    dir.display()
+                )));
+            }
+            (markdown::index(dir, &papers), dir.join(VERDICTS_MD))
+        }
         (true, _) => {
             return Err(Error::usage(
-                "report --markdown: one results directory at a time (it writes DIR/REPORT.md)",
+                "report --markdown: one directory at a time (it writes DIR/REPORT.md or DIR/VERDICTS.md)",
             ))
         }
-        (false, runs) => {
+        (false, dirs) => {
+            let runs = read_all(dirs)?;
             let names: Vec<String> = dirs.iter().map(|d| d.display().to_string()).collect();
-            let page = html::page(runs, &format!("raylab report {}", names.join(" ")));
-            let default = match runs {
+            let page = html::page(&runs, &format!("raylab report {}", names.join(" ")));
+            let default = match &runs[..] {
                 [run] => run.dir.join("report.html"),
                 _ => PathBuf::from("report.html"),
             };
@@ -319,7 +321,12 @@ mod tests {
     fn fixture(name: &str) -> PathBuf {
         let dir = std::env::temp_dir().join(format!("raylab-report-{name}-{}", std::process::id()));
         let _ = fs::remove_dir_all(&dir);
-        fs::create_dir_all(&dir).unwrap();
+        run_fixture(&dir);
+        dir
+    }
+
+    fn run_fixture(dir: &Path) {
+        fs::create_dir_all(dir).unwrap();
         let meta = serde_json::json!({
             "experiment": "toy", "run_id": "20260101T000000Z", "date": "2026-01-01T00:00:00Z",
             "commit": { "hash": "abc123", "dirty": false }, "hostname": "node7",
@@ -339,51 +346,90 @@ mod tests {
         )
         .unwrap();
         fs::write(dir.join(SUMMARY_MD), "# Summary\n\nAll 1 checks passed.\n").unwrap();
+        fs::write(dir.join("throughput_room.png"), png()).unwrap();
+    }
+
+    /// A papers directory holding one paper, `toy2026`, with a run of `toy` and none of `other`.
+    fn paper_fixture(name: &str) -> PathBuf {
+        let root = std::env::temp_dir().join(format!("raylab-paper-{name}-{}", std::process::id()));
+        let _ = fs::remove_dir_all(&root);
+        let dir = root.join("toy2026");
+        run_fixture(&dir.join("toy"));
         fs::write(
-            dir.join(VERDICTS_TOML),
-            "title = \"Toy 2026\"\npaper = \"A. Toy. Toys. 2026.\"\n[[verdicts]]\n\
-             conclusion = \"ours is fast\"\nverdict = \"differs\"\n\
-             because = \"{{Table 1 | room | ours}} against the paper's {{Table 1 | room | paper}}\"\n",
+            dir.join(claims::CLAIMS_TOML),
+            "title = \"Toy 2026\"\npaper = \"A. Toy. Toys. 2026.\"\nexperiments = [\"toy\", \"other\"]\n\
+             [[claims]]\nclaim = \"ours is as fast\"\npaper = \"3 on the room\"\nexperiment = \"toy\"\n\
+             tests = [\"{{Table 1 | room | ours}} >= {{Table 1 | room | paper}}\", \"{{Table 1 | room | ours}} in [2, 4]\"]\n\
+             note = \"{{Table 1 | room | ours}} against the paper's {{Table 1 | room | paper}}\"\n\
+             [[claims]]\nclaim = \"others agree\"\npaper = \"\"\nexperiment = \"other\"\ntests = [\"{{T | r | c}} > 1\"]\n",
         )
         .unwrap();
-        fs::write(dir.join("throughput_room.png"), png()).unwrap();
-        dir
+        root
     }
 
     #[test]
-    fn the_markdown_report_quotes_the_tables_and_names_its_sources() {
-        let dir = fixture("md");
-        let run = Results::read(&dir).unwrap();
-        let md = markdown::report(&run);
+    fn the_markdown_report_computes_verdicts_and_names_its_sources() {
+        let root = paper_fixture("md");
+        let dir = root.join("toy2026");
+        let paper = Paper::read(&dir).unwrap();
+        let md = markdown::report(&paper);
         let (named, digest) = markdown::generated_by(&md).unwrap();
-        assert_eq!((named, digest.as_str()), (dir.clone(), run.digest.as_str()));
+        assert_eq!(
+            (named, digest.as_str()),
+            (dir.clone(), paper.digest.as_str())
+        );
         assert!(md.contains("# Toy 2026\n\nA. Toy. Toys. 2026.\n"), "{md}");
         assert!(
-            md.contains("raylab run experiments/toy.toml --frames 1\n"),
+            md.contains("**2 claims: 0 hold, 1 partly, 0 differ, 1 not run.**"),
             "{md}"
         );
-        assert!(md.contains("| ISA compiled for | avx2 |"), "{md}");
-        assert!(md.contains("| commit | abc123 |"), "{md}");
+        assert!(md.contains("raylab reproduce toy2026 "), "{md}");
         assert!(
-            md.contains("| ours is fast | **differs** | 2.50 against the paper's 3 |"),
+            md.contains("| toy | 20260101T000000Z | 2026-01-01T00:00:00Z | abc123 | node7 | Some CPU | avx2 | `raylab run experiments/toy.toml --frames 1` |"),
             "{md}"
         );
-        assert!(md.contains("### Table 1: speed\n\n| scene | ours | paper |\n|---|---:|---:|\n| room | 2.50 | 3 |\n"), "{md}");
-        assert!(md.contains("![throughput_room.png](throughput_room.png)"));
-        assert!(md.contains("## Summary\n\nAll 1 checks passed.\n"), "{md}");
+        assert!(md.contains("| other | not run |"), "{md}");
+        assert!(
+            md.contains("| ours is as fast | 3 on the room | **partly** | [Table 1 · room · ours] ≥ [Table 1 · room · paper]: 2.5 ≥ 3 ✗<br>[Table 1 · room · ours] in [2, 4]: 2.5 in [2, 4] ✓ | 2.50 against the paper's 3 |"),
+            "{md}"
+        );
+        assert!(
+            md.contains("| others agree |  | **not run** | [T · r · c] > 1: not run |  |"),
+            "{md}"
+        );
+        assert!(md.contains("#### Table 1: speed\n\n| scene | ours | paper |\n|---|---:|---:|\n| room | 2.50 | 3 |\n"), "{md}");
+        assert!(md.contains("![throughput_room.png](toy/throughput_room.png)"));
+        assert!(md.contains("### Summary\n\nAll 1 checks passed.\n"), "{md}");
         // Same files, same report; any change to them, another digest.
-        assert_eq!(markdown::report(&Results::read(&dir).unwrap()), md);
-        fs::write(dir.join(RUNS_CSV), "scene,rays\nroom,1025\n").unwrap();
-        assert_ne!(Results::read(&dir).unwrap().digest, run.digest);
+        assert_eq!(markdown::report(&Paper::read(&dir).unwrap()), md);
+        fs::write(dir.join("toy").join(RUNS_CSV), "scene,rays\nroom,1025\n").unwrap();
+        assert_ne!(Paper::read(&dir).unwrap().digest, paper.digest);
         let written = write(std::slice::from_ref(&dir), true, None).unwrap();
         assert_eq!(written, dir.join(REPORT_MD));
         // The report itself is not among its sources.
-        let again = Results::read(&dir).unwrap();
+        let again = Paper::read(&dir).unwrap();
         assert_eq!(
             fs::read_to_string(&written).unwrap(),
             markdown::report(&again)
         );
-        let _ = fs::remove_dir_all(&dir);
+        // The index of papers counts their verdicts.
+        let index = write(std::slice::from_ref(&root), true, None).unwrap();
+        assert_eq!(index, root.join(VERDICTS_MD));
+        let text = fs::read_to_string(&index).unwrap();
+        assert!(
+            text.contains("| report | claims | holds | partly | differs | not run |\n|---|---:|---:|---:|---:|---:|\n"),
+            "{text}"
+        );
+        assert!(
+            text.contains("/toy2026/REPORT.md) | 2 | 0 | 1 | 0 | 1 |\n"),
+            "{text}"
+        );
+        // A run the claims file does not list is an error.
+        run_fixture(&dir.join("stray"));
+        let e = Paper::read(&dir).err().unwrap();
+        assert_eq!(e.exit_code(), 2);
+        assert!(e.to_string().contains("stray"), "{e}");
+        let _ = fs::remove_dir_all(&root);
     }
 
     #[test]
@@ -396,13 +442,9 @@ mod tests {
             assert!(!html.contains(forbidden), "{forbidden}");
         }
         assert!(html.contains("grid-template-columns:repeat(2,"));
-        // Per run: the machine column, scenes, verdicts, tables.md, data; text escaped.
+        // Per run: the machine column, scenes, tables.md, data; text escaped.
         assert_eq!(html.matches("<td>node7</td>").count(), 2);
         assert!(html.contains("<p>a &lt;toy&gt;</p>"));
-        assert_eq!(
-            html.matches("<td class=\"differs\">differs</td>").count(),
-            2
-        );
         assert_eq!(html.matches("<td class=\"num\">2.50</td>").count(), 2);
         assert_eq!(html.matches("<td>1024</td>").count(), 2);
         // The figure decodes back to the PNG's bytes.
@@ -415,23 +457,27 @@ mod tests {
         assert_eq!(e.exit_code(), 2);
         let e = write(&[a.join("nothing")], false, None).unwrap_err();
         assert!(e.to_string().contains("nothing"), "{e}");
+        // A run directory is no paper: --markdown says so.
+        let e = write(std::slice::from_ref(&a), true, None).unwrap_err();
+        assert!(e.to_string().contains("claims.toml"), "{e}");
         for d in [a, b] {
             let _ = fs::remove_dir_all(d);
         }
     }
 
     #[test]
-    fn a_verdict_quoting_a_missing_cell_is_an_error_naming_the_file() {
-        let dir = fixture("bad");
+    fn a_claim_quoting_a_missing_cell_is_an_error_naming_the_file_and_line() {
+        let root = paper_fixture("bad");
+        let dir = root.join("toy2026");
         fs::write(
-            dir.join(VERDICTS_TOML),
-            "[[verdicts]]\nconclusion = \"c\"\nverdict = \"holds\"\nbecause = \"{{Table 1 | kitchen | ours}}\"\n",
+            dir.join(claims::CLAIMS_TOML),
+            "title = \"t\"\npaper = \"p\"\nexperiments = [\"toy\"]\n[[claims]]\nclaim = \"c\"\npaper = \"\"\nexperiment = \"toy\"\ntests = [\"{{Table 1 | kitchen | ours}} > 1\"]\n",
         )
         .unwrap();
-        let e = Results::read(&dir).err().unwrap();
+        let e = Paper::read(&dir).err().unwrap();
         assert_eq!(e.exit_code(), 2);
-        assert!(e.to_string().contains("verdicts.toml:4"), "{e}");
+        assert!(e.to_string().contains("claims.toml:5"), "{e}");
         assert!(e.to_string().contains("kitchen"), "{e}");
-        let _ = fs::remove_dir_all(&dir);
+        let _ = fs::remove_dir_all(&root);
     }
 }

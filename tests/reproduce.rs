@@ -1,0 +1,140 @@
+//! `raylab reproduce` end to end at `--scale quick` on a paper of one small experiment (the
+//! built-in room, the reference tracer): the run lands in `results/.quick/<paper>/<experiment>/`
+//! (never over the committed runs) recorded as quick, the report is regenerated with the claim's verdict computed from it and
+//! labelled a smoke test, a second call keeps the run (resume), and an unknown paper is a usage
+//! error naming the papers there are.
+
+use std::fs;
+use std::path::PathBuf;
+
+use raylab::experiment::reproduce::{plan, reproduce, QUICK_DIR};
+use raylab::experiment::results::report::{REPORT_MD, VERDICTS_MD};
+use raylab::experiment::spec::overrides::Scale;
+use raylab::experiment::Chatter;
+
+fn scratch() -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("raylab-reproduce-{}", std::process::id()));
+    let _ = fs::remove_dir_all(&dir);
+    fs::create_dir_all(dir.join("experiments")).unwrap();
+    fs::create_dir_all(dir.join("results/toy2026")).unwrap();
+    dir
+}
+
+const EXPERIMENT: &str = r#"name = "tiny"
+scenes = ["room"]
+tracers = ["reference"]
+rays = ["primary"]
+resolution = { width = 512, height = 512 }
+frames = 2
+threads = [1, 2]
+warmup = 1
+repeats = 3
+
+[[tables]]
+title = "Tests per ray"
+row_header = "scene"
+where = { ray_kind = "primary", threads = 1 }
+metric = "aabb_tests_per_ray"
+rows = "scene"
+columns = [{ label = "reference", where = { tracer = "reference" } }]
+"#;
+
+const CLAIMS: &str = r#"title = "Toy 2026"
+paper = "A. Toy. Toys. 2026."
+experiments = ["tiny"]
+[[claims]]
+claim = "single rays test some boxes, but not a million each"
+paper = "none"
+experiment = "tiny"
+tests = ["{{Tests per ray | room | reference}} > 0", "{{Tests per ray | room | reference}} > 1000000"]
+"#;
+
+#[test]
+fn a_quick_reproduction_runs_reports_and_resumes() {
+    let root = scratch();
+    let (results, experiments) = (root.join("results"), root.join("experiments"));
+    fs::write(experiments.join("tiny.toml"), EXPERIMENT).unwrap();
+    fs::write(results.join("toy2026/claims.toml"), CLAIMS).unwrap();
+    let committed = results.join("toy2026");
+    let paper = results.join(QUICK_DIR).join("toy2026");
+    let steps = plan(&committed, &experiments, Scale::Quick).unwrap();
+    assert_eq!(steps.len(), 1);
+    // 64² camera rays × 1 workload × 1 scene × 1 frame × 1 instance × 1 thread count × 1 pass.
+    assert_eq!(steps[0].rays, 64 * 64);
+    assert!(!steps[0].done);
+    // At the file's own scale: 512² × 2 frames × 2 thread counts × 4 passes.
+    let full = plan(&committed, &experiments, Scale::Paper).unwrap();
+    assert_eq!(full[0].rays, 512 * 512 * 2 * 2 * 4);
+
+    let quick = |paper: &str| {
+        reproduce(
+            paper,
+            &results,
+            &experiments,
+            Scale::Quick,
+            false,
+            Chatter::Quiet,
+        )
+    };
+    let meta = || -> serde_json::Value {
+        let text = fs::read_to_string(paper.join("tiny/meta.json")).unwrap();
+        serde_json::from_str(&text).unwrap()
+    };
+    let written = quick("toy2026").unwrap();
+    assert_eq!(
+        written,
+        [
+            paper.join(REPORT_MD),
+            results.join(QUICK_DIR).join(VERDICTS_MD)
+        ]
+    );
+    // The committed paper directory is untouched.
+    let committed_files: Vec<_> = fs::read_dir(&committed).unwrap().collect();
+    assert_eq!(committed_files.len(), 1, "{committed_files:?}"); // claims.toml
+    let first = meta();
+    assert_eq!(
+        first.pointer("/overrides/scale").and_then(|v| v.as_str()),
+        Some("quick")
+    );
+    assert_eq!(
+        first
+            .pointer("/overrides/resolution/0")
+            .and_then(|v| v.as_u64()),
+        Some(64)
+    );
+    let run_id = first["run_id"].clone();
+    // Nothing is left of the staging directory.
+    let left: Vec<_> = fs::read_dir(&paper)
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(left.len(), 3, "{left:?}"); // claims.toml, tiny/, REPORT.md
+    let report = fs::read_to_string(paper.join(REPORT_MD)).unwrap();
+    assert!(report.contains("**Quick scale (`raylab reproduce --scale quick`), a smoke test and not evidence:** tiny."), "{report}");
+    assert!(
+        report.contains("**1 claims: 0 hold, 1 partly, 0 differ, 0 not run.**"),
+        "{report}"
+    );
+    assert!(
+        report.contains(
+            "| single rays test some boxes, but not a million each | none | **partly** |"
+        ),
+        "{report}"
+    );
+    let index = fs::read_to_string(results.join(QUICK_DIR).join(VERDICTS_MD)).unwrap();
+    assert!(
+        index.contains("toy2026/REPORT.md) | 1 | 0 | 1 | 0 | 0 |"),
+        "{index}"
+    );
+
+    // Resumed: the run is from this source at this scale, so it is kept, not made again.
+    assert!(plan(&paper, &experiments, Scale::Quick).unwrap()[0].done);
+    assert!(!plan(&paper, &experiments, Scale::Paper).unwrap()[0].done);
+    quick("toy2026").unwrap();
+    assert_eq!(meta()["run_id"], run_id);
+
+    let e = quick("nope").unwrap_err();
+    assert_eq!(e.exit_code(), 2);
+    assert!(e.to_string().contains("papers: toy2026, or all"), "{e}");
+    let _ = fs::remove_dir_all(&root);
+}
