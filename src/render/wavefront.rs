@@ -106,17 +106,27 @@ pub fn answer(
             pass(batch.view(), out, chunk, &|r, h| tracer.intersect(r, h))
         }
         (Work::Closest(batch), Answers::Hits(out), Some(c)) => {
-            c.merge(&counted_pass(batch.view(), out, chunk, &|r, h, c| {
-                tracer.intersect_counted(r, h, c)
-            }))
+            let per_ray = c.per_ray.is_some();
+            c.merge(&counted_pass(
+                batch.view(),
+                out,
+                chunk,
+                per_ray,
+                &|r, h, c| tracer.intersect_counted(r, h, c),
+            ))
         }
         (Work::Occlusion(batch), Answers::Occluded(out), None) => {
             pass(batch.view(), out, chunk, &|r, o| tracer.occluded(r, o))
         }
         (Work::Occlusion(batch), Answers::Occluded(out), Some(c)) => {
-            c.merge(&counted_pass(batch.view(), out, chunk, &|r, o, c| {
-                tracer.occluded_counted(r, o, c)
-            }))
+            let per_ray = c.per_ray.is_some();
+            c.merge(&counted_pass(
+                batch.view(),
+                out,
+                chunk,
+                per_ray,
+                &|r, o, c| tracer.occluded_counted(r, o, c),
+            ))
         }
         (Work::LightVisibility(query), Answers::Visibility(v), counters) => {
             visibility_pass(tracer, query, &mut v.words, counters)
