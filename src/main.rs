@@ -9,6 +9,7 @@ use clap::{Parser, Subcommand};
 use raylab::error::{Error, Result};
 use raylab::experiment::record::files::SUMMARY_MD;
 use raylab::experiment::record::results_dir::PendingResults;
+use raylab::experiment::results::heatmap::{save_panels, Panel};
 use raylab::experiment::results::summary::Summary;
 use raylab::experiment::spec::shard::Shard;
 use raylab::experiment::{run_experiment, Chatter, RunOverrides};
@@ -548,7 +549,8 @@ fn execute(command: Command) -> Result<bool> {
             let frame = scene.frame(frame, frames);
             let params = params_of(params);
             if let Some(cost) = heatmap.heatmap {
-                let tracer = raylab::tracers::tracer_for_frame(&tracer, &params, &frame)?;
+                let tracer_name = tracer;
+                let tracer = raylab::tracers::tracer_for_frame(&tracer_name, &params, &frame)?;
                 let size = (width, height);
                 let rays = wavefront(&scene, &frame, tracer.as_ref(), &heatmap.heatmap_rays, size)?;
                 let (_, maps) =
@@ -558,8 +560,9 @@ fn execute(command: Command) -> Result<bool> {
                     .find(|m| m.cost == cost)
                     .expect("every cost is mapped");
                 let scale = heatmap.heatmap_max.unwrap_or(map.max().max(1.0));
-                let caption = format!("mean {:.2}", map.mean());
-                raylab::experiment::results::heatmap::save_png(map, scale, &caption, &output)?;
+                let caption = format!("{} on {} rays", tracer_name, heatmap.heatmap_rays);
+                let panels = [(caption, Panel::Map(map))];
+                save_panels(&output, &panels, cost.unit(), scale)?;
                 println!(
                     "wrote {} ({} heat map of {} rays, {:.2} per ray, scale 0–{scale})",
                     output.display(),
