@@ -77,9 +77,10 @@ fn sums_match(what: &str, tracer: &dyn Tracer, work: Work<'_>, pixel_of: &[u32])
         counters.aabb_tests + counters.triangle_tests > 0,
         "{what}: nothing counted"
     );
-    // Every ray's pixel is counted: the map's rays are the wavefront's.
+    // Every ray is counted at its pixel: the map's rays are the wavefront's (a query's: the
+    // sample rays in front of their points).
     let rays: u64 = maps[0].rays.iter().map(|&n| n as u64).sum();
-    assert_eq!(rays, pixel_of.len() as u64, "{what}: rays per pixel");
+    assert_eq!(rays, work.rays() as u64, "{what}: rays per pixel");
     maps
 }
 

@@ -108,9 +108,15 @@ pub struct CostMap {
 }
 
 impl CostMap {
-    /// `costs` (one entry per ray or shading point `i`, from pixel `pixel_of[i]`) summed per
-    /// pixel.
-    pub fn of(costs: &RayCosts, cost: Cost, pixel_of: &[u32], width: u32, height: u32) -> Self {
+    /// `costs` (one entry per ray or shading point `i`, from pixel `pixel_of[i]`, standing for
+    /// `rays_of[i]` rays) summed per pixel.
+    pub fn of(
+        costs: &RayCosts,
+        cost: Cost,
+        (pixel_of, rays_of): (&[u32], &[u32]),
+        width: u32,
+        height: u32,
+    ) -> Self {
         let pixels = width as usize * height as usize;
         let mut map = CostMap {
             cost,
@@ -119,9 +125,9 @@ impl CostMap {
             total: vec![0; pixels],
             rays: vec![0; pixels],
         };
-        for (&pixel, &c) in pixel_of.iter().zip(cost.of(costs)) {
+        for ((&pixel, &rays), &c) in pixel_of.iter().zip(rays_of).zip(cost.of(costs)) {
             map.total[pixel as usize] += c;
-            map.rays[pixel as usize] += 1;
+            map.rays[pixel as usize] += rays;
         }
         map
     }
@@ -166,10 +172,18 @@ pub fn count_per_pixel(
              no heat map can be drawn for it",
         ));
     }
-    let owners = match work {
-        Work::Closest(batch) | Work::Occlusion(batch) => batch.len(),
-        Work::LightVisibility(query) => query.len(),
+    // A shading point stands for its sample rays (those in front of its surface).
+    let rays_of: Vec<u32> = match work {
+        Work::Closest(batch) | Work::Occlusion(batch) => vec![1; batch.len()],
+        Work::LightVisibility(query) => (0..query.len())
+            .map(|i| {
+                (0..query.samples.per_point())
+                    .filter(|&s| query.ray(i, s).is_some())
+                    .count() as u32
+            })
+            .collect(),
     };
+    let owners = rays_of.len();
     assert_eq!(owners, pixel_of.len(), "one pixel per ray or shading point");
     if let Some(&pixel) = pixel_of
         .iter()
@@ -184,7 +198,7 @@ pub fn count_per_pixel(
     answer(tracer, work, &mut answers, Some(&mut counters));
     let costs = counters.per_ray.take().expect("an attributing pass");
     let maps = Cost::ALL
-        .map(|cost| CostMap::of(&costs, cost, pixel_of, width, height))
+        .map(|cost| CostMap::of(&costs, cost, (pixel_of, &rays_of), width, height))
         .to_vec();
     Ok((counters, maps))
 }
@@ -198,12 +212,13 @@ mod tests {
         let mut costs = RayCosts::new(4);
         costs.boxes = vec![3, 5, 1, 0];
         // Rays 0 and 1 from pixel 3, ray 2 from pixel 0, ray 3 from pixel 1; pixel 2 has none.
-        let map = CostMap::of(&costs, Cost::Box, &[3, 3, 0, 1], 2, 2);
+        // Ray 3 stands for 3 rays (a shading point's samples).
+        let map = CostMap::of(&costs, Cost::Box, (&[3, 3, 0, 1], &[1, 1, 1, 3]), 2, 2);
         assert_eq!(map.total, vec![1, 0, 0, 8]);
-        assert_eq!(map.rays, vec![1, 1, 0, 2]);
+        assert_eq!(map.rays, vec![1, 3, 0, 2]);
         assert_eq!(map.per_ray(3), 4.0);
         assert_eq!(map.per_ray(2), 0.0);
-        assert_eq!(map.mean(), 9.0 / 4.0);
+        assert_eq!(map.mean(), 9.0 / 6.0);
         assert_eq!(map.max(), 4.0);
         assert_eq!("triangle".parse::<Cost>().unwrap(), Cost::Triangle);
         assert!("lanes".parse::<Cost>().is_err());

@@ -45,8 +45,10 @@ pub fn viridis(x: f64) -> RGBColor {
 
 /// Width of the colour bar and its labels beside the panels.
 const BAR_PANEL: u32 = 150;
-/// Panels are shrunk (whole pixel blocks averaged) to at most this many pixels a side.
+/// Panels are shrunk (whole pixel blocks averaged) to at most this many pixels a side, or
+/// magnified (whole pixels repeated) to at least `PANEL_MIN` wide, room for their captions.
 const PANEL_SIDE: u32 = 256;
+const PANEL_MIN: u32 = 192;
 /// Panels per row.
 const COLUMNS: usize = 4;
 /// Room under each panel for its two caption lines, and between panels.
@@ -90,9 +92,11 @@ pub fn save_panels(
     };
     register_font()?;
     let shrink = w.max(h).div_ceil(PANEL_SIDE).max(1);
+    let zoom = PANEL_MIN.div_ceil(w).max(1);
     let layout = Layout {
         shrink,
-        panel: (w / shrink, h / shrink),
+        zoom,
+        panel: (w * zoom / shrink, h * zoom / shrink),
         rows: panels.len().div_ceil(COLUMNS) as u32,
         columns: panels.len().min(COLUMNS) as u32,
     };
@@ -106,8 +110,10 @@ pub fn save_panels(
 
 /// Where the panels go.
 struct Layout {
-    /// Image pixels per panel pixel, along each axis.
+    /// Image pixels per panel pixel, along each axis (≥ 1) ...
     shrink: u32,
+    /// ... or panel pixels per image pixel (≥ 1; one of the two is 1).
+    zoom: u32,
     panel: (u32, u32),
     rows: u32,
     columns: u32,
@@ -118,6 +124,12 @@ impl Layout {
         let width = self.columns * (self.panel.0 + GAP) + BAR_PANEL;
         let height = (self.rows * (self.panel.1 + CAPTION + GAP)).max(MIN_HEIGHT);
         (width, height)
+    }
+
+    /// The image pixels, along one axis, that panel pixel `p` shows.
+    fn source(&self, p: u32) -> std::ops::Range<u32> {
+        let first = p * self.shrink / self.zoom;
+        first..first + self.shrink
     }
 
     /// The top-left corner of panel `i`.
@@ -192,12 +204,11 @@ fn draw_map(
     scale_max: f64,
     corner: (i32, i32),
 ) -> std::result::Result<(), Box<dyn std::error::Error>> {
-    let s = layout.shrink;
     for py in 0..layout.panel.1 {
         for px in 0..layout.panel.0 {
             let (mut total, mut rays) = (0u64, 0u64);
-            for y in py * s..(py + 1) * s {
-                for x in px * s..(px + 1) * s {
+            for y in layout.source(py) {
+                for x in layout.source(px) {
                     let i = (y * map.width + x) as usize;
                     total += map.total[i];
                     rays += map.rays[i] as u64;
@@ -222,10 +233,10 @@ fn draw_shaded(
     corner: (i32, i32),
 ) -> std::result::Result<(), Box<dyn std::error::Error>> {
     let bytes = image.to_srgb8(image.auto_exposure());
-    let s = layout.shrink;
+    let middle = |p: u32| layout.source(p).start + layout.shrink / 2;
     for py in 0..layout.panel.1 {
         for px in 0..layout.panel.0 {
-            let i = 3 * ((py * s + s / 2) * image.width + px * s + s / 2) as usize;
+            let i = 3 * (middle(py) * image.width + middle(px)) as usize;
             let colour = RGBColor(bytes[i], bytes[i + 1], bytes[i + 2]);
             root.draw_pixel((corner.0 + px as i32, corner.1 + py as i32), &colour)?;
         }
@@ -234,8 +245,9 @@ fn draw_shaded(
 }
 
 /// The run's figures (`heatmaps = [...]`): one per scene × ray kind × cost of `set`,
-/// `heatmap-<scene>-<kind>-<cost>.png`, the shaded frame first, then every tracer in plan order,
-/// all on one scale: the largest per-ray cost of any pixel of them.
+/// `heatmap-<scene>-<kind>-<cost>.png`, the shaded frame first, then every tracer that counts in
+/// plan order, all on one scale (the largest per-ray cost of any pixel of them), then one panel
+/// for the baselines, which report no counts.
 pub fn write_figures(dir: &Path, costs: &[Cost], set: &HeatmapSet) -> Result<()> {
     for (scene, image) in &set.shaded {
         let of_scene: Vec<&HeatmapPanel> =
@@ -256,10 +268,16 @@ pub fn write_figures(dir: &Path, costs: &[Cost], set: &HeatmapSet) -> Result<()>
                 let scale = maps.iter().flatten().map(|m| m.max()).fold(1.0, f64::max);
                 let mut panels = vec![(scene.clone(), Panel::Shaded(image))];
                 panels.extend(
-                    tracers.iter().zip(&maps).map(|(p, map)| {
-                        (p.tracer.clone(), map.map_or(Panel::NoCounts, Panel::Map))
-                    }),
+                    tracers
+                        .iter()
+                        .zip(&maps)
+                        .filter_map(|(p, map)| map.map(|map| (p.tracer.clone(), Panel::Map(map)))),
                 );
+                // The baselines (embree-best alone is 18 of them) share one blank panel.
+                let baselines = maps.iter().filter(|m| m.is_none()).count();
+                if baselines > 0 {
+                    panels.push((format!("{baselines} baseline(s)"), Panel::NoCounts));
+                }
                 let name = format!(
                     "heatmap-{}-{}-{}.png",
                     file_stem(scene),
