@@ -4,6 +4,7 @@
 //! native answer and everyone's shadow rays) a soft-shadow query — and the counters themselves
 //! equal those of an ordinary counting pass, so attributing costs changes no count.
 
+use raylab::experiment::Experiment;
 use raylab::geometry::RayBatch;
 use raylab::render::area_light::{soft_shadow_points, LightSampleSets};
 use raylab::render::cost_map::{count_per_pixel, wavefront, Cost, CostMap};
@@ -175,4 +176,38 @@ fn baselines_without_counts_give_no_map() {
     let err =
         count_per_pixel(embree.as_ref(), Work::of_batch(&rays), &rays.pixel, SIZE).unwrap_err();
     assert!(err.to_string().contains("does not report"), "{err}");
+}
+
+#[test]
+fn the_readme_picture_is_made_by_a_committed_command() {
+    let readme = std::fs::read_to_string("README.md").unwrap();
+    let picture = "docs/heatmaps/heatmap-conference-area-light-soft_shadow-box.png";
+    assert!(
+        readme.contains(&format!("]({picture})")),
+        "the README shows the picture"
+    );
+    assert!(readme.contains("raylab run experiments/heatmaps.toml --out /tmp/heatmaps"));
+    assert!(readme.contains(&format!("cp /tmp/heatmaps/heatmaps/*/{}", &picture[14..])));
+    let exp = Experiment::load(std::path::Path::new("experiments/heatmaps.toml")).unwrap();
+    assert_eq!(exp.name, "heatmaps");
+    assert_eq!(exp.heatmaps, vec![Cost::Box]);
+    assert_eq!(exp.scenes[0].name, "conference-area-light");
+    let image = image::open(picture).unwrap();
+    // The shaded frame and three tracers' 256² panels side by side, plus the colour bar.
+    assert!(image.width() > 4 * 256 && image.height() >= 256);
+}
+
+#[test]
+fn an_unknown_heat_map_names_the_file_and_line() {
+    let text =
+        "name = \"x\"\nscenes = [\"room\"]\ntracers = [\"reference\"]\nrays = [\"primary\"]\n\
+                heatmaps = [\"box\", \"lanes\"]\nresolution = { width = 8, height = 8 }\n\
+                frames = 1\nthreads = [1]\nwarmup = 0\nrepeats = 1\n";
+    let err = Experiment::parse(std::path::Path::new("x.toml"), text).unwrap_err();
+    assert_eq!(err.exit_code(), 2);
+    let message = err.to_string();
+    assert!(
+        message.contains("x.toml:5:") && message.contains("\"lanes\""),
+        "{message}"
+    );
 }
