@@ -41,6 +41,8 @@ struct Cli {
     command: Command,
 }
 
+// Parsed once per process: boxing the larger variants' flags would buy nothing.
+#[allow(clippy::large_enum_variant)]
 #[derive(Subcommand)]
 enum Command {
     /// Run an experiment TOML: scenes × tracers × parameters × frames → results/<experiment>/<run-id>/,

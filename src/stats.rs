@@ -206,6 +206,22 @@ fn bump(by_depth: &mut Vec<u64>, depth: usize) {
     bump_by(by_depth, depth, 1);
 }
 
+/// One test per ray of `owners` at `depth`: into a count and its per-depth column, and, when
+/// attributing, into each owner's entry of `per_ray`.
+fn add_tests(
+    (total, by_depth): (&mut u64, &mut Vec<u64>),
+    per_ray: Option<&mut Vec<u64>>,
+    depth: usize,
+    owners: Owners<'_>,
+) {
+    let n = owners.len() as u64;
+    *total += n;
+    bump_by(by_depth, depth, n);
+    if let Some(column) = per_ray {
+        owners.for_each(|i| column[i as usize] += 1);
+    }
+}
+
 fn bump_by(by_depth: &mut Vec<u64>, depth: usize, n: u64) {
     if by_depth.len() <= depth {
         by_depth.resize(depth + 1, 0);
@@ -254,21 +270,23 @@ impl Stats for Counters {
     }
     #[inline]
     fn aabb_tests(&mut self, depth: usize, owners: Owners<'_>) {
-        let n = owners.len() as u64;
-        self.aabb_tests += n;
-        bump_by(&mut self.aabb_by_depth, depth, n);
-        if let Some(costs) = &mut self.per_ray {
-            owners.for_each(|i| costs.boxes[i as usize] += 1);
-        }
+        let per_ray = self.per_ray.as_mut().map(|c| &mut c.boxes);
+        add_tests(
+            (&mut self.aabb_tests, &mut self.aabb_by_depth),
+            per_ray,
+            depth,
+            owners,
+        );
     }
     #[inline]
     fn triangle_tests(&mut self, depth: usize, owners: Owners<'_>) {
-        let n = owners.len() as u64;
-        self.triangle_tests += n;
-        bump_by(&mut self.triangle_by_depth, depth, n);
-        if let Some(costs) = &mut self.per_ray {
-            owners.for_each(|i| costs.triangles[i as usize] += 1);
-        }
+        let per_ray = self.per_ray.as_mut().map(|c| &mut c.triangles);
+        add_tests(
+            (&mut self.triangle_tests, &mut self.triangle_by_depth),
+            per_ray,
+            depth,
+            owners,
+        );
     }
     #[inline]
     fn node_shared(&mut self, _depth: usize, owners: Owners<'_>) {
