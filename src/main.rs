@@ -9,19 +9,21 @@ use clap::{Parser, Subcommand};
 use raylab::error::{Error, Result};
 use raylab::experiment::record::files::SUMMARY_MD;
 use raylab::experiment::record::results_dir::PendingResults;
+use raylab::experiment::results::heatmap::{save_panels, Panel};
 use raylab::experiment::results::summary::Summary;
 use raylab::experiment::spec::overrides::Scale;
 use raylab::experiment::spec::shard::Shard;
 use raylab::experiment::{run_experiment, Chatter, RunOverrides};
 use raylab::geometry::ray_file::{hits_csv, occlusion_csv, read_rays};
 use raylab::geometry::RayKind;
+use raylab::render::cost_map::{count_per_pixel, wavefront, Cost};
 use raylab::render::distribution::{render_sampled, DrtSettings, FrameGeometry};
 use raylab::render::image::Image;
 use raylab::render::motion::MovingMesh;
 use raylab::render::path::ShadeStreams;
 use raylab::render::raycast::render_raycast;
 use raylab::render::renderers::{RenderWorkload, RendererInfo, RENDERERS};
-use raylab::render::wavefront::Tracing;
+use raylab::render::wavefront::{Tracing, Work};
 use raylab::render::whitted::{render_whitted, WhittedSettings};
 use raylab::scene::library::{list_scenes, load_scene};
 use raylab::scene::{Frame, Scene};
@@ -40,6 +42,8 @@ struct Cli {
     command: Command,
 }
 
+// Parsed once per process: boxing the larger variants' flags would buy nothing.
+#[allow(clippy::large_enum_variant)]
 #[derive(Subcommand)]
 enum Command {
     /// Run an experiment TOML: scenes × tracers × parameters × frames → results/<experiment>/<run-id>/,
@@ -177,6 +181,8 @@ enum Command {
         whitted: WhittedArgs,
         #[command(flatten)]
         drt: DrtArgs,
+        #[command(flatten)]
+        heatmap: HeatmapArgs,
     },
     /// Trace identical rays with a tracer and with Embree (robust) and compare them ray by ray.
     Verify {
@@ -288,6 +294,26 @@ struct WhittedArgs {
     /// glossy, glass.
     #[arg(long)]
     materials: Option<String>,
+}
+
+/// `render --heatmap`: a per-pixel cost map instead of the shaded image.
+#[derive(clap::Args, Debug)]
+struct HeatmapArgs {
+    /// Write a heat map of this cost per pixel instead of the image: box, triangle or nodes
+    /// (tests or visits per ray, from a counting pass; not for the production baselines).
+    #[arg(long, value_parser = parse_cost)]
+    heatmap: Option<Cost>,
+    /// The rays the heat map counts: primary, shadow (one per hit and light) or diffuse.
+    #[arg(long, default_value = "primary", requires = "heatmap")]
+    heatmap_rays: String,
+    /// Top of the colour scale in tests per ray (default: the map's largest), so several
+    /// tracers' maps share one scale.
+    #[arg(long, requires = "heatmap")]
+    heatmap_max: Option<f64>,
+}
+
+fn parse_cost(name: &str) -> std::result::Result<Cost, String> {
+    name.parse::<Cost>().map_err(|e| e.to_string())
 }
 
 /// Distribution ray tracing options of `render --renderer distribution`.
@@ -522,6 +548,7 @@ fn execute(command: Command) -> Result<bool> {
             max_depth,
             whitted,
             drt,
+            heatmap,
         } => {
             check_frame(frame, frames)?;
             at_least_one("--width", width as usize)?;
@@ -533,6 +560,17 @@ fn execute(command: Command) -> Result<bool> {
                 return Err(Error::usage(format!(
                     "--output {}: the image is a PNG, so its name must end in .png",
                     output.display()
+                )));
+            }
+            if let Some(max) = heatmap.heatmap_max.filter(|m| !(m.is_finite() && *m > 0.0)) {
+                return Err(Error::usage(format!(
+                    "--heatmap-max must be a number > 0, not {max}"
+                )));
+            }
+            if heatmap.heatmap.is_some() && renderer != RAYCAST {
+                return Err(Error::usage(format!(
+                    "--heatmap counts a wavefront (--heatmap-rays), not a {renderer} render: \
+                     leave out --renderer"
                 )));
             }
             // The settings are checked before anything is loaded or allocated.
@@ -556,6 +594,30 @@ fn execute(command: Command) -> Result<bool> {
             let scene = load_scene(&scene, size)?;
             let frame = scene.frame(frame, frames);
             let params = params_of(params);
+            if let Some(cost) = heatmap.heatmap {
+                let tracer_name = tracer;
+                let tracer = raylab::tracers::tracer_for_frame(&tracer_name, &params, &frame)?;
+                let size = (width, height);
+                let rays = wavefront(&scene, &frame, tracer.as_ref(), &heatmap.heatmap_rays, size)?;
+                let (_, maps) =
+                    count_per_pixel(tracer.as_ref(), Work::of_batch(&rays), &rays.pixel, size)?;
+                let map = maps
+                    .iter()
+                    .find(|m| m.cost == cost)
+                    .expect("every cost is mapped");
+                let scale = heatmap.heatmap_max.unwrap_or(map.max().max(1.0));
+                let caption = format!("{} on {} rays", tracer_name, heatmap.heatmap_rays);
+                let panels = [(caption, Panel::Map(map))];
+                save_panels(&output, &panels, cost.unit(), scale)?;
+                println!(
+                    "wrote {} ({} heat map of {} rays, {:.2} per ray, scale 0–{scale})",
+                    output.display(),
+                    cost.name(),
+                    heatmap.heatmap_rays,
+                    map.mean()
+                );
+                return Ok(true);
+            }
             let image = match workload {
                 None => {
                     let tracer = raylab::tracers::tracer_for_frame(&tracer, &params, &frame)?;

@@ -2,6 +2,14 @@
 //! `if S::ENABLED`, so `NoStats` compiles every count away and timing runs pay nothing, while
 //! `Counters` records exact AABB tests, triangle tests and nodes visited, per BVH depth, plus the
 //! algorithm-specific events of `Event` (mailbox hits, culled boxes, rays alive at leaves, ...).
+//! A counting pass may also charge every box test, triangle test and node visit to the ray it was
+//! made for (`RayCosts`, the per-pixel heat maps): kernels name the rays of each count (`Owners`).
+
+mod ray_costs;
+
+use std::ops::Range;
+
+pub use ray_costs::{Owners, RayCosts};
 
 pub trait Stats: Default + Send {
     const ENABLED: bool;
@@ -11,6 +19,37 @@ pub trait Stats: Default + Send {
     fn triangle_test(&mut self, depth: usize);
     /// `n` occurrences of an algorithm-specific event.
     fn event(&mut self, event: Event, n: u64);
+
+    /// Ray `i` of the kernel's rays is traced next, alone: the counts that follow without
+    /// owners of their own (`aabb_test`, `triangle_test`, `node`) are its.
+    #[inline(always)]
+    fn charge_ray(&mut self, _i: usize) {}
+
+    /// One box test for each ray of `owners` (a packet's lanes in use, a stream's rays).
+    #[inline(always)]
+    fn aabb_tests(&mut self, depth: usize, owners: Owners<'_>) {
+        (0..owners.len()).for_each(|_| self.aabb_test(depth));
+    }
+
+    /// One triangle test for each ray of `owners`.
+    #[inline(always)]
+    fn triangle_tests(&mut self, depth: usize, owners: Owners<'_>) {
+        (0..owners.len()).for_each(|_| self.triangle_test(depth));
+    }
+
+    /// One node visit shared by the rays of `owners` (a packet's, a stream's, a block's).
+    #[inline(always)]
+    fn node_shared(&mut self, depth: usize, _owners: Owners<'_>) {
+        self.node(depth);
+    }
+
+    /// `f`'s counts, made over rays numbered `0..owners_of.len()` (shadow rays, frusta), each
+    /// spread over the rays `owners_of[i]` of the caller's numbering (its shading point, its
+    /// pixels: `RayCosts::add_spread`).
+    #[inline(always)]
+    fn relabelled<R>(&mut self, _owners_of: &[Range<u32>], f: impl FnOnce(&mut Self) -> R) -> R {
+        f(self)
+    }
 }
 
 /// Events that only some algorithms have. Each is one column of runs.csv (empty for tracers that
@@ -157,13 +196,37 @@ pub struct Counters {
     pub triangle_by_depth: Vec<u64>,
     /// Indexed by `Event as usize`.
     pub events: [u64; Event::COUNT],
+    /// The same box tests, triangle tests and node visits per ray, when the pass attributes them
+    /// (`Counters::attributing`).
+    #[serde(skip)]
+    pub per_ray: Option<RayCosts>,
 }
 
 fn bump(by_depth: &mut Vec<u64>, depth: usize) {
+    bump_by(by_depth, depth, 1);
+}
+
+/// One test per ray of `owners` at `depth`: into a count and its per-depth column, and, when
+/// attributing, into each owner's entry of `per_ray`.
+fn add_tests(
+    (total, by_depth): (&mut u64, &mut Vec<u64>),
+    per_ray: Option<&mut Vec<u64>>,
+    depth: usize,
+    owners: Owners<'_>,
+) {
+    let n = owners.len() as u64;
+    *total += n;
+    bump_by(by_depth, depth, n);
+    if let Some(column) = per_ray {
+        owners.for_each(|i| column[i as usize] += 1);
+    }
+}
+
+fn bump_by(by_depth: &mut Vec<u64>, depth: usize, n: u64) {
     if by_depth.len() <= depth {
         by_depth.resize(depth + 1, 0);
     }
-    by_depth[depth] += 1;
+    by_depth[depth] += n;
 }
 
 impl Stats for Counters {
@@ -175,29 +238,102 @@ impl Stats for Counters {
     #[inline]
     fn node(&mut self, _depth: usize) {
         self.nodes_visited += 1;
+        if let Some(costs) = &mut self.per_ray {
+            costs.node_of_current();
+        }
     }
     #[inline]
     fn aabb_test(&mut self, depth: usize) {
         self.aabb_tests += 1;
         bump(&mut self.aabb_by_depth, depth);
+        if let Some(costs) = &mut self.per_ray {
+            costs.box_of_current();
+        }
     }
     #[inline]
     fn triangle_test(&mut self, depth: usize) {
         self.triangle_tests += 1;
         bump(&mut self.triangle_by_depth, depth);
+        if let Some(costs) = &mut self.per_ray {
+            costs.triangle_of_current();
+        }
     }
     #[inline]
     fn event(&mut self, event: Event, n: u64) {
         self.events[event as usize] += n;
     }
+    #[inline]
+    fn charge_ray(&mut self, i: usize) {
+        if let Some(costs) = &mut self.per_ray {
+            costs.current = i as u32;
+        }
+    }
+    #[inline]
+    fn aabb_tests(&mut self, depth: usize, owners: Owners<'_>) {
+        let per_ray = self.per_ray.as_mut().map(|c| &mut c.boxes);
+        add_tests(
+            (&mut self.aabb_tests, &mut self.aabb_by_depth),
+            per_ray,
+            depth,
+            owners,
+        );
+    }
+    #[inline]
+    fn triangle_tests(&mut self, depth: usize, owners: Owners<'_>) {
+        let per_ray = self.per_ray.as_mut().map(|c| &mut c.triangles);
+        add_tests(
+            (&mut self.triangle_tests, &mut self.triangle_by_depth),
+            per_ray,
+            depth,
+            owners,
+        );
+    }
+    #[inline]
+    fn node_shared(&mut self, _depth: usize, owners: Owners<'_>) {
+        self.nodes_visited += 1;
+        if let Some(costs) = &mut self.per_ray {
+            costs.node_shared(owners);
+        }
+    }
+    fn relabelled<R>(&mut self, owners_of: &[Range<u32>], f: impl FnOnce(&mut Self) -> R) -> R {
+        let Some(outer) = self.per_ray.take() else {
+            return f(self);
+        };
+        self.per_ray = Some(RayCosts::new(owners_of.len()));
+        let result = f(self);
+        let inner = self.per_ray.replace(outer).expect("put back above");
+        self.per_ray
+            .as_mut()
+            .expect("just put back")
+            .add_spread(&inner, owners_of);
+        result
+    }
 }
 
 impl Counters {
+    /// Counters that also charge each count to one of `rays` rays (`per_ray`).
+    pub fn attributing(rays: usize) -> Counters {
+        Counters {
+            per_ray: Some(RayCosts::new(rays)),
+            ..Counters::default()
+        }
+    }
+
     pub fn get(&self, event: Event) -> u64 {
         self.events[event as usize]
     }
 
+    /// Adds `other`'s counts (and its per-ray costs, when both have them, to the same rays).
     pub fn merge(&mut self, other: &Counters) {
+        self.merge_at(other, 0);
+    }
+
+    /// Adds `other`'s counts; its per-ray costs, when both have them, to this one's rays from
+    /// `offset` on (a chunk's counters into its batch's).
+    pub fn merge_at(&mut self, other: &Counters, offset: usize) {
+        if let (Some(mine), Some(theirs)) = (&mut self.per_ray, &other.per_ray) {
+            mine.add_at(theirs, offset);
+        }
         self.rays += other.rays;
         self.nodes_visited += other.nodes_visited;
         self.aabb_tests += other.aabb_tests;

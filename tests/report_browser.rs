@@ -4,6 +4,10 @@
 //! decoded with a non-zero natural size, and where the first table and image are drawn; a
 //! screenshot then must show ink (pixel variance) in those two places.
 //!
+//! A second test runs the Benthin benchmark (`experiments/benthin09-benchmark.toml`, as written
+//! but at 32² and one pass) and checks its report shows every heat map (issue 33), and that
+//! `experiments/packet.toml` asks for the same maps.
+//!
 //! CI installs Chromium (`.ci/setup`); without it this test fails, unless `RAYLAB_NO_BROWSER` is set
 //! (then it prints why it skipped).
 
@@ -101,16 +105,90 @@ fn variance(shot: &image::RgbImage, [x, y, w, h]: [u32; 4]) -> f64 {
     values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / values.len() as f64
 }
 
-#[test]
-fn chromium_renders_the_reports_tables_and_images() {
+/// Chromium, or `None` when `RAYLAB_NO_BROWSER` says to skip.
+fn browser_or_skip() -> Option<PathBuf> {
     if let Some(why) = std::env::var_os("RAYLAB_NO_BROWSER") {
         println!("skipped: RAYLAB_NO_BROWSER={}", why.to_string_lossy());
-        return;
+        return None;
     }
-    let browser = chromium().expect(
+    Some(chromium().expect(
         "the HTML report test needs Chromium (`apt-get install chromium`, as .ci/setup does); \
          set RAYLAB_NO_BROWSER=1 to skip it",
+    ))
+}
+
+/// The probe's line from the DOM Chromium dumps of `html` with the probe added.
+fn probe_of(browser: &Path, work: &Path, html: &str) -> String {
+    let probe_page = work.join("probe.html");
+    std::fs::write(
+        &probe_page,
+        html.replace("</body>", &format!("{PROBE}</body>")),
+    )
+    .unwrap();
+    let dom = browse(
+        browser,
+        &work.join("profile"),
+        &probe_page,
+        &["--dump-dom".into()],
     );
+    let start = dom.find("<pre id=\"probe\">").expect("the probe ran") + 16;
+    dom[start..start + dom[start..].find("</pre>").unwrap()].to_string()
+}
+
+#[test]
+fn chromium_shows_the_benthin_benchmarks_heat_maps() {
+    let Some(browser) = browser_or_skip() else {
+        return;
+    };
+    if raylab::scene::library::load_scene("conference-area-light", None).is_err() {
+        println!("skipped: real scenes not found; set RAYLAB_SCENES to ../shared/scenes");
+        return;
+    }
+    let packet = std::fs::read_to_string("experiments/packet.toml").unwrap();
+    assert!(packet.contains("\nheatmaps = [\"box\", \"triangle\"]\n"));
+    let work = std::env::temp_dir().join(format!("raylab-heatmaps-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&work);
+    std::fs::create_dir_all(&work).unwrap();
+    let overrides = RunOverrides {
+        output: Some(work.join("results")),
+        resolution: Some((32, 32)),
+        threads: Some(vec![1]),
+        warmup: Some(0),
+        repeats: Some(1),
+        ..RunOverrides::default()
+    };
+    let experiment = Path::new("experiments/benthin09-benchmark.toml");
+    let dir = run_experiment(experiment, &overrides).unwrap();
+    // Two scenes × (primary, soft shadows) × (box, triangle).
+    let mut maps: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|name| name.starts_with("heatmap-"))
+        .collect();
+    maps.sort();
+    assert_eq!(maps.len(), 8, "{maps:?}");
+    assert!(maps.contains(&"heatmap-sibenik-area-light-soft_shadow-box.png".to_string()));
+    let page = report::write(std::slice::from_ref(&dir), false, None).unwrap();
+    let html = std::fs::read_to_string(&page).unwrap();
+    for name in &maps {
+        assert!(
+            html.contains(&format!("<img alt=\"{name}\"")),
+            "{name} not in the page"
+        );
+    }
+    let probe = probe_of(&browser, &work, &html);
+    // Every image decoded with a size: the maps among them.
+    let images: usize = field(&probe, "images").parse().unwrap();
+    assert!(images >= maps.len(), "{probe}");
+    assert_eq!(field(&probe, "decoded"), images.to_string(), "{probe}");
+    let _ = std::fs::remove_dir_all(&work);
+}
+
+#[test]
+fn chromium_renders_the_reports_tables_and_images() {
+    let Some(browser) = browser_or_skip() else {
+        return;
+    };
     let work = std::env::temp_dir().join(format!("raylab-browser-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&work);
     std::fs::create_dir_all(&work).unwrap();
@@ -134,17 +212,8 @@ fn chromium_renders_the_reports_tables_and_images() {
     assert!(pngs >= 2, "the run drew {pngs} plots");
     let page = report::write(std::slice::from_ref(&dir), false, None).unwrap();
     let html = std::fs::read_to_string(&page).unwrap();
-    let probe_page = work.join("probe.html");
-    std::fs::write(
-        &probe_page,
-        html.replace("</body>", &format!("{PROBE}</body>")),
-    )
-    .unwrap();
-
+    let probe = &probe_of(&browser, &work, &html);
     let profile = work.join("profile");
-    let dom = browse(&browser, &profile, &probe_page, &["--dump-dom".into()]);
-    let start = dom.find("<pre id=\"probe\">").expect("the probe ran") + 16;
-    let probe = &dom[start..start + dom[start..].find("</pre>").unwrap()];
     assert_eq!(field(probe, "images"), pngs.to_string(), "{probe}");
     assert_eq!(field(probe, "decoded"), pngs.to_string(), "{probe}");
     // Machines, scenes, Table 1 and runs.csv at least.

@@ -105,9 +105,11 @@ pub fn run(
         overrides.chatter != Chatter::Quiet,
     );
     let dump = overrides.dump_rays.then(|| results.dir().join(RAYS_DIR));
-    let cases = runner::run_plan(exp, &plan, &part, load, &progress, dump.as_deref());
+    let measured = runner::run_plan(exp, &plan, &part, load, &progress, dump.as_deref());
     progress.finish_and_clear();
-    let mut records = run::case::records(&plan, &cases?);
+    let (cases, heatmaps) = measured?;
+    results::heatmap::write_figures(results.dir(), &exp.heatmaps, &heatmaps)?;
+    let mut records = run::case::records(&plan, &cases);
     results::embree_best::fill(&plan, &mut records.runs);
 
     let dir = results.dir();

@@ -3,6 +3,7 @@
 pub mod area_light;
 pub mod assembly;
 pub mod convergence;
+pub mod cost_map;
 pub mod discontinuity_filter;
 pub mod distribution;
 pub mod glossy;

@@ -101,23 +101,29 @@ pub fn answer(
     counters: Option<&mut Counters>,
 ) {
     let chunk = tracer.chunk_rays();
+    // Whether the counters charge each count to its ray too (`Counters::attributing`).
+    let per_ray = counters.as_ref().is_some_and(|c| c.per_ray.is_some());
     match (work, answers, counters) {
         (Work::Closest(batch), Answers::Hits(out), None) => {
             pass(batch.view(), out, chunk, &|r, h| tracer.intersect(r, h))
         }
-        (Work::Closest(batch), Answers::Hits(out), Some(c)) => {
-            c.merge(&counted_pass(batch.view(), out, chunk, &|r, h, c| {
-                tracer.intersect_counted(r, h, c)
-            }))
-        }
+        (Work::Closest(batch), Answers::Hits(out), Some(c)) => c.merge(&counted_pass(
+            batch.view(),
+            out,
+            chunk,
+            per_ray,
+            &|r, h, c| tracer.intersect_counted(r, h, c),
+        )),
         (Work::Occlusion(batch), Answers::Occluded(out), None) => {
             pass(batch.view(), out, chunk, &|r, o| tracer.occluded(r, o))
         }
-        (Work::Occlusion(batch), Answers::Occluded(out), Some(c)) => {
-            c.merge(&counted_pass(batch.view(), out, chunk, &|r, o, c| {
-                tracer.occluded_counted(r, o, c)
-            }))
-        }
+        (Work::Occlusion(batch), Answers::Occluded(out), Some(c)) => c.merge(&counted_pass(
+            batch.view(),
+            out,
+            chunk,
+            per_ray,
+            &|r, o, c| tracer.occluded_counted(r, o, c),
+        )),
         (Work::LightVisibility(query), Answers::Visibility(v), counters) => {
             visibility_pass(tracer, query, &mut v.words, counters)
         }

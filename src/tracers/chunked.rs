@@ -52,18 +52,19 @@ fn packet_chunks(len: usize, packet_start: &[bool], at_least: usize) -> Vec<Rang
     chunks
 }
 
-/// `out` cut along `chunk_ranges(rays, chunk_rays)`, each part with its rays.
+/// `out` cut along `chunk_ranges(rays, chunk_rays)`, each part with its first ray's index and
+/// its rays.
 fn chunks<'a, 'r, T>(
     rays: Rays<'r>,
     mut out: &'a mut [T],
     chunk_rays: usize,
-) -> Vec<(Rays<'r>, &'a mut [T])> {
+) -> Vec<(usize, Rays<'r>, &'a mut [T])> {
     chunk_ranges(rays, chunk_rays)
         .into_iter()
         .map(|range| {
             let (chunk, rest) = std::mem::take(&mut out).split_at_mut(range.len());
             out = rest;
-            (rays.slice(range), chunk)
+            (range.start, rays.slice(range), chunk)
         })
         .collect()
 }
@@ -77,7 +78,7 @@ pub fn pass<T: Send>(
 ) {
     chunks(rays, out, chunk_rays)
         .into_par_iter()
-        .for_each(|(rays, chunk)| trace(rays, chunk));
+        .for_each(|(_, rays, chunk)| trace(rays, chunk));
 }
 
 /// `rays` in `tracer`'s own layout for closest hits, staged chunk by chunk as `pass` cuts them,
@@ -97,29 +98,50 @@ pub fn stage_occlusion<'t>(
     tracer.stage_occlusion(rays, chunk_ranges(rays, tracer.chunk_rays()))
 }
 
-/// One counting pass: each chunk counts into its own `Counters`, merged at the end.
+/// One counting pass: each chunk counts into its own `Counters`, merged at the end; with
+/// `per_ray`, each count also charged to its ray (`Counters::attributing`).
 pub fn counted_pass<T: Send>(
     rays: Rays<'_>,
     out: &mut [T],
     chunk_rays: usize,
+    per_ray: bool,
     trace: &(dyn Fn(Rays<'_>, &mut [T], &mut Counters) + Sync),
 ) -> Counters {
-    chunks(rays, out, chunk_rays)
+    let len = rays.len();
+    let parts = chunks(rays, out, chunk_rays)
         .into_par_iter()
-        .map(|(rays, chunk)| {
-            let mut counters = Counters::default();
+        .map(|(first, rays, chunk)| {
+            let mut counters = chunk_counters(per_ray, rays.len());
             trace(rays, chunk, &mut counters);
-            counters
+            (first, counters)
         })
-        .reduce(Counters::default, merge)
+        .collect();
+    gather(chunk_counters(per_ray, len), parts)
 }
 
-/// The chunks of a light-visibility query: whole packets of points, about `chunk_rays` rays each.
+/// Counters for `rays` rays, attributing them when `per_ray`.
+fn chunk_counters(per_ray: bool, rays: usize) -> Counters {
+    match per_ray {
+        true => Counters::attributing(rays),
+        false => Counters::default(),
+    }
+}
+
+/// `total` with every chunk's counters (first ray or point, counters) merged in, in order.
+fn gather(mut total: Counters, parts: Vec<(usize, Counters)>) -> Counters {
+    for (first, counters) in &parts {
+        total.merge_at(counters, *first);
+    }
+    total
+}
+
+/// The chunks of a light-visibility query: whole packets of points, about `chunk_rays` rays
+/// each, with their first point.
 fn visibility_chunks<'a, 'q>(
     query: VisibilityQuery<'q>,
     mut out: &'a mut [u64],
     chunk_rays: usize,
-) -> Vec<(VisibilityQuery<'q>, &'a mut [u64])> {
+) -> Vec<(usize, VisibilityQuery<'q>, &'a mut [u64])> {
     let words = query.samples.words_per_point();
     let points = chunk_rays.div_ceil(query.samples.per_point());
     packet_chunks(query.len(), query.packet_start, points)
@@ -127,7 +149,7 @@ fn visibility_chunks<'a, 'q>(
         .map(|range| {
             let (chunk, rest) = std::mem::take(&mut out).split_at_mut(range.len() * words);
             out = rest;
-            (query.slice(range), chunk)
+            (range.start, query.slice(range), chunk)
         })
         .collect()
 }
@@ -167,23 +189,19 @@ pub fn visibility_pass(
 ) {
     let chunks = visibility_chunks(query, out, tracer.chunk_rays()).into_par_iter();
     match counters {
-        None => chunks.for_each(|(q, o)| tracer.light_visibility(q, o)),
+        None => chunks.for_each(|(_, q, o)| tracer.light_visibility(q, o)),
         Some(total) => {
-            let merged = chunks
-                .map(|(q, o)| {
-                    let mut counters = Counters::default();
+            let per_ray = total.per_ray.is_some();
+            let parts = chunks
+                .map(|(first, q, o)| {
+                    let mut counters = chunk_counters(per_ray, q.len());
                     tracer.light_visibility_counted(q, o, &mut counters);
-                    counters
+                    (first, counters)
                 })
-                .reduce(Counters::default, merge);
-            total.merge(&merged);
+                .collect();
+            total.merge(&gather(chunk_counters(per_ray, query.len()), parts));
         }
     }
-}
-
-fn merge(mut a: Counters, b: Counters) -> Counters {
-    a.merge(&b);
-    a
 }
 
 /// Closest hits of a whole batch.

@@ -91,12 +91,14 @@ pub trait SingleRayKernel: Send + Sync {
 impl<T: SingleRayKernel> Kernel for T {
     fn intersect_with<S: Stats>(&self, rays: Rays<'_>, hits: &mut [Hit], stats: &mut S) {
         for (i, hit) in hits.iter_mut().enumerate() {
+            stats.charge_ray(i);
             *hit = trace_checked::<T, S, false>(self, &rays.ray(i), stats);
         }
     }
 
     fn occluded_with<S: Stats>(&self, rays: Rays<'_>, occluded: &mut [bool], stats: &mut S) {
         for (i, o) in occluded.iter_mut().enumerate() {
+            stats.charge_ray(i);
             *o = trace_checked::<T, S, true>(self, &rays.ray(i), stats).is_hit();
         }
     }

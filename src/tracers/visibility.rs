@@ -383,7 +383,14 @@ pub fn occluded_by_rays<K: Kernel + ?Sized, S: Stats>(
             query.rays(batch, traced);
             flags.clear();
             flags.resize(batch.len(), false);
-            kernel.occluded_with(batch.view(), flags, stats);
+            // Per-ray counters charge each shadow ray's counts to its shading point.
+            let points: Vec<Range<u32>> = match S::ENABLED {
+                true => batch.pixel.iter().map(|&p| p..p + 1).collect(),
+                false => Vec::new(),
+            };
+            stats.relabelled(&points, |stats| {
+                kernel.occluded_with(batch.view(), flags, stats)
+            });
             for (&(i, sample), _) in traced.iter().zip(&*flags).filter(|(_, &o)| !o) {
                 occluded[i as usize * words + sample as usize / 64] &= !(1 << (sample % 64));
             }

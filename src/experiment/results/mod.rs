@@ -5,6 +5,7 @@
 pub mod embree_best;
 pub mod error_plot;
 pub mod figures;
+pub mod heatmap;
 pub mod plots;
 pub mod report;
 pub mod staleness;

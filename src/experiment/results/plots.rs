@@ -68,7 +68,7 @@ fn kind_colour(kind: RayKind) -> RGBColor {
 }
 
 /// Letters, digits, `-`, `_` and `.` pass; everything else becomes `_`.
-fn file_stem(label: &str) -> String {
+pub(super) fn file_stem(label: &str) -> String {
     label
         .chars()
         .map(|c| {

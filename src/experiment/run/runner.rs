@@ -18,15 +18,18 @@ use rayon::{ThreadPool, ThreadPoolBuilder};
 
 use crate::accel::Accel;
 use crate::error::{Error, Result};
+use crate::experiment::record::heatmap_set::{HeatmapPanel, HeatmapSet};
 use crate::geometry::ray_file::read_rays;
 use crate::geometry::{RayBatch, RayKind};
 use crate::random::mix64;
 use crate::render::area_light::soft_shadow_points;
 use crate::render::convergence::reference_image;
+use crate::render::cost_map::{count_per_pixel, CostMap};
 use crate::render::distribution::{render_sampled, DrtSettings, FrameGeometry};
 use crate::render::image::Image;
 use crate::render::motion::{tracer_for_motion, MovingMesh};
 use crate::render::path::ShadeStreams;
+use crate::render::raycast::render_raycast;
 use crate::render::rays::{diffuse_rays, primary_rays, shadow_rays};
 use crate::render::specular::specular_rays;
 use crate::render::wavefront::{BatchRecord, Tracing, Work};
@@ -105,7 +108,7 @@ pub fn run_plan(
     load: SceneLoader,
     progress: &ProgressBar,
     dump_rays: Option<&Path>,
-) -> Result<Vec<Case>> {
+) -> Result<(Vec<Case>, HeatmapSet)> {
     let file_batches = plan
         .ray_files
         .iter()
@@ -139,6 +142,7 @@ pub fn run_plan(
     let widest = widest(&pools);
 
     let mut cases = Vec::new();
+    let mut heatmaps = HeatmapSet::default();
     for (scene_index, (spec, scene_plan)) in exp.scenes.iter().zip(&plan.scenes).enumerate() {
         if !part.measures_scene(scene_index) {
             continue;
@@ -192,10 +196,27 @@ pub fn run_plan(
                     }
                 }
             }
+            let maps_now = f == 0 && !exp.heatmaps.is_empty();
+            if maps_now {
+                let oracle = frame_tracers.oracle.as_ref();
+                let image = widest
+                    .install(|| render_raycast(&scene, &frame, oracle, exp.width, exp.height));
+                heatmaps.shaded.push((spec.name.clone(), image));
+            }
             for (i, tracer) in frame_tracers.tracers.iter().enumerate() {
                 let Some(tracer) = tracer else {
                     continue;
                 };
+                if maps_now {
+                    for workload in &workloads {
+                        heatmaps.panels.push(HeatmapPanel {
+                            scene: spec.name.clone(),
+                            kind: workload.kind(),
+                            tracer: plan.instances[i].label.clone(),
+                            maps: workload.cost_maps(tracer.as_ref(), exp, widest)?,
+                        });
+                    }
+                }
                 let measure = TracerOnFrame {
                     exp,
                     pools: &pools,
@@ -229,7 +250,7 @@ pub fn run_plan(
             }
         }
     }
-    Ok(cases)
+    Ok((cases, heatmaps))
 }
 
 /// Measuring one tracer instance on one frame: the batches traced on their own, then the render
@@ -641,6 +662,8 @@ enum Workload {
         rays: RayBatch,
         /// Their generation, timed like a tracer's passes at every thread count.
         generation: Vec<Timing>,
+        /// The pixel of each shading point.
+        pixels: Vec<u32>,
     },
 }
 
@@ -650,6 +673,32 @@ impl Workload {
             Workload::Rays(batch) => batch.kind(),
             Workload::SoftShadow { .. } => RayKind::SoftShadow,
         }
+    }
+
+    /// `tracer`'s cost maps of this workload (`None` for a tracer that reports no counts),
+    /// counted in `pool` as `batch` traces it: the soft-shadow query natively or as its rays.
+    fn cost_maps(
+        &self,
+        tracer: &dyn Tracer,
+        exp: &Experiment,
+        pool: &ThreadPool,
+    ) -> Result<Option<Vec<CostMap>>> {
+        if !tracer.counts_internals() {
+            return Ok(None);
+        }
+        let size = (exp.width, exp.height);
+        let (work, pixel_of) = match self {
+            Workload::Rays(batch) => (Work::of_batch(batch), batch.pixel.clone()),
+            Workload::SoftShadow { pixels, .. } if tracer.answers_visibility_natively() => {
+                (self.work(), pixels.clone())
+            }
+            Workload::SoftShadow { rays, pixels, .. } => (
+                Work::Occlusion(rays),
+                rays.pixel.iter().map(|&p| pixels[p as usize]).collect(),
+            ),
+        };
+        let (_, maps) = pool.install(|| count_per_pixel(tracer, work, &pixel_of, size))?;
+        Ok(Some(maps))
     }
 
     fn work(&self) -> Work<'_> {
@@ -757,12 +806,18 @@ fn generate_workloads(
                 let light = QuadLight::of(light);
                 let query = light_query(&points, light, &samples);
                 let (rays, generation) = time_shadow_rays(exp, pools, query);
+                // `soft_shadow_points` makes one point per hit, in ray order.
+                let pixels = (0..primary.len())
+                    .filter(|&i| hits()[i].is_hit())
+                    .map(|i| primary.pixel[i])
+                    .collect();
                 workloads.push(Workload::SoftShadow {
                     points,
                     light,
                     samples,
                     rays,
                     generation,
+                    pixels,
                 });
                 continue;
             }

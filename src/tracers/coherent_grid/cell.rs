@@ -8,7 +8,7 @@ use super::traversal::SliceVisitor;
 use super::{CgtConfig, CULL_MIN_RAYS};
 use crate::accel::Grid;
 use crate::geometry::Hit;
-use crate::stats::{Event, Stats};
+use crate::stats::{Event, Owners, Stats};
 
 /// Something told about every cell a packet visits (`()` for tracing, a list for tests).
 pub trait CellObserver {
@@ -40,6 +40,14 @@ pub(super) struct Packet<'a, const L: usize, S, O, const ANY: bool> {
 }
 
 impl<const L: usize, S: Stats, O: CellObserver, const ANY: bool> Packet<'_, L, S, O, ANY> {
+    /// The chunk indices of the rays in the lanes (per-ray counters).
+    fn lane_rays(&self) -> Vec<u32> {
+        let lanes = &self.ws.lanes;
+        (0..lanes.len())
+            .map(|slot| self.group[lanes.ray[slot] as usize])
+            .collect()
+    }
+
     /// The triangle's vertices in march coordinates (for culling).
     #[inline]
     fn march_vertices(&self, id: u32) -> [[f32; 3]; 3] {
@@ -75,7 +83,8 @@ impl<const L: usize, S: Stats, O: CellObserver, const ANY: bool> SliceVisitor
             return; // every ray found its occluder earlier in this slice
         }
         if S::ENABLED {
-            self.stats.node(0);
+            let rays = self.lane_rays();
+            self.stats.node_shared(0, Owners::List(&rays));
         }
         self.observer.visit(cell);
         let grid = self.grid;
@@ -104,12 +113,11 @@ impl<const L: usize, S: Stats, O: CellObserver, const ANY: bool> SliceVisitor
                 continue;
             }
             let tri = &grid.triangles[id as usize];
-            let ws = &mut *self.ws;
             if S::ENABLED {
-                for _ in 0..ws.lanes.len() {
-                    self.stats.triangle_test(0);
-                }
+                let rays = self.lane_rays();
+                self.stats.triangle_tests(0, Owners::List(&rays));
             }
+            let ws = &mut *self.ws;
             let (hits, group, march, d_s) = (&mut *self.hits, self.group, &ws.march, &ws.d_s);
             let mut any_done = false;
             ws.lanes.intersect(tri, |lanes, slot, t, u, v| {

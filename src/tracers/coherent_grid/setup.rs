@@ -142,6 +142,7 @@ impl CgtTracer {
         for &i in group {
             if S::ENABLED {
                 stats.event(Event::Packets, 1);
+                stats.charge_ray(i as usize);
             }
             hits[i as usize] = self.dda.walk::<S, ANY>(&rays.ray(i as usize), stats);
         }

@@ -212,6 +212,7 @@ pub fn trace_block<T: FrustumTree, S: Stats>(
             }
             let keep = keep_counted(frusta, tri, candidates, config.backface, stats);
             for f in bits(keep) {
+                stats.charge_ray(f);
                 let point_alive = &mut alive[f * words..(f + 1) * words];
                 let simd = &mut rays[f * groups..(f + 1) * groups];
                 if generated & 1 << f == 0 {

@@ -7,7 +7,7 @@ use glam::Vec3;
 
 use crate::accel::Bvh;
 use crate::geometry::{Aabb, Triangle};
-use crate::stats::{Event, Stats};
+use crate::stats::{Event, Owners, Stats};
 use crate::tracers::multi_frusta::cull::keep_mask;
 use crate::tracers::multi_frusta::frusta::{Frusta, Margins};
 
@@ -131,9 +131,16 @@ pub fn count_child_tests<S: Stats>(
     stats.event(Event::FrustumBoxTests, children);
     stats.event(Event::FrustaAtNodes, mask.count_ones() as u64);
     stats.event(Event::BoxesCulled, children - entered);
-    for _ in 0..mask.count_ones() as u64 * children {
-        stats.aabb_test(depth);
-    }
+    // Frusta are the rays here (`relabelled` by the caller spreads them over their pixels).
+    (0..children).for_each(|_| {
+        stats.aabb_tests(
+            depth,
+            Owners::Bits {
+                base: 0,
+                bits: mask,
+            },
+        )
+    });
 }
 
 /// Starts a block's walk: the root's box (`bvh`'s, the binary tree `tree` was made from) against
@@ -149,7 +156,13 @@ pub fn start_at_root<T: FrustumTree, S: Stats>(
 ) {
     if S::ENABLED {
         stats.event(Event::FrustumBoxTests, 1);
-        (0..mask.count_ones()).for_each(|_| stats.aabb_test(0));
+        stats.aabb_tests(
+            0,
+            Owners::Bits {
+                base: 0,
+                bits: mask,
+            },
+        );
     }
     let root = &bvh.nodes[Bvh::ROOT];
     stack.clear();
@@ -180,13 +193,25 @@ pub fn next_leaf<T: FrustumTree, S: Stats>(
             match tree.open::<S>(at) {
                 Step::Leaf(leaf) => {
                     if S::ENABLED {
-                        stats.node(leaf.depth);
+                        stats.node_shared(
+                            leaf.depth,
+                            Owners::Bits {
+                                base: 0,
+                                bits: mask,
+                            },
+                        );
                     }
                     return Some((leaf, mask));
                 }
                 Step::Inner { node, depth } => {
                     if S::ENABLED {
-                        stats.node(depth);
+                        stats.node_shared(
+                            depth,
+                            Owners::Bits {
+                                base: 0,
+                                bits: mask,
+                            },
+                        );
                     }
                     match tree.visit_children(node, mask, frusta, margins, towards, stack, stats) {
                         Some(child) => (at, mask) = child,

@@ -67,6 +67,7 @@ mod tests;
 mod wide_walk;
 
 use std::cell::RefCell;
+use std::ops::Range;
 use std::str::FromStr;
 use std::sync::Arc;
 
@@ -251,18 +252,27 @@ impl MftTracer {
             scratch.sets.fill(&query, &scratch.targets);
             for first in (0..query.len()).step_by(self.config.block) {
                 let len = self.config.block.min(query.len() - first);
-                block::trace_block(
-                    &self.bvh,
-                    tree,
-                    &self.config,
-                    &margins,
-                    &query,
-                    first,
-                    len,
-                    &mut occluded[first * words..(first + len) * words],
-                    scratch,
-                    stats,
-                );
+                // Per-ray counters: frustum `f`'s counts go to shading point `first + f`.
+                let points: Vec<Range<u32>> = match S::ENABLED {
+                    true => (first as u32..(first + len) as u32)
+                        .map(|p| p..p + 1)
+                        .collect(),
+                    false => Vec::new(),
+                };
+                stats.relabelled(&points, |stats| {
+                    block::trace_block(
+                        &self.bvh,
+                        tree,
+                        &self.config,
+                        &margins,
+                        &query,
+                        first,
+                        len,
+                        &mut occluded[first * words..(first + len) * words],
+                        scratch,
+                        stats,
+                    )
+                });
             }
         })
     }

@@ -135,7 +135,14 @@ pub fn intersect<T: FrustumTree, S: Stats>(
                 scene_far: far,
                 leaf_rays: config.leaf_rays,
             };
-            trace_block(&frame, group, rays, hits, scratch, stats);
+            // Per-ray counters: frustum `f`'s counts go to its pixels' rays.
+            let pixels: Vec<Range<u32>> = match S::ENABLED {
+                true => group.iter().map(|r| r.start as u32..r.end as u32).collect(),
+                false => Vec::new(),
+            };
+            stats.relabelled(&pixels, |stats| {
+                trace_block(&frame, group, rays, hits, scratch, stats)
+            });
         }
         scratch.packets = packets;
     })
@@ -245,6 +252,7 @@ fn trace_block<T: FrustumTree, S: Stats>(
             let keep = keep_counted(frusta, tri, candidates, false, stats);
             let prim = bvh.prim_ids[t];
             for f in bits(keep) {
+                stats.charge_ray(f);
                 let pixels = &rays.pixel[group[f].clone()];
                 if generated & 1 << f == 0 {
                     generated |= 1 << f;

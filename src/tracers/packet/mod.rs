@@ -269,6 +269,7 @@ impl PacketTracer {
             // The wide traversal's node test is the interval test.
             let interval = traversal == Traversal::Ia || self.nodes.wide().is_some();
             packet.load(rays.slice(range), &tree, self.config.frustum, interval);
+            packet.first = first;
             match (self.nodes.wide(), traversal) {
                 (Some(WideNodes::Four(wide)), _) => {
                     traverse_wide::<4, L, S, ANY>(&mut packet, &tree, wide, &mut wide_stack, stats)

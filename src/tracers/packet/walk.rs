@@ -48,7 +48,7 @@ pub fn traverse<R: RaySelection, const L: usize, S: Stats, const ANY: bool>(
     loop {
         let depth = tree.depth::<S>(node);
         if S::ENABLED {
-            stats.node(depth);
+            stats.node_shared(depth, packet.owners());
         }
         if let Some(below) = R::enter(packet, tree, node, ia, stats) {
             ia = below;

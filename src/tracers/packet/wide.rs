@@ -72,7 +72,7 @@ pub fn traverse_wide<const W: usize, const L: usize, S: Stats, const ANY: bool>(
     let mut node = 0u32;
     let mut ia = 0u32;
     if S::ENABLED {
-        stats.node(0);
+        stats.node_shared(0, packet.owners());
     }
     loop {
         expand(packet, wide, node, ia, stack, &mut top, stats);
@@ -94,7 +94,7 @@ pub fn traverse_wide<const W: usize, const L: usize, S: Stats, const ANY: bool>(
                 0
             };
             if S::ENABLED {
-                stats.node(depth);
+                stats.node_shared(depth, packet.owners());
             }
             let (lo, hi) = cell.child_box(slot as usize);
             let culls = |p: &Packet<L>, s: &mut S| p.frustum_culls_bounds(lo, hi, s);

@@ -6,7 +6,7 @@
 
 use crate::accel::{Bvh, BvhConfig, BvhNode};
 use crate::geometry::{Hit, Rays};
-use crate::stats::{Event, Stats};
+use crate::stats::{Event, Owners, Stats};
 
 use super::frustum::Frustum;
 use super::interval::IntervalPacket;
@@ -50,6 +50,8 @@ pub struct Packet<const L: usize> {
     pub groups: Vec<SimdRay<L>>,
     /// Rays in the packet (the lanes in use over all SIMD rays).
     pub rays: usize,
+    /// The packet's first ray among the kernel's rays (per-ray counters: `Owners`).
+    pub first: usize,
     /// `0, 1, …, groups − 1`: Ranged and IA hand leaves a sub-slice of it.
     pub identity: Vec<u32>,
     /// Partition's index list `I` (§3.3).
@@ -77,6 +79,7 @@ impl<const L: usize> Packet<L> {
         Packet {
             groups: vec![SimdRay::default(); groups],
             rays: 0,
+            first: 0,
             identity: (0..groups as u32).collect(),
             index: Vec::with_capacity(groups),
             alive: Vec::with_capacity(groups),
@@ -157,6 +160,19 @@ impl<const L: usize> Packet<L> {
         }
     }
 
+    /// The rays of the packet (per-ray counters).
+    pub fn owners(&self) -> Owners<'static> {
+        Owners::span(self.first, self.rays)
+    }
+
+    /// The rays in the lanes of SIMD ray `g`.
+    fn group_owners(&self, g: u32) -> Owners<'static> {
+        Owners::span(
+            self.first + g as usize * L,
+            self.groups[g as usize].used as usize,
+        )
+    }
+
     /// Whether SIMD ray `g` meets the box of `node`, counting one box test per lane in use.
     #[inline(always)]
     pub fn hits_box<S: Stats>(&self, g: u32, node: &BvhNode, depth: usize, stats: &mut S) -> bool {
@@ -176,7 +192,7 @@ impl<const L: usize> Packet<L> {
     ) -> bool {
         let group = &self.groups[g as usize];
         if S::ENABLED {
-            (0..group.used).for_each(|_| stats.aabb_test(depth));
+            stats.aabb_tests(depth, self.group_owners(g));
         }
         group.hits_box(lo, hi)
     }
@@ -254,6 +270,7 @@ impl<const L: usize> Packet<L> {
             stats.event(Event::LeafActiveRays, lanes as u64);
         }
         let bvh = tree.bvh;
+        let first = self.first;
         // Camera rays share one origin and frame across the packet: each triangle is then made
         // relative to it once, not once per SIMD ray (`SharedFrame`).
         let shared = self.frame;
@@ -278,7 +295,10 @@ impl<const L: usize> Packet<L> {
             for &g in ids {
                 let group = &mut self.groups[g as usize];
                 if S::ENABLED {
-                    (0..group.used).for_each(|_| stats.triangle_test(depth));
+                    stats.triangle_tests(
+                        depth,
+                        Owners::span(first + g as usize * L, group.used as usize),
+                    );
                 }
                 let hits = match (moving_end, &relative) {
                     (None, Some(rel)) => group.intersect_relative::<ANY>(rel, prim),

@@ -7,7 +7,7 @@
 use crate::geometry::Aabb;
 use crate::lanes::stream::partition_by;
 use crate::lanes::LaneMask;
-use crate::stats::{Event, Stats};
+use crate::stats::{Event, Owners, Stats};
 
 use super::rays::StreamRays;
 use super::width::Width;
@@ -26,7 +26,7 @@ pub fn filter<const L: usize, const N: usize, S: Stats>(
 ) -> (usize, [bool; 3]) {
     let group = Width::<L, N>::GROUP;
     if S::ENABLED {
-        (0..len).for_each(|_| stats.aabb_test(depth));
+        stats.aabb_tests(depth, Owners::List(&rays.ids(len)));
         stats.event(Event::StreamBoxTests, 1);
         stats.event(Event::TraversalLanesActive, len as u64);
         stats.event(Event::TraversalLanesIssued, Width::<L, N>::issued(len));

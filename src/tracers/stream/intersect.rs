@@ -7,7 +7,7 @@
 
 use crate::accel::BvhNode;
 use crate::geometry::Hit;
-use crate::stats::{Event, Stats};
+use crate::stats::{Event, Owners, Stats};
 
 use super::traverse::{Answer, Walk};
 use super::width::Width;
@@ -45,7 +45,7 @@ impl<const L: usize, const N: usize, A: Answer> Walk<'_, L, N, A> {
                     break;
                 }
                 if S::ENABLED {
-                    (0..live).for_each(|_| stats.triangle_test(depth));
+                    stats.triangle_tests(depth, Owners::List(&self.live_ids(base)));
                     stats.event(Event::IntersectionLanesActive, live as u64);
                     stats.event(Event::IntersectionLanesIssued, N as u64);
                 }
@@ -67,5 +67,16 @@ impl<const L: usize, const N: usize, A: Answer> Walk<'_, L, N, A> {
             }
         }
         self.live(len)
+    }
+
+    /// The chunk indices of the live lanes of the groups loaded from stream position `base`.
+    fn live_ids(&self, base: usize) -> Vec<u32> {
+        let group = Width::<L, N>::GROUP;
+        let mut ids = Vec::new();
+        for (g, simd) in self.groups.iter().enumerate() {
+            let live = (0..L).filter(|&l| simd.tmax[l] != f32::NEG_INFINITY);
+            ids.extend(live.map(|l| self.rays.id(base + g * group + l) as u32));
+        }
+        ids
     }
 }

@@ -198,6 +198,11 @@ impl<const L: usize> StreamRays<L> {
         }
     }
 
+    /// The chunk indices of the rays at stream positions `0..len` (per-ray counters).
+    pub fn ids(&self, len: usize) -> Vec<u32> {
+        (0..len).map(|at| self.id(at) as u32).collect()
+    }
+
     /// The chunk index of the ray at stream position `at`.
     #[inline(always)]
     pub fn id(&self, at: usize) -> usize {

@@ -13,7 +13,7 @@ use crate::geometry::{Hit, Rays, Triangle};
 use crate::lanes::stream::{partition_by, SoaRays};
 use crate::lanes::LaneMask;
 use crate::lanes::SimdRay;
-use crate::stats::Stats;
+use crate::stats::{Owners, Stats};
 use crate::tracers::packet::ChildOrder;
 
 use super::filter::filter;
@@ -98,7 +98,7 @@ impl<const L: usize, const N: usize, A: Answer> Walk<'_, L, N, A> {
             0
         };
         if S::ENABLED {
-            stats.node(depth);
+            stats.node_shared(depth, Owners::List(&self.rays.ids(len)));
         }
         let (hit, negative) = filter::<L, N, S>(self.rays, len, &cell.bounds, depth, stats);
         if hit == 0 {
@@ -127,6 +127,7 @@ impl<const L: usize, const N: usize, A: Answer> Walk<'_, L, N, A> {
     /// live, moved to the front.
     fn single_rays<S: Stats>(&mut self, node: u32, len: usize, stats: &mut S) -> usize {
         for at in 0..len {
+            stats.charge_ray(self.rays.id(at));
             let ray = (&*self.rays, at, &self.input);
             let hit = A::trace_single(self.handoff, self.bvh, node, ray, stats);
             if hit.is_hit() {

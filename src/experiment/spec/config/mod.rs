@@ -110,6 +110,7 @@ mod stability;
 mod tests;
 mod tracers;
 
+use crate::render::cost_map::Cost;
 pub use rays::RayFileSpec;
 pub use renders::{DistributionWorkload, RenderWorkload};
 pub use scenes::SceneSpec;
@@ -151,6 +152,9 @@ pub struct Experiment {
     pub soft_shadow_samples: u32,
     /// How the `soft_shadow` workload's interleaved light sample sets are made.
     pub soft_shadow_sets: LightSampleSets,
+    /// `heatmaps = ["box", "triangle"]`: the per-pixel cost maps the run draws (first frame,
+    /// every scene × ray kind, every tracer side by side; `results::heatmap`).
+    pub heatmaps: Vec<Cost>,
     /// Results go to `<output>/<name>/<run-id>/`.
     pub output: PathBuf,
     /// Paper-vs-ours tables written to tables.md.
@@ -196,6 +200,8 @@ struct ExperimentFile {
     seed: u64,
     #[serde(default)]
     soft_shadow: Option<Spanned<SoftShadowSpec>>,
+    #[serde(default)]
+    heatmaps: Vec<Spanned<String>>,
     #[serde(default = "default_output")]
     output: PathBuf,
     #[serde(default)]
@@ -312,6 +318,15 @@ impl Experiment {
         let (soft_shadow_samples, soft_shadow_sets) = soft_shadow::soft_shadow(&src, &file)?;
         let instances = tracers::expand_tracers(&src, &file)?;
         check_tables_and_figures(&src, &file)?;
+        let heatmaps = file
+            .heatmaps
+            .iter()
+            .map(|name| {
+                name.get_ref()
+                    .parse::<Cost>()
+                    .map_err(|e| src.usage_error(&name.span(), format!("heatmaps: {e}")))
+            })
+            .collect::<Result<Vec<Cost>>>()?;
         Ok(Experiment {
             path: path.to_path_buf(),
             name: file.name.into_inner(),
@@ -332,6 +347,7 @@ impl Experiment {
             seed: file.seed,
             soft_shadow_samples,
             soft_shadow_sets,
+            heatmaps,
             output: file.output,
             tables: file.tables.into_iter().map(Spanned::into_inner).collect(),
             figures: file.figures.into_iter().map(Spanned::into_inner).collect(),

@@ -1,0 +1,308 @@
+//! Heat-map PNGs (issue 33): `CostMap`s in false colour (viridis, the perceptually uniform map of
+//! matplotlib) side by side with the shaded frame, on one scale with one colour bar labelled in
+//! tests per ray, so several tracers' maps compare; a run's figures per scene × ray kind × cost.
+
+use std::path::Path;
+
+use plotters::prelude::*;
+
+use crate::error::{Error, Result};
+use crate::render::cost_map::CostMap;
+use crate::render::image::Image;
+
+use crate::experiment::record::heatmap_set::{HeatmapPanel, HeatmapSet};
+use crate::geometry::RayKind;
+use crate::render::cost_map::Cost;
+
+use super::plots::{file_stem, register_font, FONT};
+
+/// Viridis at 0, 0.1, …, 1 (matplotlib's `viridis` sampled at 11 points); colours in between
+/// are interpolated linearly.
+const VIRIDIS: [[u8; 3]; 11] = [
+    [0x44, 0x01, 0x54],
+    [0x48, 0x24, 0x75],
+    [0x41, 0x44, 0x87],
+    [0x35, 0x5f, 0x8d],
+    [0x2a, 0x78, 0x8e],
+    [0x21, 0x91, 0x8c],
+    [0x22, 0xa8, 0x84],
+    [0x44, 0xbf, 0x70],
+    [0x7a, 0xd1, 0x51],
+    [0xbd, 0xdf, 0x26],
+    [0xfd, 0xe7, 0x25],
+];
+
+/// The colour of `x` in `[0, 1]` (clamped; NaN is 0).
+pub fn viridis(x: f64) -> RGBColor {
+    let x = if x.is_nan() { 0.0 } else { x.clamp(0.0, 1.0) };
+    let at = x * (VIRIDIS.len() - 1) as f64;
+    let i = (at.floor() as usize).min(VIRIDIS.len() - 2);
+    let f = at - i as f64;
+    let [a, b] = [VIRIDIS[i], VIRIDIS[i + 1]];
+    let mix = |c: usize| (a[c] as f64 + (b[c] as f64 - a[c] as f64) * f).round() as u8;
+    RGBColor(mix(0), mix(1), mix(2))
+}
+
+/// Width of the colour bar and its labels beside the panels.
+const BAR_PANEL: u32 = 150;
+/// Panels are shrunk (whole pixel blocks averaged) to at most this many pixels a side, or
+/// magnified (whole pixels repeated) to at least `PANEL_MIN` wide, room for their captions.
+const PANEL_SIDE: u32 = 256;
+const PANEL_MIN: u32 = 192;
+/// Panels per row.
+const COLUMNS: usize = 4;
+/// Room under each panel for its two caption lines, and between panels.
+const CAPTION: u32 = 34;
+const GAP: u32 = 8;
+/// Shortest image: room for the bar's labels.
+const MIN_HEIGHT: u32 = 200;
+
+/// What one panel shows.
+pub enum Panel<'a> {
+    /// The shaded frame the rays come from.
+    Shaded(&'a Image),
+    /// A tracer's cost map.
+    Map(&'a CostMap),
+    /// A tracer that reports no counts (a production baseline).
+    NoCounts,
+}
+
+/// Writes `panels` (each with its caption) to `path` as one PNG, rows of `COLUMNS`, every map in
+/// false colour from 0 (dark) to `scale_max` (bright; larger values saturate) of `cost`'s unit,
+/// with one colour bar. Each map's caption line 2 is its mean per ray.
+pub fn save_panels(
+    path: &Path,
+    panels: &[(String, Panel<'_>)],
+    unit: &str,
+    scale_max: f64,
+) -> Result<()> {
+    if !(scale_max.is_finite() && scale_max > 0.0) {
+        return Err(Error::usage(format!(
+            "heat map scale maximum must be a number > 0, not {scale_max}"
+        )));
+    }
+    let Some((w, h)) = panels.iter().find_map(|(_, p)| match p {
+        Panel::Shaded(image) => Some((image.width, image.height)),
+        Panel::Map(map) => Some((map.width, map.height)),
+        Panel::NoCounts => None,
+    }) else {
+        return Err(Error::usage(
+            "a heat-map figure needs at least one map or image",
+        ));
+    };
+    register_font()?;
+    let shrink = w.max(h).div_ceil(PANEL_SIDE).max(1);
+    let zoom = PANEL_MIN.div_ceil(w).max(1);
+    let layout = Layout {
+        shrink,
+        zoom,
+        panel: (w * zoom / shrink, h * zoom / shrink),
+        rows: panels.len().div_ceil(COLUMNS) as u32,
+        columns: panels.len().min(COLUMNS) as u32,
+    };
+    let size = layout.size();
+    let mut buffer = vec![255u8; size.0 as usize * size.1 as usize * 3];
+    draw(&layout, panels, unit, scale_max, &mut buffer)
+        .map_err(|e| Error::runtime(format!("{}: cannot draw heat map: {e}", path.display())))?;
+    image::save_buffer(path, &buffer, size.0, size.1, image::ColorType::Rgb8)
+        .map_err(|e| Error::runtime(format!("{}: cannot write PNG: {e}", path.display())))
+}
+
+/// Where the panels go.
+struct Layout {
+    /// Image pixels per panel pixel, along each axis (≥ 1) ...
+    shrink: u32,
+    /// ... or panel pixels per image pixel (≥ 1; one of the two is 1).
+    zoom: u32,
+    panel: (u32, u32),
+    rows: u32,
+    columns: u32,
+}
+
+impl Layout {
+    fn size(&self) -> (u32, u32) {
+        let width = self.columns * (self.panel.0 + GAP) + BAR_PANEL;
+        let height = (self.rows * (self.panel.1 + CAPTION + GAP)).max(MIN_HEIGHT);
+        (width, height)
+    }
+
+    /// The image pixels, along one axis, that panel pixel `p` shows.
+    fn source(&self, p: u32) -> std::ops::Range<u32> {
+        let first = p * self.shrink / self.zoom;
+        first..first + self.shrink
+    }
+
+    /// The top-left corner of panel `i`.
+    fn corner(&self, i: usize) -> (i32, i32) {
+        let (column, row) = ((i % COLUMNS) as u32, (i / COLUMNS) as u32);
+        (
+            (column * (self.panel.0 + GAP)) as i32,
+            (row * (self.panel.1 + CAPTION + GAP)) as i32,
+        )
+    }
+}
+
+type Canvas<'b> = DrawingArea<BitMapBackend<'b>, plotters::coord::Shift>;
+
+fn draw(
+    layout: &Layout,
+    panels: &[(String, Panel<'_>)],
+    unit: &str,
+    scale_max: f64,
+    buffer: &mut [u8],
+) -> std::result::Result<(), Box<dyn std::error::Error>> {
+    let size = layout.size();
+    let root = BitMapBackend::with_buffer(buffer, size).into_drawing_area();
+    let style = TextStyle::from((FONT, 12).into_font()).color(&BLACK);
+    for (i, (caption, panel)) in panels.iter().enumerate() {
+        let (x0, y0) = layout.corner(i);
+        let second = match panel {
+            Panel::Shaded(image) => {
+                draw_shaded(&root, layout, image, (x0, y0))?;
+                "shaded".to_string()
+            }
+            Panel::Map(map) => {
+                draw_map(&root, layout, map, scale_max, (x0, y0))?;
+                format!("mean {:.2} per ray", map.mean())
+            }
+            Panel::NoCounts => "no counts: a library's own kernels".to_string(),
+        };
+        let below = y0 + layout.panel.1 as i32;
+        root.draw(&Text::new(caption.clone(), (x0, below + 3), style.clone()))?;
+        root.draw(&Text::new(second, (x0, below + 17), style.clone()))?;
+    }
+    // The bar: bottom (0) to top (scale_max), with five labels.
+    let left = (layout.columns * (layout.panel.0 + GAP)) as i32 + 8;
+    let (top, bar_height) = (10, size.1 as i32 - 40);
+    for row in 0..bar_height {
+        let colour = viridis(1.0 - row as f64 / (bar_height - 1).max(1) as f64);
+        root.draw(&Rectangle::new(
+            [(left, top + row), (left + 16, top + row + 1)],
+            colour.filled(),
+        ))?;
+    }
+    for k in 0..=4 {
+        let value = scale_max * k as f64 / 4.0;
+        let y = top + ((bar_height - 1) as f64 * (1.0 - k as f64 / 4.0)) as i32 - 6;
+        let text = format!("{value:.1}");
+        root.draw(&Text::new(text, (left + 20, y), style.clone()))?;
+    }
+    root.draw(&Text::new(
+        unit.to_string(),
+        (left - 4, size.1 as i32 - 22),
+        style,
+    ))?;
+    root.present()?;
+    Ok(())
+}
+
+/// `map` at `corner`, each panel pixel the cost per ray of its block of image pixels.
+fn draw_map(
+    root: &Canvas<'_>,
+    layout: &Layout,
+    map: &CostMap,
+    scale_max: f64,
+    corner: (i32, i32),
+) -> std::result::Result<(), Box<dyn std::error::Error>> {
+    for py in 0..layout.panel.1 {
+        for px in 0..layout.panel.0 {
+            let (mut total, mut rays) = (0u64, 0u64);
+            for y in layout.source(py) {
+                for x in layout.source(px) {
+                    let i = (y * map.width + x) as usize;
+                    total += map.total[i];
+                    rays += map.rays[i] as u64;
+                }
+            }
+            let colour = match rays {
+                // No ray from here (a shadow map's background): grey, not "zero cost".
+                0 => RGBColor(128, 128, 128),
+                _ => viridis(total as f64 / rays as f64 / scale_max),
+            };
+            root.draw_pixel((corner.0 + px as i32, corner.1 + py as i32), &colour)?;
+        }
+    }
+    Ok(())
+}
+
+/// `image` at `corner`, auto-exposed as `Image::save_png` does, one image pixel per block.
+fn draw_shaded(
+    root: &Canvas<'_>,
+    layout: &Layout,
+    image: &Image,
+    corner: (i32, i32),
+) -> std::result::Result<(), Box<dyn std::error::Error>> {
+    let bytes = image.to_srgb8(image.auto_exposure());
+    let middle = |p: u32| layout.source(p).start + layout.shrink / 2;
+    for py in 0..layout.panel.1 {
+        for px in 0..layout.panel.0 {
+            let i = 3 * (middle(py) * image.width + middle(px)) as usize;
+            let colour = RGBColor(bytes[i], bytes[i + 1], bytes[i + 2]);
+            root.draw_pixel((corner.0 + px as i32, corner.1 + py as i32), &colour)?;
+        }
+    }
+    Ok(())
+}
+
+/// The run's figures (`heatmaps = [...]`): one per scene × ray kind × cost of `set`,
+/// `heatmap-<scene>-<kind>-<cost>.png`, the shaded frame first, then every tracer that counts in
+/// plan order, all on one scale (the largest per-ray cost of any pixel of them), then one panel
+/// for the baselines, which report no counts.
+pub fn write_figures(dir: &Path, costs: &[Cost], set: &HeatmapSet) -> Result<()> {
+    for (scene, image) in &set.shaded {
+        let of_scene: Vec<&HeatmapPanel> =
+            set.panels.iter().filter(|p| &p.scene == scene).collect();
+        let mut kinds: Vec<RayKind> = of_scene.iter().map(|p| p.kind).collect();
+        kinds.dedup();
+        for kind in kinds {
+            let tracers: Vec<&&HeatmapPanel> = of_scene.iter().filter(|p| p.kind == kind).collect();
+            for &cost in costs {
+                let maps: Vec<Option<&CostMap>> = tracers
+                    .iter()
+                    .map(|p| {
+                        p.maps
+                            .as_ref()
+                            .and_then(|maps| maps.iter().find(|m| m.cost == cost))
+                    })
+                    .collect();
+                let scale = maps.iter().flatten().map(|m| m.max()).fold(1.0, f64::max);
+                let mut panels = vec![(scene.clone(), Panel::Shaded(image))];
+                panels.extend(
+                    tracers
+                        .iter()
+                        .zip(&maps)
+                        .filter_map(|(p, map)| map.map(|map| (p.tracer.clone(), Panel::Map(map)))),
+                );
+                // The baselines (embree-best alone is 18 of them) share one blank panel.
+                let baselines = maps.iter().filter(|m| m.is_none()).count();
+                if baselines > 0 {
+                    panels.push((format!("{baselines} baseline(s)"), Panel::NoCounts));
+                }
+                let name = format!(
+                    "heatmap-{}-{}-{}.png",
+                    file_stem(scene),
+                    kind.name(),
+                    cost.name()
+                );
+                save_panels(&dir.join(name), &panels, cost.unit(), scale)?;
+            }
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn viridis_ends_and_middle() {
+        assert_eq!(viridis(0.0), RGBColor(0x44, 0x01, 0x54));
+        assert_eq!(viridis(1.0), RGBColor(0xfd, 0xe7, 0x25));
+        assert_eq!(viridis(0.5), RGBColor(0x21, 0x91, 0x8c));
+        assert_eq!(viridis(2.0), viridis(1.0));
+        assert_eq!(viridis(f64::NAN), viridis(0.0));
+        // Halfway between the first two stops.
+        assert_eq!(viridis(0.05), RGBColor(0x46, 0x13, 0x65));
+    }
+}

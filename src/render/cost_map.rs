@@ -1,0 +1,226 @@
+//! Per-pixel traversal cost (issue 33): one counting pass over a wavefront with every count
+//! charged to its ray (`stats::RayCosts`), the rays' costs summed into the pixels they descend
+//! from. A pixel's value is its cost per ray (box tests, triangle tests or nodes visited, ÷ the
+//! rays of the wavefront from that pixel), so maps of different ray kinds read alike.
+
+use std::str::FromStr;
+
+use crate::error::{Error, Result};
+use crate::geometry::RayBatch;
+use crate::render::rays::{diffuse_rays, primary_rays, shadow_rays};
+use crate::render::wavefront::{answer, Answers, Work};
+use crate::scene::{Frame, Scene};
+use crate::stats::{Counters, RayCosts};
+use crate::tracers::chunked::trace_hits;
+use crate::tracers::Tracer;
+
+/// The ray kinds `wavefront` makes: each ray descends from one pixel.
+pub const RAY_KINDS: [&str; 3] = ["primary", "shadow", "diffuse"];
+
+/// The `width × height` wavefront of `kind` (`RAY_KINDS`) of `frame`: its camera rays, or the
+/// shadow rays (one per hit and light) or diffuse bounces (seed 0) of their hits through
+/// `tracer`; each ray carries its pixel.
+pub fn wavefront(
+    scene: &Scene,
+    frame: &Frame,
+    tracer: &dyn Tracer,
+    kind: &str,
+    (width, height): (u32, u32),
+) -> Result<RayBatch> {
+    let primary = primary_rays(&frame.camera, width, height);
+    let hits = || trace_hits(tracer, &primary);
+    match kind {
+        "primary" => Ok(primary),
+        "shadow" => Ok(shadow_rays(scene, &frame.mesh, &primary, &hits(), 0)),
+        "diffuse" => Ok(diffuse_rays(&frame.mesh, &primary, &hits(), 0)),
+        other => Err(Error::usage(format!(
+            "unknown heat-map rays {other:?}: one of {}",
+            RAY_KINDS.join(", ")
+        ))),
+    }
+}
+
+/// What a map shows.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Cost {
+    /// Ray–box tests.
+    Box,
+    /// Ray–triangle tests.
+    Triangle,
+    /// BVH nodes or grid cells visited (a visit shared by a packet goes to its rays in turn).
+    Nodes,
+}
+
+impl Cost {
+    pub const ALL: [Cost; 3] = [Cost::Box, Cost::Triangle, Cost::Nodes];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Cost::Box => "box",
+            Cost::Triangle => "triangle",
+            Cost::Nodes => "nodes",
+        }
+    }
+
+    /// The colour bar's unit.
+    pub fn unit(self) -> &'static str {
+        match self {
+            Cost::Box => "box tests per ray",
+            Cost::Triangle => "triangle tests per ray",
+            Cost::Nodes => "nodes visited per ray",
+        }
+    }
+
+    /// `costs`' column of this cost.
+    fn of(self, costs: &RayCosts) -> &[u64] {
+        match self {
+            Cost::Box => &costs.boxes,
+            Cost::Triangle => &costs.triangles,
+            Cost::Nodes => &costs.nodes,
+        }
+    }
+}
+
+impl FromStr for Cost {
+    type Err = Error;
+    fn from_str(name: &str) -> Result<Cost> {
+        Cost::ALL
+            .into_iter()
+            .find(|c| c.name() == name)
+            .ok_or_else(|| {
+                Error::usage(format!(
+                    "unknown heat map {name:?}: one of box, triangle, nodes"
+                ))
+            })
+    }
+}
+
+/// One cost per pixel of a `width × height` image.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CostMap {
+    pub cost: Cost,
+    pub width: u32,
+    pub height: u32,
+    /// The cost of the rays from each pixel, row by row.
+    pub total: Vec<u64>,
+    /// Rays (a light-visibility query: shading points) from each pixel.
+    pub rays: Vec<u32>,
+}
+
+impl CostMap {
+    /// `costs` (one entry per ray or shading point `i`, from pixel `pixel_of[i]`, standing for
+    /// `rays_of[i]` rays) summed per pixel.
+    pub fn of(
+        costs: &RayCosts,
+        cost: Cost,
+        (pixel_of, rays_of): (&[u32], &[u32]),
+        width: u32,
+        height: u32,
+    ) -> Self {
+        let pixels = width as usize * height as usize;
+        let mut map = CostMap {
+            cost,
+            width,
+            height,
+            total: vec![0; pixels],
+            rays: vec![0; pixels],
+        };
+        for ((&pixel, &rays), &c) in pixel_of.iter().zip(rays_of).zip(cost.of(costs)) {
+            map.total[pixel as usize] += c;
+            map.rays[pixel as usize] += rays;
+        }
+        map
+    }
+
+    /// Pixel `i`'s cost per ray (0 where no ray came from it).
+    pub fn per_ray(&self, i: usize) -> f64 {
+        match self.rays[i] {
+            0 => 0.0,
+            n => self.total[i] as f64 / n as f64,
+        }
+    }
+
+    /// The map's cost per ray over all its rays.
+    pub fn mean(&self) -> f64 {
+        let rays: u64 = self.rays.iter().map(|&n| n as u64).sum();
+        match rays {
+            0 => 0.0,
+            n => self.total.iter().sum::<u64>() as f64 / n as f64,
+        }
+    }
+
+    /// The largest cost per ray of any pixel.
+    pub fn max(&self) -> f64 {
+        (0..self.total.len())
+            .map(|i| self.per_ray(i))
+            .fold(0.0, f64::max)
+    }
+}
+
+/// One counting pass of `tracer` over `work` in the current pool, each count charged to its ray:
+/// the pass's counters and its map of each cost. `pixel_of[i]`: the pixel of ray `i` (a batch's
+/// `pixel`) or of shading point `i` (a light-visibility query), in a `width × height` image.
+pub fn count_per_pixel(
+    tracer: &dyn Tracer,
+    work: Work<'_>,
+    pixel_of: &[u32],
+    (width, height): (u32, u32),
+) -> Result<(Counters, Vec<CostMap>)> {
+    if !tracer.counts_internals() {
+        return Err(Error::usage(
+            "this tracer (a production baseline) does not report its box and triangle tests: \
+             no heat map can be drawn for it",
+        ));
+    }
+    // A shading point stands for its sample rays (those in front of its surface).
+    let rays_of: Vec<u32> = match work {
+        Work::Closest(batch) | Work::Occlusion(batch) => vec![1; batch.len()],
+        Work::LightVisibility(query) => (0..query.len())
+            .map(|i| {
+                (0..query.samples.per_point())
+                    .filter(|&s| query.ray(i, s).is_some())
+                    .count() as u32
+            })
+            .collect(),
+    };
+    let owners = rays_of.len();
+    assert_eq!(owners, pixel_of.len(), "one pixel per ray or shading point");
+    if let Some(&pixel) = pixel_of
+        .iter()
+        .find(|&&p| p as u64 >= width as u64 * height as u64)
+    {
+        return Err(Error::usage(format!(
+            "pixel {pixel} lies outside the {width}×{height} image"
+        )));
+    }
+    let mut counters = Counters::attributing(owners);
+    let mut answers = Answers::blank(&work);
+    answer(tracer, work, &mut answers, Some(&mut counters));
+    let costs = counters.per_ray.take().expect("an attributing pass");
+    let maps = Cost::ALL
+        .map(|cost| CostMap::of(&costs, cost, (pixel_of, &rays_of), width, height))
+        .to_vec();
+    Ok((counters, maps))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rays_sum_into_their_pixels() {
+        let mut costs = RayCosts::new(4);
+        costs.boxes = vec![3, 5, 1, 0];
+        // Rays 0 and 1 from pixel 3, ray 2 from pixel 0, ray 3 from pixel 1; pixel 2 has none.
+        // Ray 3 stands for 3 rays (a shading point's samples).
+        let map = CostMap::of(&costs, Cost::Box, (&[3, 3, 0, 1], &[1, 1, 1, 3]), 2, 2);
+        assert_eq!(map.total, vec![1, 0, 0, 8]);
+        assert_eq!(map.rays, vec![1, 3, 0, 2]);
+        assert_eq!(map.per_ray(3), 4.0);
+        assert_eq!(map.per_ray(2), 0.0);
+        assert_eq!(map.mean(), 9.0 / 6.0);
+        assert_eq!(map.max(), 4.0);
+        assert_eq!("triangle".parse::<Cost>().unwrap(), Cost::Triangle);
+        assert!("lanes".parse::<Cost>().is_err());
+    }
+}

@@ -1,0 +1,213 @@
+//! Per-pixel cost maps (issue 33) add up: on a real scene, for every tracer family that counts
+//! its tests, the box tests, triangle tests and node visits of a map sum exactly to the counters
+//! of the same counting pass — primary rays, shadow rays, diffuse bounces and (multi-frusta's
+//! native answer and everyone's shadow rays) a soft-shadow query — and the counters themselves
+//! equal those of an ordinary counting pass, so attributing costs changes no count.
+
+use raylab::experiment::Experiment;
+use raylab::geometry::RayBatch;
+use raylab::render::area_light::{soft_shadow_points, LightSampleSets};
+use raylab::render::cost_map::{count_per_pixel, wavefront, Cost, CostMap};
+use raylab::render::wavefront::{answer, Answers, Work};
+use raylab::scene::library::load_scene;
+use raylab::scene::Scene;
+use raylab::stats::Counters;
+use raylab::tracers::chunked::{query_rays, trace_hits};
+use raylab::tracers::visibility::QuadLight;
+use raylab::tracers::{tracer_for_frame, Params, Tracer, VisibilityQuery};
+
+const SIZE: (u32, u32) = (64, 48);
+
+/// Every from-scratch family, with the variants whose attribution differs (packet lanes and
+/// frusta, wide trees, stream hand-off to single rays, primary frusta).
+fn tracers() -> Vec<(&'static str, Params)> {
+    vec![
+        ("reference", Params::new()),
+        ("wide-single", Params::new()),
+        ("obvhs", Params::new()),
+        ("grid-dda", Params::new()),
+        ("packet", Params::new()),
+        ("packet", Params::new().with("traversal", "masked")),
+        ("packet", Params::new().with("width", 4)),
+        ("cgt", Params::new()),
+        ("stream", Params::new()),
+        ("stream", Params::new().with("single", 8)),
+        ("mft", Params::new()),
+        ("mft", Params::new().with("primary", "frusta")),
+        ("mft", Params::new().with("width", 4)),
+    ]
+}
+
+/// An ordinary counting pass of `work`.
+fn plain_counters(tracer: &dyn Tracer, work: Work<'_>) -> Counters {
+    let mut counters = Counters::default();
+    answer(
+        tracer,
+        work,
+        &mut Answers::blank(&work),
+        Some(&mut counters),
+    );
+    counters
+}
+
+/// The maps of `work` sum to its counters, which equal an ordinary pass's; returns the maps.
+fn sums_match(what: &str, tracer: &dyn Tracer, work: Work<'_>, pixel_of: &[u32]) -> Vec<CostMap> {
+    let (counters, maps) = count_per_pixel(tracer, work, pixel_of, SIZE).unwrap();
+    let plain = plain_counters(tracer, work);
+    assert_eq!(
+        (
+            counters.aabb_tests,
+            counters.triangle_tests,
+            counters.nodes_visited
+        ),
+        (plain.aabb_tests, plain.triangle_tests, plain.nodes_visited),
+        "{what}: attributing changed the counts"
+    );
+    let sum = |cost: Cost| -> u64 {
+        let map: &CostMap = maps.iter().find(|m| m.cost == cost).unwrap();
+        map.total.iter().sum()
+    };
+    assert_eq!(sum(Cost::Box), counters.aabb_tests, "{what}: box tests");
+    assert_eq!(
+        sum(Cost::Triangle),
+        counters.triangle_tests,
+        "{what}: triangle tests"
+    );
+    assert_eq!(sum(Cost::Nodes), counters.nodes_visited, "{what}: nodes");
+    assert!(
+        counters.aabb_tests + counters.triangle_tests > 0,
+        "{what}: nothing counted"
+    );
+    // Every ray is counted at its pixel: the map's rays are the wavefront's (a query's: the
+    // sample rays in front of their points).
+    let rays: u64 = maps[0].rays.iter().map(|&n| n as u64).sum();
+    assert_eq!(rays, work.rays() as u64, "{what}: rays per pixel");
+    maps
+}
+
+fn conference() -> Option<Scene> {
+    match load_scene("conference", None) {
+        Ok(scene) => Some(scene),
+        Err(e) => {
+            eprintln!("NOTE: conference not found ({e}); set RAYLAB_SCENES to ../shared/scenes");
+            None
+        }
+    }
+}
+
+#[test]
+fn maps_sum_to_the_counters_for_every_tracer_family() {
+    let Some(scene) = conference() else { return };
+    let frame = scene.frame(0, 1);
+    let reference = tracer_for_frame("reference", &Params::new(), &frame).unwrap();
+    let batches: Vec<(&str, RayBatch)> = ["primary", "shadow", "diffuse"]
+        .map(|kind| {
+            let rays = wavefront(&scene, &frame, reference.as_ref(), kind, SIZE).unwrap();
+            assert!(!rays.is_empty(), "{kind} rays");
+            (kind, rays)
+        })
+        .to_vec();
+    // The soft-shadow query of the primary hits: each shading point from its hit's pixel.
+    let primary = &batches[0].1;
+    let hits = trace_hits(reference.as_ref(), primary);
+    let (points, samples) = soft_shadow_points(
+        &frame.mesh,
+        primary,
+        &hits,
+        SIZE.0,
+        16,
+        LightSampleSets::parse("jittered").unwrap(),
+        7,
+    )
+    .unwrap();
+    let point_pixels: Vec<u32> = (0..primary.len())
+        .filter(|&i| hits[i].is_hit())
+        .map(|i| primary.pixel[i])
+        .collect();
+    let query = VisibilityQuery::new(&points, QuadLight::of(&scene.lights[0]), &samples).unwrap();
+    let soft_rays = query_rays(query);
+    let soft_ray_pixels: Vec<u32> = soft_rays
+        .pixel
+        .iter()
+        .map(|&p| point_pixels[p as usize])
+        .collect();
+
+    for (name, params) in tracers() {
+        let tracer = tracer_for_frame(name, &params, &frame).unwrap();
+        let label = format!("{name} {params:?}");
+        for (kind, rays) in &batches {
+            let what = format!("{label} on {kind} rays");
+            let maps = sums_match(&what, tracer.as_ref(), Work::of_batch(rays), &rays.pixel);
+            // Each camera ray of a BVH tracer tests the root box at least: its own test, or its
+            // lane's or stream slot's, lands on its own pixel (frusta spread theirs instead).
+            let bvh_rays =
+                !matches!(name, "cgt" | "grid-dda") && !format!("{params:?}").contains("frusta");
+            if *kind == "primary" && bvh_rays {
+                let boxes = &maps.iter().find(|m| m.cost == Cost::Box).unwrap().total;
+                assert!(
+                    boxes.iter().all(|&b| b >= 1),
+                    "{what}: a pixel without its box test"
+                );
+            }
+        }
+        let what = format!("{label} on soft-shadow rays");
+        sums_match(
+            &what,
+            tracer.as_ref(),
+            Work::Occlusion(&soft_rays),
+            &soft_ray_pixels,
+        );
+        let what = format!("{label} on the soft-shadow query");
+        sums_match(
+            &what,
+            tracer.as_ref(),
+            Work::LightVisibility(query),
+            &point_pixels,
+        );
+    }
+}
+
+#[test]
+fn baselines_without_counts_give_no_map() {
+    let Some(scene) = conference() else { return };
+    let frame = scene.frame(0, 1);
+    let embree = tracer_for_frame("embree3-4", &Params::new(), &frame).unwrap();
+    let rays = raylab::render::rays::primary_rays(&frame.camera, SIZE.0, SIZE.1);
+    let err =
+        count_per_pixel(embree.as_ref(), Work::of_batch(&rays), &rays.pixel, SIZE).unwrap_err();
+    assert!(err.to_string().contains("does not report"), "{err}");
+}
+
+#[test]
+fn the_readme_picture_is_made_by_a_committed_command() {
+    let readme = std::fs::read_to_string("README.md").unwrap();
+    let picture = "docs/heatmaps/heatmap-conference-area-light-soft_shadow-box.png";
+    assert!(
+        readme.contains(&format!("]({picture})")),
+        "the README shows the picture"
+    );
+    assert!(readme.contains("raylab run experiments/heatmaps.toml --out /tmp/heatmaps"));
+    assert!(readme.contains(&format!("cp /tmp/heatmaps/heatmaps/*/{}", &picture[14..])));
+    let exp = Experiment::load(std::path::Path::new("experiments/heatmaps.toml")).unwrap();
+    assert_eq!(exp.name, "heatmaps");
+    assert_eq!(exp.heatmaps, vec![Cost::Box]);
+    assert_eq!(exp.scenes[0].name, "conference-area-light");
+    let image = image::open(picture).unwrap();
+    // The shaded frame and three tracers' 256² panels side by side, plus the colour bar.
+    assert!(image.width() > 4 * 256 && image.height() >= 256);
+}
+
+#[test]
+fn an_unknown_heat_map_names_the_file_and_line() {
+    let text =
+        "name = \"x\"\nscenes = [\"room\"]\ntracers = [\"reference\"]\nrays = [\"primary\"]\n\
+                heatmaps = [\"box\", \"lanes\"]\nresolution = { width = 8, height = 8 }\n\
+                frames = 1\nthreads = [1]\nwarmup = 0\nrepeats = 1\n";
+    let err = Experiment::parse(std::path::Path::new("x.toml"), text).unwrap_err();
+    assert_eq!(err.exit_code(), 2);
+    let message = err.to_string();
+    assert!(
+        message.contains("x.toml:5:") && message.contains("\"lanes\""),
+        "{message}"
+    );
+}
