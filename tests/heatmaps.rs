@@ -125,7 +125,8 @@ fn maps_sum_to_the_counters_for_every_tracer_family() {
         .map(|i| primary.pixel[i])
         .collect();
     let query = VisibilityQuery::new(&points, QuadLight::of(&scene.lights[0]), &samples).unwrap();
-    let soft_rays = query_rays(query);
+    let mut soft_rays = RayBatch::default();
+    query_rays(query, &mut soft_rays);
     let soft_ray_pixels: Vec<u32> = soft_rays
         .pixel
         .iter()
