@@ -3,7 +3,7 @@
 
 use glam::Vec3;
 
-use crate::geometry::{Hit, Ray, Triangle, WatertightRay};
+use crate::geometry::{Hit, Ray, RayBatch, RayKind, Triangle, WatertightRay};
 use crate::random::SplitMix64;
 
 /// A seeded triangle soup: triangles with centres uniform in the cube `[lo, hi]³`, each corner
@@ -97,6 +97,20 @@ pub fn awkward_slab_rays() -> ([Vec3; 5], [Vec3; 7]) {
         Vec3::new(-0.7, 0.1, 0.0),
     ];
     (origins, dirs)
+}
+
+/// A batch's rays, field by field (kind, the f32 columns and times, pixels, packet starts): what
+/// two ways of making the same batch must agree on.
+pub fn batch_fields(b: &RayBatch) -> (Option<RayKind>, [Vec<f32>; 9], Vec<u32>, Vec<bool>) {
+    let f = [
+        &b.ox, &b.oy, &b.oz, &b.dx, &b.dy, &b.dz, &b.tmin, &b.tmax, &b.time,
+    ];
+    (
+        b.kind,
+        f.map(|v| v.clone()),
+        b.pixel.clone(),
+        b.packet_start.clone(),
+    )
 }
 
 #[cfg(test)]

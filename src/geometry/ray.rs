@@ -187,10 +187,10 @@ impl RayBatch {
         self.kind.unwrap_or(RayKind::Primary)
     }
 
-    /// Empty, of `kind`, keeping the allocations (a buffer refilled per chunk).
-    pub fn clear(&mut self, kind: RayKind) {
-        self.kind = Some(kind);
-        for v in [
+    /// The rays' eight f32 columns (origin, direction, tmin, tmax), for code that treats them
+    /// alike.
+    pub(crate) fn columns_mut(&mut self) -> [&mut Vec<f32>; 8] {
+        [
             &mut self.ox,
             &mut self.oy,
             &mut self.oz,
@@ -199,10 +199,16 @@ impl RayBatch {
             &mut self.dz,
             &mut self.tmin,
             &mut self.tmax,
-            &mut self.time,
-        ] {
+        ]
+    }
+
+    /// Empty, of `kind`, keeping the allocations (a buffer refilled per chunk).
+    pub fn clear(&mut self, kind: RayKind) {
+        self.kind = Some(kind);
+        for v in self.columns_mut() {
             v.clear();
         }
+        self.time.clear();
         self.pixel.clear();
         self.packet_start.clear();
         self.camera = None;

@@ -63,16 +63,7 @@ impl RayBatch {
         let total: usize = lens.iter().sum();
         self.kind = Some(kind);
         self.camera = None;
-        for v in [
-            &mut self.ox,
-            &mut self.oy,
-            &mut self.oz,
-            &mut self.dx,
-            &mut self.dy,
-            &mut self.dz,
-            &mut self.tmin,
-            &mut self.tmax,
-        ] {
+        for v in self.columns_mut() {
             v.resize(total, 0.0);
         }
         self.pixel.resize(total, 0);
@@ -112,6 +103,7 @@ mod tests {
     use glam::Vec3;
 
     use super::*;
+    use crate::test_util::batch_fields;
 
     #[test]
     fn parts_filled_in_any_order_make_the_batch_pushes_make() {
@@ -138,17 +130,6 @@ mod tests {
                 part.set(k, &ray(i), 100 + i as u32, i % 3 == 0);
             }
         }
-        let fields = |b: &RayBatch| {
-            let f = [
-                &b.ox, &b.oy, &b.oz, &b.dx, &b.dy, &b.dz, &b.tmin, &b.tmax, &b.time,
-            ];
-            (
-                b.kind,
-                f.map(|v| v.clone()),
-                b.pixel.clone(),
-                b.packet_start.clone(),
-            )
-        };
-        assert_eq!(fields(&filled), fields(&pushed));
+        assert_eq!(batch_fields(&filled), batch_fields(&pushed));
     }
 }

@@ -285,6 +285,7 @@ mod tests {
     /// the rays of the serial `VisibilityQuery::rays`: order, packets, times and pixels.
     #[test]
     fn query_rays_are_the_serial_rays_in_place() {
+        use crate::test_util::batch_fields;
         use crate::tracers::visibility::{LightSamples, QuadLight, ShadingPoint, ShadingPoints};
         let light = QuadLight {
             corner: Vec3::new(0.0, 4.0, 0.0),
@@ -314,25 +315,14 @@ mod tests {
         query.rays(&mut serial, &mut Vec::new());
         let mut parallel = batch(100_000, Some(5));
         query_rays(query, &mut parallel);
-        let fields = |b: &RayBatch| {
-            let f = [
-                &b.ox, &b.oy, &b.oz, &b.dx, &b.dy, &b.dz, &b.tmin, &b.tmax, &b.time,
-            ];
-            (
-                b.kind,
-                f.map(|v| v.clone()),
-                b.pixel.clone(),
-                b.packet_start.clone(),
-            )
-        };
         assert_eq!(serial.len(), query.ray_count());
         assert!(!serial.time.is_empty() && serial.len() < 5000 * 16);
-        assert_eq!(fields(&parallel), fields(&serial));
+        assert_eq!(batch_fields(&parallel), batch_fields(&serial));
         // A query at time 0 only: no ray times, though the batch had none to drop either.
         let early = query.slice(0..2000);
         early.rays(&mut serial, &mut Vec::new());
         query_rays(early, &mut parallel);
         assert!(parallel.time.is_empty());
-        assert_eq!(fields(&parallel), fields(&serial));
+        assert_eq!(batch_fields(&parallel), batch_fields(&serial));
     }
 }
