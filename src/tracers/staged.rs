@@ -16,13 +16,13 @@ pub trait StagedRays<T>: Send {
 }
 
 /// Per-chunk staged data beside the chunk's range of the batch.
-pub struct Chunks<C> {
-    pub chunks: Vec<(Range<usize>, C)>,
+struct Chunks<C> {
+    chunks: Vec<(Range<usize>, C)>,
 }
 
 impl<C: Send> Chunks<C> {
     /// `stage` of every range, in the current pool.
-    pub fn stage(ranges: Vec<Range<usize>>, stage: impl Fn(Range<usize>) -> C + Sync) -> Self {
+    fn stage(ranges: Vec<Range<usize>>, stage: impl Fn(Range<usize>) -> C + Sync) -> Self {
         Chunks {
             chunks: ranges
                 .into_par_iter()
@@ -32,7 +32,7 @@ impl<C: Send> Chunks<C> {
     }
 
     /// `trace` of every chunk with its part of `out`, in the current pool.
-    pub fn trace<T: Send>(&mut self, out: &mut [T], trace: impl Fn(&mut C, &mut [T]) + Sync) {
+    fn trace<T: Send>(&mut self, out: &mut [T], trace: impl Fn(&mut C, &mut [T]) + Sync) {
         let mut rest = out;
         let mut parts = Vec::with_capacity(self.chunks.len());
         for (range, chunk) in &mut self.chunks {

@@ -14,7 +14,7 @@ use crate::error::Result;
 use crate::geometry::{Hit, RayKind, Rays};
 use crate::params::Params;
 use crate::stats::Stats;
-use crate::tracers::staged::Chunks;
+use crate::tracers::staged::staged_by;
 use crate::tracers::{Kernel, StagedRays};
 
 /// One way of calling Embree `A` on a chunk of rays: how the chunk is cut into calls, the record
@@ -185,11 +185,14 @@ impl<A: EmbreeApi, M: Submission<A>> EmbreeTracer<A, M> {
         rays: Rays<'_>,
         chunks: Vec<Range<usize>>,
     ) -> Box<dyn StagedRays<Q::Answer> + '_> {
-        Box::new(Staged::<A, M, Q> {
-            tracer: self,
-            kind: rays.kind,
-            chunks: Chunks::stage(chunks, |range| Self::stage::<Q>(rays.slice(range))),
-        })
+        let kind = rays.kind;
+        staged_by(
+            chunks,
+            |range| Self::stage::<Q>(rays.slice(range)),
+            move |calls: &mut Vec<(Range<usize>, Q::Record)>, out: &mut [Q::Answer]| {
+                self.trace_staged::<Q>(kind, calls, out)
+            },
+        )
     }
 }
 
@@ -271,22 +274,6 @@ impl<A: EmbreeApi, M: Submission<A>> Query<A, M> for Occlusion {
         out: &mut [bool],
     ) {
         M::occluded(scene, args, record, out)
-    }
-}
-
-/// A batch staged for Embree: per chunk, the records of its calls. Counting is not done here:
-/// counted passes go through `Kernel` (Embree counts rays only).
-struct Staged<'t, A: EmbreeApi, M: Submission<A>, Q: Query<A, M>> {
-    tracer: &'t EmbreeTracer<A, M>,
-    kind: RayKind,
-    chunks: Chunks<Vec<(Range<usize>, Q::Record)>>,
-}
-
-impl<A: EmbreeApi, M: Submission<A>, Q: Query<A, M>> StagedRays<Q::Answer> for Staged<'_, A, M, Q> {
-    fn trace(&mut self, out: &mut [Q::Answer]) {
-        let (tracer, kind) = (self.tracer, self.kind);
-        self.chunks
-            .trace(out, |calls, out| tracer.trace_staged::<Q>(kind, calls, out));
     }
 }
 
