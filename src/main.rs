@@ -98,7 +98,8 @@ enum Command {
     /// at this scale, so a killed reproduction resumes where it stopped.
     Reproduce {
         /// A paper's directory name under results/ (overbeck2008, boulos2007, wald2006,
-        /// gribble2008, benthin2009, ...) or `all`.
+        /// gribble2008, benthin2009, ...), one experiment file a paper's claims list (its name,
+        /// e.g. wald06-resolution-1024: only that file is run, then the paper's report), or `all`.
         paper: String,
         /// `paper`: the experiment files' own settings; `quick`: 64² images, one frame, one pass,
         /// one thread (a smoke test in RESULTS/.quick/, never over the committed runs; its reports

@@ -1,7 +1,8 @@
 //! `raylab reproduce` end to end at `--scale quick` on a paper of one small experiment (the
 //! built-in room, the reference tracer): the run lands in `results/.quick/<paper>/<experiment>/`
 //! (never over the committed runs) recorded as quick, the report is regenerated with the claim's verdict computed from it and
-//! labelled a smoke test, a second call keeps the run (resume), and an unknown paper is a usage
+//! labelled a smoke test, a second call keeps the run (resume), one experiment file can be run
+//! alone, and an unknown paper is a usage
 //! error naming the papers there are.
 
 use std::fs;
@@ -62,6 +63,7 @@ fn a_quick_reproduction_runs_reports_and_resumes() {
     // 64² camera rays × 1 workload × 1 scene × 1 frame × 1 instance × 1 thread count × 1 pass.
     assert_eq!(steps[0].rays, 64 * 64);
     assert!(!steps[0].done);
+    assert_eq!(steps[0].last_seconds, None);
     // At the file's own scale: 512² × 2 frames × 2 thread counts × 4 passes.
     let full = plan(&committed, &experiments, Scale::Paper).unwrap();
     assert_eq!(full[0].rays, 512 * 512 * 2 * 2 * 4);
@@ -103,6 +105,11 @@ fn a_quick_reproduction_runs_reports_and_resumes() {
         Some(64)
     );
     let run_id = first["run_id"].clone();
+    // A file run before is estimated by that run's wall time.
+    let again = plan(&paper, &experiments, Scale::Quick).unwrap();
+    assert!(again[0].done);
+    assert_eq!(again[0].last_seconds, first["wall_seconds"].as_f64());
+    assert_eq!(again[0].estimate_seconds(), again[0].last_seconds.unwrap());
     // Nothing is left of the staging directory.
     let left: Vec<_> = fs::read_dir(&paper)
         .unwrap()
@@ -133,8 +140,24 @@ fn a_quick_reproduction_runs_reports_and_resumes() {
     quick("toy2026").unwrap();
     assert_eq!(meta()["run_id"], run_id);
 
+    // One experiment file named: only it runs, in its paper; the other run is kept.
+    fs::write(
+        experiments.join("tiny2.toml"),
+        EXPERIMENT.replace("tiny", "tiny2"),
+    )
+    .unwrap();
+    let listed = CLAIMS.replace(r#"["tiny"]"#, r#"["tiny", "tiny2"]"#);
+    fs::write(committed.join("claims.toml"), listed).unwrap();
+    quick("tiny2").unwrap();
+    assert!(paper.join("tiny2/meta.json").is_file());
+    assert_eq!(meta()["run_id"], run_id);
+
     let e = quick("nope").unwrap_err();
     assert_eq!(e.exit_code(), 2);
+    assert!(
+        e.to_string().contains("no paper lists an experiment nope"),
+        "{e}"
+    );
     assert!(e.to_string().contains("papers: toy2026, or all"), "{e}");
     let _ = fs::remove_dir_all(&root);
 }

@@ -1,6 +1,6 @@
-//! `raylab reproduce <paper>|all [--scale paper|quick]`: every experiment file a paper's claims
-//! list (`results/<paper>/claims.toml`), run in turn into `results/<paper>/<experiment>/`, then
-//! the paper's REPORT.md and the index of verdicts regenerated. The plan comes first, with an
+//! `raylab reproduce <paper>|<experiment>|all [--scale paper|quick]`: every experiment file a
+//! paper's claims list (`results/<paper>/claims.toml`; or the one file named), run in turn into
+//! `results/<paper>/<experiment>/`, then the paper's REPORT.md and the index of verdicts regenerated. The plan comes first, with an
 //! estimated time per file; a run already made from this source at this scale is kept, so a
 //! killed reproduction resumes where it stopped (a run is moved into place only once complete).
 //! A quick (smoke-test) reproduction works in `results/.quick/<paper>/` with a copy of the
@@ -21,10 +21,12 @@ use crate::experiment::run::meta::commit;
 use crate::experiment::spec::overrides::Scale;
 use crate::experiment::{run_experiment, Chatter, Experiment, RunOverrides};
 
-/// Rays per second assumed for the estimate: a conservative constant, below what the slowest
-/// committed paper runs sustain per timed pass (whole Whitted and path-traced frames with shading,
-/// 1–3 million rays/s on 2 threads; ray batches run at tens of millions). An estimate, not a
-/// promise: the progress line corrects it by the time the finished files took.
+/// Rays per second assumed for the estimate of a file never run at this scale: a conservative
+/// constant, below what the slowest committed paper runs sustain per timed pass (whole Whitted and
+/// path-traced frames with shading, 1–3 million rays/s on 2 threads; ray batches run at tens of
+/// millions), so such estimates run long, often by 10× or more. A file run before is estimated
+/// by that run's wall time instead. An estimate, not a promise: the progress line corrects it by
+/// the time the finished files took.
 pub const ESTIMATED_RAYS_PER_SECOND: f64 = 1.0e6;
 
 /// Where under the results root a quick reproduction works (`results/.quick/<paper>/`).
@@ -56,11 +58,15 @@ pub struct Step {
     pub rays: u64,
     /// Its run here is from this source and scale: kept.
     pub done: bool,
+    /// The wall time of the run in place at this scale, if any (from an older source, or of an
+    /// older version of the file: the best estimate there is).
+    pub last_seconds: Option<f64>,
 }
 
 impl Step {
     pub fn estimate_seconds(&self) -> f64 {
-        self.rays as f64 / ESTIMATED_RAYS_PER_SECOND
+        self.last_seconds
+            .unwrap_or(self.rays as f64 / ESTIMATED_RAYS_PER_SECOND)
     }
 }
 
@@ -80,21 +86,21 @@ fn planned_rays(exp: &Experiment) -> u64 {
     .fold(exp.largest_batch(), |n, &k| n.saturating_mul(k as u64))
 }
 
-/// Is the run in `dir` from this source tree (commit, and the measured code's digests) at `scale`?
-fn is_current(dir: &Path, scale: Scale, hash: &str) -> bool {
-    let Ok(text) = std::fs::read_to_string(dir.join(META_JSON)) else {
-        return false;
-    };
-    let Ok(meta) = serde_json::from_str::<Value>(&text) else {
-        return false;
-    };
+/// The meta.json of the run in `dir` if it was made at `scale`.
+fn run_at_scale(dir: &Path, scale: Scale) -> Option<Value> {
+    let text = std::fs::read_to_string(dir.join(META_JSON)).ok()?;
+    let meta = serde_json::from_str::<Value>(&text).ok()?;
     let recorded_scale = meta
         .pointer("/overrides/scale")
         .and_then(Value::as_str)
         .unwrap_or("paper");
+    (recorded_scale == scale.name()).then_some(meta)
+}
+
+/// Is the run (`meta`) from this source tree (commit, and the measured code's digests)?
+fn is_current(meta: &Value, hash: &str) -> bool {
     let source = this_source().map(|s| serde_json::to_value(s).unwrap_or_default());
     meta.pointer("/commit/hash").and_then(Value::as_str) == Some(hash)
-        && recorded_scale == scale.name()
         && source.is_some()
         && meta.get("measured_source") == source.as_ref()
 }
@@ -110,10 +116,12 @@ pub fn plan(paper_dir: &Path, experiments: &Path, scale: Scale) -> Result<Vec<St
             let file = experiments.join(format!("{name}.toml"));
             let mut exp = Experiment::load(&file)?;
             overrides(scale, paper_dir).apply(&mut exp)?;
+            let last = run_at_scale(&paper_dir.join(name), scale);
             Ok(Step {
                 experiment: name.clone(),
                 rays: planned_rays(&exp),
-                done: is_current(&paper_dir.join(name), scale, &hash),
+                done: last.as_ref().is_some_and(|m| is_current(m, &hash)),
+                last_seconds: last.and_then(|m| m.get("wall_seconds")?.as_f64()),
                 file,
             })
         })
@@ -128,7 +136,35 @@ fn minutes(seconds: f64) -> String {
     }
 }
 
-/// Reproduces the papers named (`all`: every paper under `results`), then regenerates their
+/// The papers `which` names, each with the one experiment file to run if it names one: `all`,
+/// a paper's directory name under `results`, or an experiment file a paper's claims list.
+fn select(which: &str, results: &Path) -> Result<Vec<(PathBuf, Option<String>)>> {
+    let papers = papers_under(results)?;
+    if which == "all" {
+        return Ok(papers.into_iter().map(|p| (p, None)).collect());
+    }
+    let dir = results.join(which);
+    if dir.join(CLAIMS_TOML).is_file() {
+        return Ok(vec![(dir, None)]);
+    }
+    for paper in &papers {
+        let (claims, _) = Claims::read(&paper.join(CLAIMS_TOML))?;
+        if claims.experiments.iter().any(|e| e == which) {
+            return Ok(vec![(paper.clone(), Some(which.to_string()))]);
+        }
+    }
+    let known: Vec<String> = papers
+        .iter()
+        .filter_map(|p| p.file_name().map(|n| n.to_string_lossy().into_owned()))
+        .collect();
+    Err(Error::usage(format!(
+        "reproduce {which}: no {} and no paper lists an experiment {which} (papers: {}, or all)",
+        dir.join(CLAIMS_TOML).display(),
+        known.join(", ")
+    )))
+}
+
+/// Reproduces what `which` names (`select`), then regenerates their
 /// reports and `results/VERDICTS.md`. Returns the report paths (none for a `dry_run`, which
 /// prints the plans only).
 pub fn reproduce(
@@ -139,49 +175,38 @@ pub fn reproduce(
     dry_run: bool,
     chatter: Chatter,
 ) -> Result<Vec<PathBuf>> {
-    let papers = match which {
-        "all" => papers_under(results)?,
-        name => {
-            let dir = results.join(name);
-            if !dir.join(CLAIMS_TOML).is_file() {
-                let known: Vec<String> = papers_under(results)?
-                    .iter()
-                    .filter_map(|p| p.file_name().map(|n| n.to_string_lossy().into_owned()))
-                    .collect();
-                return Err(Error::usage(format!(
-                    "reproduce {name}: no {} (papers: {}, or all)",
-                    dir.join(CLAIMS_TOML).display(),
-                    known.join(", ")
-                )));
-            }
-            vec![dir]
-        }
-    };
+    let papers = select(which, results)?;
     let root = match scale {
         Scale::Paper => results.to_path_buf(),
         Scale::Quick => results.join(QUICK_DIR),
     };
     let mut reports = Vec::new();
-    for source in &papers {
+    for (source, only) in &papers {
         let paper = &root.join(source.file_name().unwrap_or_default());
         if paper != source {
             std::fs::create_dir_all(paper).map_err(|e| Error::io(paper, e))?;
             let claims = paper.join(CLAIMS_TOML);
             std::fs::copy(source.join(CLAIMS_TOML), &claims).map_err(|e| Error::io(&claims, e))?;
         }
-        let steps = plan(paper, experiments, scale)?;
+        let mut steps = plan(paper, experiments, scale)?;
+        steps.retain(|s| only.as_ref().is_none_or(|name| &s.experiment == name));
         let mut text = format!(
-            "reproduce {} at {} scale ({} rays/s assumed):\n",
+            "reproduce {} at {} scale (estimates: the last run's wall time, else {} rays/s):\n",
             paper.display(),
             scale.name(),
             ESTIMATED_RAYS_PER_SECOND
         );
         for s in &steps {
             text += &format!(
-                "  {:<28} {:>16} rays  ~{:>8}  {}\n",
+                "  {:<28} {:>16} rays  ~{:>8} {:<10} {}\n",
                 s.experiment,
                 s.rays,
                 minutes(s.estimate_seconds()),
+                if s.last_seconds.is_some() {
+                    "(last run)"
+                } else {
+                    ""
+                },
                 if s.done {
                     "done at this source"
                 } else {
