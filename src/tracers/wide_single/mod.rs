@@ -10,7 +10,7 @@
 //! - **Order**: a lone child met is entered at once (Embree's `BVHNNodeTraverser1Hit` does the
 //!   same; on incoherent rays it is the common case, and it saves the stack's store and load);
 //!   otherwise the children met go on the stack far to near by entry distance, so the nearest is
-//!   popped first; a popped child whose entry lies beyond the closest hit found meanwhile is
+//!   popped first (occlusion rays push them unsorted, as Embree's any-hit traversal); a popped child whose entry lies beyond the closest hit found meanwhile is
 //!   skipped untested. A pushed child's node or leaf triangles are prefetched (a wide node spans
 //!   four cache lines and the walk is bound by their loads: the siblings' misses overlap).
 //! - **Leaves**: the reference tracer's leaf stage (`reference::intersect_leaf`: the watertight
@@ -265,7 +265,9 @@ pub fn trace_wide<const W: usize, R: RayTests, S: Stats, const ANY: bool>(
             }
         } else {
             // Push the children met, keeping this node's run of the stack sorted far to near
-            // (equal entries: the later slot first, as popped).
+            // (equal entries: the later slot first, as popped). Occlusion (`ANY`) pushes them
+            // unsorted, in slot order, as Embree's any-hit traversal does: any hit ends it, so
+            // near-first order buys little and the sort costs every node.
             let base = top;
             while hit != 0 {
                 let c = hit.trailing_zeros() as usize;
@@ -284,7 +286,10 @@ pub fn trace_wide<const W: usize, R: RayTests, S: Stats, const ANY: bool>(
                 }
                 let mut at = top;
                 // SAFETY: entries base..top were written by this loop.
-                while at > base && unsafe { stack[at - 1].assume_init_ref() }.enter < child.enter {
+                while !ANY
+                    && at > base
+                    && unsafe { stack[at - 1].assume_init_ref() }.enter < child.enter
+                {
                     stack[at] = stack[at - 1];
                     if S::ENABLED {
                         depths[at] = depths[at - 1];
