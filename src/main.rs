@@ -300,14 +300,15 @@ struct WhittedArgs {
 #[derive(clap::Args, Debug)]
 struct HeatmapArgs {
     /// Write a heat map of this cost per pixel instead of the image: box, triangle or nodes
-    /// (tests or visits per ray, from a counting pass; not for the production baselines).
+    /// (tests or visits per ray, from a counting pass; not for the production baselines), or
+    /// lanes (share of SIMD lanes active; SIMD tracers only).
     #[arg(long, value_parser = parse_cost)]
     heatmap: Option<Cost>,
     /// The rays the heat map counts: primary, shadow (one per hit and light) or diffuse.
     #[arg(long, default_value = "primary", requires = "heatmap")]
     heatmap_rays: String,
-    /// Top of the colour scale in tests per ray (default: the map's largest), so several
-    /// tracers' maps share one scale.
+    /// Top of the colour scale in tests per ray (default: the map's largest; lanes: 1), so
+    /// several tracers' maps share one scale.
     #[arg(long, requires = "heatmap")]
     heatmap_max: Option<f64>,
 }
@@ -601,20 +602,22 @@ fn execute(command: Command) -> Result<bool> {
                 let rays = wavefront(&scene, &frame, tracer.as_ref(), &heatmap.heatmap_rays, size)?;
                 let (_, maps) =
                     count_per_pixel(tracer.as_ref(), Work::of_batch(&rays), &rays.pixel, size)?;
-                let map = maps
-                    .iter()
-                    .find(|m| m.cost == cost)
-                    .expect("every cost is mapped");
-                let scale = heatmap.heatmap_max.unwrap_or(map.max().max(1.0));
+                let map = maps.iter().find(|m| m.cost == cost).ok_or_else(|| {
+                    Error::usage(format!(
+                        "--heatmap lanes: {tracer_name} traces single rays, it has no ray lanes \
+                         to share (the lanes map is for packet, stream, cgt and mft)"
+                    ))
+                })?;
+                let scale = heatmap.heatmap_max.unwrap_or(cost.scale([map]));
                 let caption = format!("{} on {} rays", tracer_name, heatmap.heatmap_rays);
                 let panels = [(caption, Panel::Map(map))];
                 save_panels(&output, &panels, cost.unit(), scale)?;
                 println!(
-                    "wrote {} ({} heat map of {} rays, {:.2} per ray, scale 0–{scale})",
+                    "wrote {} ({} heat map of {} rays, {}, scale 0–{scale})",
                     output.display(),
                     cost.name(),
                     heatmap.heatmap_rays,
-                    map.mean()
+                    cost.caption(map.mean())
                 );
                 return Ok(true);
             }

@@ -2,7 +2,8 @@
 //! its tests, the box tests, triangle tests and node visits of a map sum exactly to the counters
 //! of the same counting pass — primary rays, shadow rays, diffuse bounces and (multi-frusta's
 //! native answer and everyone's shadow rays) a soft-shadow query — and the counters themselves
-//! equal those of an ordinary counting pass, so attributing costs changes no count.
+//! equal those of an ordinary counting pass, so attributing costs changes no count. The lanes
+//! maps sum to the pass's SIMD lane totals, which equal the counts each family already keeps.
 
 use raylab::experiment::Experiment;
 use raylab::geometry::RayBatch;
@@ -11,7 +12,7 @@ use raylab::render::cost_map::{count_per_pixel, wavefront, Cost, CostMap};
 use raylab::render::wavefront::{answer, Answers, Work};
 use raylab::scene::library::load_scene;
 use raylab::scene::Scene;
-use raylab::stats::Counters;
+use raylab::stats::{Counters, Event};
 use raylab::tracers::chunked::{query_rays, trace_hits};
 use raylab::tracers::visibility::QuadLight;
 use raylab::tracers::{tracer_for_frame, Params, Tracer, VisibilityQuery};
@@ -50,8 +51,55 @@ fn plain_counters(tracer: &dyn Tracer, work: Work<'_>) -> Counters {
     counters
 }
 
+/// The tracers whose SIMD operations run over rays (they have lanes maps).
+fn traces_lanes(name: &str) -> bool {
+    matches!(name, "packet" | "stream" | "cgt" | "mft")
+}
+
+/// The lanes map of `name`'s pass sums to its lane totals, which equal what the family counts
+/// anyway: every test of packet and mft is one SIMD lane (their tests are all lane tests), a
+/// stream's lanes are its traversal and intersection lanes, cgt's are its cells' triangle tests
+/// less its lone rays'.
+fn lanes_match(what: &str, name: &str, counters: &Counters, maps: &[CostMap]) {
+    let lanes = maps.iter().find(|m| m.cost == Cost::Lanes);
+    let Some(lanes) = lanes.filter(|_| traces_lanes(name)) else {
+        assert!(lanes.is_none(), "{what}: a single-ray tracer has no lanes");
+        assert_eq!(counters.simd_lanes, 0, "{what}");
+        return;
+    };
+    assert_eq!(lanes.total.iter().sum::<u64>(), counters.simd_lanes_active);
+    assert_eq!(lanes.per.iter().sum::<u64>(), counters.simd_lanes, "{what}");
+    let tests = counters.aabb_tests + counters.triangle_tests;
+    match name {
+        "packet" | "mft" => assert_eq!(counters.simd_lanes_active, tests, "{what}"),
+        "stream" => {
+            let both = |a: Event, b: Event| counters.get(a) + counters.get(b);
+            assert_eq!(
+                (counters.simd_lanes_active, counters.simd_lanes),
+                (
+                    both(Event::TraversalLanesActive, Event::IntersectionLanesActive),
+                    both(Event::TraversalLanesIssued, Event::IntersectionLanesIssued)
+                ),
+                "{what}"
+            );
+        }
+        _ => assert!(
+            counters.simd_lanes_active <= counters.triangle_tests,
+            "{what}"
+        ),
+    }
+    let share = lanes.mean();
+    assert!(share > 0.0 && share <= 1.0, "{what}: lane share {share}");
+}
+
 /// The maps of `work` sum to its counters, which equal an ordinary pass's; returns the maps.
-fn sums_match(what: &str, tracer: &dyn Tracer, work: Work<'_>, pixel_of: &[u32]) -> Vec<CostMap> {
+fn sums_match(
+    what: &str,
+    name: &str,
+    tracer: &dyn Tracer,
+    work: Work<'_>,
+    pixel_of: &[u32],
+) -> Vec<CostMap> {
     let (counters, maps) = count_per_pixel(tracer, work, pixel_of, SIZE).unwrap();
     let plain = plain_counters(tracer, work);
     assert_eq!(
@@ -74,13 +122,14 @@ fn sums_match(what: &str, tracer: &dyn Tracer, work: Work<'_>, pixel_of: &[u32])
         "{what}: triangle tests"
     );
     assert_eq!(sum(Cost::Nodes), counters.nodes_visited, "{what}: nodes");
+    lanes_match(what, name, &counters, &maps);
     assert!(
         counters.aabb_tests + counters.triangle_tests > 0,
         "{what}: nothing counted"
     );
     // Every ray is counted at its pixel: the map's rays are the wavefront's (a query's: the
     // sample rays in front of their points).
-    let rays: u64 = maps[0].rays.iter().map(|&n| n as u64).sum();
+    let rays: u64 = maps[0].per.iter().sum();
     assert_eq!(rays, work.rays() as u64, "{what}: rays per pixel");
     maps
 }
@@ -138,7 +187,13 @@ fn maps_sum_to_the_counters_for_every_tracer_family() {
         let label = format!("{name} {params:?}");
         for (kind, rays) in &batches {
             let what = format!("{label} on {kind} rays");
-            let maps = sums_match(&what, tracer.as_ref(), Work::of_batch(rays), &rays.pixel);
+            let maps = sums_match(
+                &what,
+                name,
+                tracer.as_ref(),
+                Work::of_batch(rays),
+                &rays.pixel,
+            );
             // Each camera ray of a BVH tracer tests the root box at least: its own test, or its
             // lane's or stream slot's, lands on its own pixel (frusta spread theirs instead).
             let bvh_rays =
@@ -154,6 +209,7 @@ fn maps_sum_to_the_counters_for_every_tracer_family() {
         let what = format!("{label} on soft-shadow rays");
         sums_match(
             &what,
+            name,
             tracer.as_ref(),
             Work::Occlusion(&soft_rays),
             &soft_ray_pixels,
@@ -161,11 +217,32 @@ fn maps_sum_to_the_counters_for_every_tracer_family() {
         let what = format!("{label} on the soft-shadow query");
         sums_match(
             &what,
+            name,
             tracer.as_ref(),
             Work::LightVisibility(query),
             &point_pixels,
         );
     }
+}
+
+#[test]
+fn full_packets_keep_every_lane_busy() {
+    let Some(scene) = conference() else { return };
+    let frame = scene.frame(0, 1);
+    // 64×48 camera rays in 8×8 packets of 4-wide SIMD rays: every SIMD ray is full, and the
+    // packet tests all its lanes at every node and triangle it visits.
+    let packet = tracer_for_frame("packet", &Params::new().with("width", 4), &frame).unwrap();
+    let rays = raylab::render::rays::primary_rays(&frame.camera, SIZE.0, SIZE.1);
+    let (counters, maps) =
+        count_per_pixel(packet.as_ref(), Work::of_batch(&rays), &rays.pixel, SIZE).unwrap();
+    let lanes = maps.iter().find(|m| m.cost == Cost::Lanes).unwrap();
+    assert_eq!(counters.simd_lanes_active, counters.simd_lanes);
+    assert!((0..lanes.total.len()).all(|i| lanes.value(i) == 1.0));
+    // A stream's filters narrow as rays leave: its lanes are busy less than all the time.
+    let stream = tracer_for_frame("stream", &Params::new(), &frame).unwrap();
+    let (counters, _) =
+        count_per_pixel(stream.as_ref(), Work::of_batch(&rays), &rays.pixel, SIZE).unwrap();
+    assert!(counters.simd_lanes_active < counters.simd_lanes);
 }
 
 #[test]
@@ -202,13 +279,13 @@ fn the_readme_picture_is_made_by_a_committed_command() {
 fn an_unknown_heat_map_names_the_file_and_line() {
     let text =
         "name = \"x\"\nscenes = [\"room\"]\ntracers = [\"reference\"]\nrays = [\"primary\"]\n\
-                heatmaps = [\"box\", \"lanes\"]\nresolution = { width = 8, height = 8 }\n\
+                heatmaps = [\"box\", \"lane\"]\nresolution = { width = 8, height = 8 }\n\
                 frames = 1\nthreads = [1]\nwarmup = 0\nrepeats = 1\n";
     let err = Experiment::parse(std::path::Path::new("x.toml"), text).unwrap_err();
     assert_eq!(err.exit_code(), 2);
     let message = err.to_string();
     assert!(
-        message.contains("x.toml:5:") && message.contains("\"lanes\""),
+        message.contains("x.toml:5:") && message.contains("\"lane\"") && message.contains("lanes"),
         "{message}"
     );
 }
