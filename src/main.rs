@@ -11,6 +11,7 @@ use raylab::experiment::record::files::SUMMARY_MD;
 use raylab::experiment::record::results_dir::PendingResults;
 use raylab::experiment::results::heatmap::{save_panels, Panel};
 use raylab::experiment::results::summary::Summary;
+use raylab::experiment::spec::config::DEFAULT_SOFT_SHADOW_SAMPLES;
 use raylab::experiment::spec::overrides::Scale;
 use raylab::experiment::spec::shard::Shard;
 use raylab::experiment::{run_experiment, Chatter, RunOverrides};
@@ -23,7 +24,7 @@ use raylab::render::motion::MovingMesh;
 use raylab::render::path::ShadeStreams;
 use raylab::render::raycast::render_raycast;
 use raylab::render::renderers::{RenderWorkload, RendererInfo, RENDERERS};
-use raylab::render::wavefront::{Tracing, Work};
+use raylab::render::wavefront::Tracing;
 use raylab::render::whitted::{render_whitted, WhittedSettings};
 use raylab::scene::library::{list_scenes, load_scene};
 use raylab::scene::{Frame, Scene};
@@ -304,9 +305,14 @@ struct HeatmapArgs {
     /// lanes (share of SIMD lanes active; SIMD tracers only).
     #[arg(long, value_parser = parse_cost)]
     heatmap: Option<Cost>,
-    /// The rays the heat map counts: primary, shadow (one per hit and light) or diffuse.
+    /// The rays the heat map counts: primary, shadow (one per hit and light), diffuse or
+    /// soft-shadow (the light-visibility query of the primary hits on the scene's quad light:
+    /// natively for mft, as its shadow rays for the others).
     #[arg(long, default_value = "primary", requires = "heatmap")]
     heatmap_rays: String,
+    /// Light samples per shading point of --heatmap-rays soft-shadow (a perfect square).
+    #[arg(long, default_value_t = DEFAULT_SOFT_SHADOW_SAMPLES, requires = "heatmap")]
+    heatmap_samples: u32,
     /// Top of the colour scale in tests per ray (default: the map's largest; lanes: 1), so
     /// several tracers' maps share one scale.
     #[arg(long, requires = "heatmap")]
@@ -599,9 +605,10 @@ fn execute(command: Command) -> Result<bool> {
                 let tracer_name = tracer;
                 let tracer = raylab::tracers::tracer_for_frame(&tracer_name, &params, &frame)?;
                 let size = (width, height);
-                let rays = wavefront(&scene, &frame, tracer.as_ref(), &heatmap.heatmap_rays, size)?;
-                let (_, maps) =
-                    count_per_pixel(tracer.as_ref(), Work::of_batch(&rays), &rays.pixel, size)?;
+                let rays = (heatmap.heatmap_rays.as_str(), heatmap.heatmap_samples);
+                let wavefront = wavefront(&scene, &frame, tracer.as_ref(), rays, size)?;
+                let (work, pixel_of) = wavefront.work_for(tracer.as_ref());
+                let (_, maps) = count_per_pixel(tracer.as_ref(), work, &pixel_of, size)?;
                 let map = maps.iter().find(|m| m.cost == cost).ok_or_else(|| {
                     Error::usage(format!(
                         "--heatmap lanes: {tracer_name} traces single rays, it has no ray lanes \

@@ -8,7 +8,7 @@
 use raylab::experiment::Experiment;
 use raylab::geometry::RayBatch;
 use raylab::render::area_light::{soft_shadow_points, LightSampleSets};
-use raylab::render::cost_map::{count_per_pixel, wavefront, Cost, CostMap};
+use raylab::render::cost_map::{count_per_pixel, wavefront, Cost, CostMap, Wavefront};
 use raylab::render::wavefront::{answer, Answers, Work};
 use raylab::scene::library::load_scene;
 use raylab::scene::Scene;
@@ -151,7 +151,10 @@ fn maps_sum_to_the_counters_for_every_tracer_family() {
     let reference = tracer_for_frame("reference", &Params::new(), &frame).unwrap();
     let batches: Vec<(&str, RayBatch)> = ["primary", "shadow", "diffuse"]
         .map(|kind| {
-            let rays = wavefront(&scene, &frame, reference.as_ref(), kind, SIZE).unwrap();
+            let wave = wavefront(&scene, &frame, reference.as_ref(), (kind, 16), SIZE).unwrap();
+            let Wavefront::Rays(rays) = wave else {
+                panic!("{kind}: a batch of rays")
+            };
             assert!(!rays.is_empty(), "{kind} rays");
             (kind, rays)
         })
@@ -223,6 +226,39 @@ fn maps_sum_to_the_counters_for_every_tracer_family() {
             &point_pixels,
         );
     }
+}
+
+/// `render --heatmap … --heatmap-rays soft-shadow`'s wavefront: the query of the primary hits on
+/// the scene's quad light, natively for mft, as its shadow rays for the others; its maps sum to
+/// the pass's counters, and a tracer that answers with rays counts every sample ray in front of
+/// its point once, at its point's pixel.
+#[test]
+fn soft_shadow_maps_sum_to_the_counters() {
+    let scene = load_scene("conference-area-light", None).unwrap();
+    let frame = scene.frame(0, 1);
+    for name in ["reference", "packet", "stream", "mft"] {
+        let tracer = tracer_for_frame(name, &Params::new(), &frame).unwrap();
+        let wave = wavefront(&scene, &frame, tracer.as_ref(), ("soft-shadow", 4), SIZE).unwrap();
+        let Wavefront::SoftShadow { work, rays } = &wave else {
+            panic!("a soft-shadow query")
+        };
+        assert_eq!(work.samples.per_point(), 4);
+        let (work_of_tracer, pixel_of) = wave.work_for(tracer.as_ref());
+        let native = matches!(work_of_tracer, Work::LightVisibility(_));
+        assert_eq!(native, name == "mft", "{name}: natively only mft");
+        assert_eq!(work_of_tracer.rays(), rays.len(), "{name}: the same rays");
+        let what = format!("{name} on soft-shadow rays");
+        sums_match(&what, name, tracer.as_ref(), work_of_tracer, &pixel_of);
+    }
+    // Without a quad light there is no query.
+    let room = load_scene("room", None).unwrap();
+    let frame = room.frame(0, 1);
+    let tracer = tracer_for_frame("reference", &Params::new(), &frame).unwrap();
+    let err = wavefront(&room, &frame, tracer.as_ref(), ("soft-shadow", 4), SIZE)
+        .err()
+        .unwrap();
+    assert_eq!(err.exit_code(), 2);
+    assert!(err.to_string().contains("quad light"), "{err}");
 }
 
 #[test]

@@ -8,36 +8,104 @@ use std::str::FromStr;
 
 use crate::error::{Error, Result};
 use crate::geometry::RayBatch;
+use crate::render::area_light::{LightSampleSets, SoftShadowWork};
 use crate::render::rays::{diffuse_rays, primary_rays, shadow_rays};
 use crate::render::wavefront::{answer, Answers, Work};
 use crate::scene::{Frame, Scene};
 use crate::stats::{Counters, RayCosts};
-use crate::tracers::chunked::trace_hits;
+use crate::tracers::chunked::{query_rays, trace_hits};
 use crate::tracers::Tracer;
 
 /// The ray kinds `wavefront` makes: each ray descends from one pixel.
-pub const RAY_KINDS: [&str; 3] = ["primary", "shadow", "diffuse"];
+pub const RAY_KINDS: [&str; 4] = ["primary", "shadow", "diffuse", "soft-shadow"];
+
+/// A wavefront whose work descends from pixels.
+pub enum Wavefront {
+    Rays(RayBatch),
+    /// The soft-shadow query and its shadow rays (`chunked::query_rays`).
+    SoftShadow {
+        work: SoftShadowWork,
+        rays: RayBatch,
+    },
+}
+
+impl Wavefront {
+    /// What `tracer` is handed, with the pixel of each ray or shading point.
+    pub fn work_for(&self, tracer: &dyn Tracer) -> (Work<'_>, Vec<u32>) {
+        match self {
+            Wavefront::Rays(batch) => (Work::of_batch(batch), batch.pixel.clone()),
+            Wavefront::SoftShadow { work, rays } => soft_shadow_work(tracer, work, rays),
+        }
+    }
+}
 
 /// The `width × height` wavefront of `kind` (`RAY_KINDS`) of `frame`: its camera rays, or the
 /// shadow rays (one per hit and light) or diffuse bounces (seed 0) of their hits through
-/// `tracer`; each ray carries its pixel.
+/// `tracer`, or their soft-shadow query (`samples` jittered samples per point on the scene's
+/// quad light, seed 0); each ray and point carries its pixel.
 pub fn wavefront(
     scene: &Scene,
     frame: &Frame,
     tracer: &dyn Tracer,
-    kind: &str,
+    (kind, samples): (&str, u32),
     (width, height): (u32, u32),
-) -> Result<RayBatch> {
+) -> Result<Wavefront> {
     let primary = primary_rays(&frame.camera, width, height);
     let hits = || trace_hits(tracer, &primary);
-    match kind {
-        "primary" => Ok(primary),
-        "shadow" => Ok(shadow_rays(scene, &frame.mesh, &primary, &hits(), 0)),
-        "diffuse" => Ok(diffuse_rays(&frame.mesh, &primary, &hits(), 0)),
-        other => Err(Error::usage(format!(
-            "unknown heat-map rays {other:?}: one of {}",
-            RAY_KINDS.join(", ")
-        ))),
+    let rays = match kind {
+        "primary" => primary,
+        "shadow" => shadow_rays(scene, &frame.mesh, &primary, &hits(), 0),
+        "diffuse" => diffuse_rays(&frame.mesh, &primary, &hits(), 0),
+        "soft-shadow" => {
+            let sets = LightSampleSets::default();
+            let work = SoftShadowWork::of_hits(
+                scene,
+                &frame.mesh,
+                &primary,
+                &hits(),
+                width,
+                samples,
+                sets,
+                0,
+            )?
+            .ok_or_else(|| {
+                Error::usage(format!(
+                    "soft-shadow rays need a quad light, and scene {} has none \
+                     (the *-area-light scenes have one)",
+                    scene.name
+                ))
+            })?;
+            let mut rays = RayBatch::default();
+            query_rays(work.query(), &mut rays);
+            return Ok(Wavefront::SoftShadow { work, rays });
+        }
+        other => {
+            return Err(Error::usage(format!(
+                "unknown heat-map rays {other:?}: one of {}",
+                RAY_KINDS.join(", ")
+            )))
+        }
+    };
+    Ok(Wavefront::Rays(rays))
+}
+
+/// What `tracer` is handed for the soft-shadow workload `work` — the query itself when it
+/// answers natively (mft), else its shadow rays `rays` — with the pixel of each point or ray.
+pub fn soft_shadow_work<'a>(
+    tracer: &dyn Tracer,
+    work: &'a SoftShadowWork,
+    rays: &'a RayBatch,
+) -> (Work<'a>, Vec<u32>) {
+    match tracer.answers_visibility_natively() {
+        true => (Work::LightVisibility(work.query()), work.pixels.clone()),
+        // A shadow ray's `pixel` is its shading point.
+        false => (
+            Work::Occlusion(rays),
+            rays.pixel
+                .iter()
+                .map(|&p| work.pixels[p as usize])
+                .collect(),
+        ),
     }
 }
 
