@@ -8,8 +8,11 @@
 use raylab::experiment::Experiment;
 use raylab::geometry::RayBatch;
 use raylab::render::area_light::{soft_shadow_points, LightSampleSets};
+use raylab::render::assembly::BatchKind;
 use raylab::render::cost_map::{count_per_pixel, wavefront, Cost, CostMap, Wavefront};
-use raylab::render::wavefront::{answer, Answers, Work};
+use raylab::render::distribution::{DrtSettings, Integrator};
+use raylab::render::path::path_bounce_rays;
+use raylab::render::wavefront::{answer, Answers, Tracing, Work};
 use raylab::scene::library::load_scene;
 use raylab::scene::Scene;
 use raylab::stats::{Counters, Event};
@@ -259,6 +262,77 @@ fn soft_shadow_maps_sum_to_the_counters() {
         .unwrap();
     assert_eq!(err.exit_code(), 2);
     assert!(err.to_string().contains("quad light"), "{err}");
+}
+
+/// `--heatmap-rays bounce-N`: the path tracer's N-th bounce, each ray at the pixel its path
+/// started at. Single rays count the same whether traced wave by wave in the frame or as one
+/// batch, so the map sums to the frame's own record of that bounce; every family's map sums to
+/// its pass's counters.
+#[test]
+fn path_bounce_maps_sum_to_the_frames_counters() {
+    let scene = load_scene("conference-area-light", None).unwrap();
+    let frame = scene.frame(0, 1);
+    let reference = tracer_for_frame("reference", &Params::new(), &frame).unwrap();
+    let settings = DrtSettings {
+        integrator: Integrator::Path,
+        width: SIZE.0,
+        height: SIZE.1,
+        spp: 1,
+        ..DrtSettings::default()
+    };
+    let (rays, traced) = path_bounce_rays(
+        &scene,
+        &frame,
+        reference.as_ref(),
+        &settings,
+        2,
+        Tracing::Counted,
+    )
+    .unwrap();
+    let record = traced
+        .batches
+        .iter()
+        .find(|b| b.depth == 2 && b.kind == BatchKind::Rays(rays.kind()))
+        .unwrap();
+    assert!(!rays.is_empty());
+    assert_eq!(rays.len(), record.rays, "the frame's bounce-2 rays");
+    let maps = sums_match(
+        "reference on bounce 2",
+        "reference",
+        reference.as_ref(),
+        Work::of_batch(&rays),
+        &rays.pixel,
+    );
+    let total = |cost: Cost| -> u64 {
+        let map = maps.iter().find(|m| m.cost == cost).unwrap();
+        map.total.iter().sum()
+    };
+    let c = &record.counters;
+    assert_eq!(
+        (total(Cost::Box), total(Cost::Triangle), total(Cost::Nodes)),
+        (c.aabb_tests, c.triangle_tests, c.nodes_visited)
+    );
+    // The heat map's wavefront is the same bounce (the frame does not depend on the tracer).
+    for name in ["reference", "packet", "stream", "cgt"] {
+        let tracer = tracer_for_frame(name, &Params::new(), &frame).unwrap();
+        let wave = wavefront(&scene, &frame, tracer.as_ref(), ("bounce-2", 1), SIZE).unwrap();
+        let Wavefront::Rays(bounce) = &wave else {
+            panic!("a batch of rays")
+        };
+        assert_eq!(bounce.pixel, rays.pixel, "{name}: the same paths");
+        let what = format!("{name} on bounce 2");
+        sums_match(
+            &what,
+            name,
+            tracer.as_ref(),
+            Work::of_batch(bounce),
+            &bounce.pixel,
+        );
+    }
+    let err = wavefront(&scene, &frame, reference.as_ref(), ("bounce-0", 1), SIZE)
+        .err()
+        .unwrap();
+    assert!(err.to_string().contains("N ≥ 1"), "{err}");
 }
 
 #[test]

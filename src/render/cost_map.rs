@@ -9,15 +9,17 @@ use std::str::FromStr;
 use crate::error::{Error, Result};
 use crate::geometry::RayBatch;
 use crate::render::area_light::{LightSampleSets, SoftShadowWork};
+use crate::render::distribution::{DrtSettings, Integrator};
+use crate::render::path::path_bounce_rays;
 use crate::render::rays::{diffuse_rays, primary_rays, shadow_rays};
-use crate::render::wavefront::{answer, Answers, Work};
+use crate::render::wavefront::{answer, Answers, Tracing, Work};
 use crate::scene::{Frame, Scene};
 use crate::stats::{Counters, RayCosts};
 use crate::tracers::chunked::{query_rays, trace_hits};
 use crate::tracers::Tracer;
 
 /// The ray kinds `wavefront` makes: each ray descends from one pixel.
-pub const RAY_KINDS: [&str; 4] = ["primary", "shadow", "diffuse", "soft-shadow"];
+pub const RAY_KINDS: [&str; 5] = ["primary", "shadow", "diffuse", "soft-shadow", "bounce-N"];
 
 /// A wavefront whose work descends from pixels.
 pub enum Wavefront {
@@ -42,7 +44,8 @@ impl Wavefront {
 /// The `width × height` wavefront of `kind` (`RAY_KINDS`) of `frame`: its camera rays, or the
 /// shadow rays (one per hit and light) or diffuse bounces (seed 0) of their hits through
 /// `tracer`, or their soft-shadow query (`samples` jittered samples per point on the scene's
-/// quad light, seed 0); each ray and point carries its pixel.
+/// quad light, seed 0), or the `N`-th bounce of a path-traced frame (`bounce-N`, N ≥ 1: one
+/// path per pixel, `path::path_bounce_rays`); each ray and point carries its pixel.
 pub fn wavefront(
     scene: &Scene,
     frame: &Frame,
@@ -78,6 +81,25 @@ pub fn wavefront(
             let mut rays = RayBatch::default();
             query_rays(work.query(), &mut rays);
             return Ok(Wavefront::SoftShadow { work, rays });
+        }
+        other if other.starts_with("bounce-") => {
+            let depth = other["bounce-".len()..]
+                .parse::<u32>()
+                .ok()
+                .filter(|&d| d >= 1)
+                .ok_or_else(|| {
+                    Error::usage(format!(
+                        "heat-map rays {other:?}: bounce-N takes a whole number N ≥ 1"
+                    ))
+                })?;
+            let settings = DrtSettings {
+                integrator: Integrator::Path,
+                width,
+                height,
+                spp: 1,
+                ..DrtSettings::default()
+            };
+            path_bounce_rays(scene, frame, tracer, &settings, depth, Tracing::Timed)?.0
         }
         other => {
             return Err(Error::usage(format!(
