@@ -165,15 +165,12 @@ pub struct SoftShadowWork {
 impl SoftShadowWork {
     /// `soft_shadow_points` of `primary`'s `hits` (a `width`-wide image), `samples` per point of
     /// `sets`; `None` when `scene` has no quad light.
-    #[allow(clippy::too_many_arguments)]
     pub fn of_hits(
         scene: &Scene,
         mesh: &Mesh,
-        primary: &RayBatch,
-        hits: &[Hit],
+        (primary, hits): (&RayBatch, &[Hit]),
         width: u32,
-        samples: u32,
-        sets: LightSampleSets,
+        (samples, sets): (u32, LightSampleSets),
         seed: u64,
     ) -> Result<Option<SoftShadowWork>> {
         let Some(light) = scene.quad_light() else {

@@ -61,14 +61,13 @@ pub fn wavefront(
         "diffuse" => diffuse_rays(&frame.mesh, &primary, &hits(), 0),
         "soft-shadow" => {
             let sets = LightSampleSets::default();
+            let hits = hits();
             let work = SoftShadowWork::of_hits(
                 scene,
                 &frame.mesh,
-                &primary,
-                &hits(),
+                (&primary, &hits),
                 width,
-                samples,
-                sets,
+                (samples, sets),
                 0,
             )?
             .ok_or_else(|| {

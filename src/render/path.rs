@@ -430,28 +430,6 @@ fn light_hits(lights: &[Light], ray: &Ray, t_max: f32) -> Vec3 {
     sum
 }
 
-/// Renders `frame` of `scene` by path tracing with `tracer`, which must have been built over
-/// `geometry`. `settings.max_depth` bounces at most after the camera ray.
-pub fn render_path(
-    scene: &Scene,
-    frame: &Frame,
-    geometry: FrameGeometry<'_>,
-    tracer: &dyn Tracer,
-    settings: &DrtSettings,
-    tracing: Tracing,
-) -> Result<DrtFrame> {
-    let mut no_rays = None;
-    trace_paths(
-        scene,
-        frame,
-        geometry,
-        tracer,
-        settings,
-        tracing,
-        &mut no_rays,
-    )
-}
-
 /// The path rays of bounce `depth` (≥ 1; the camera rays are bounce 0) of `frame` path traced
 /// with `tracer` at `settings` (`max_depth` raised to `depth`), every wave's, each carrying the
 /// pixel its path started at (`render --heatmap-rays bounce-N`). Also the frame, whose batch
@@ -470,15 +448,17 @@ pub fn path_bounce_rays(
     };
     let mut kept = Some((depth, RayBatch::default()));
     let geometry = FrameGeometry::Static(&frame.mesh);
-    let traced = trace_paths(
+    let traced = render_path(
         scene, frame, geometry, tracer, &settings, tracing, &mut kept,
     )?;
-    let (_, rays) = kept.expect("put back by trace_paths");
+    let (_, rays) = kept.expect("left in place by render_path");
     Ok((rays, traced))
 }
 
-/// `render_path`, appending the rays of bounce `keep.0` to `keep.1` when asked.
-fn trace_paths(
+/// Renders `frame` of `scene` by path tracing with `tracer`, which must have been built over
+/// `geometry`. `settings.max_depth` bounces at most after the camera ray. With `keep` =
+/// `Some((depth, rays))`, the path rays of bounce `depth` are appended to `rays`.
+pub fn render_path(
     scene: &Scene,
     frame: &Frame,
     geometry: FrameGeometry<'_>,

@@ -751,11 +751,9 @@ fn generate_workloads(
                 let work = SoftShadowWork::of_hits(
                     scene,
                     &frame.mesh,
-                    &primary,
-                    hits(),
+                    (&primary, hits()),
                     exp.width,
-                    exp.soft_shadow_samples,
-                    exp.soft_shadow_sets,
+                    (exp.soft_shadow_samples, exp.soft_shadow_sets),
                     seed(kind),
                 )?
                 .expect("the plan gives soft shadows only to scenes with a quad light");
