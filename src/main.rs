@@ -11,6 +11,7 @@ use raylab::experiment::record::files::SUMMARY_MD;
 use raylab::experiment::record::results_dir::PendingResults;
 use raylab::experiment::results::heatmap::{save_panels, Panel};
 use raylab::experiment::results::summary::Summary;
+use raylab::experiment::spec::config::DEFAULT_SOFT_SHADOW_SAMPLES;
 use raylab::experiment::spec::overrides::Scale;
 use raylab::experiment::spec::shard::Shard;
 use raylab::experiment::{run_experiment, Chatter, RunOverrides};
@@ -23,7 +24,7 @@ use raylab::render::motion::MovingMesh;
 use raylab::render::path::ShadeStreams;
 use raylab::render::raycast::render_raycast;
 use raylab::render::renderers::{RenderWorkload, RendererInfo, RENDERERS};
-use raylab::render::wavefront::{Tracing, Work};
+use raylab::render::wavefront::Tracing;
 use raylab::render::whitted::{render_whitted, WhittedSettings};
 use raylab::scene::library::{list_scenes, load_scene};
 use raylab::scene::{Frame, Scene};
@@ -301,14 +302,20 @@ struct WhittedArgs {
 #[derive(clap::Args, Debug)]
 struct HeatmapArgs {
     /// Write a heat map of this cost per pixel instead of the image: box, triangle or nodes
-    /// (tests or visits per ray, from a counting pass; not for the production baselines).
+    /// (tests or visits per ray, from a counting pass; not for the production baselines), or
+    /// lanes (share of SIMD lanes active; SIMD tracers only).
     #[arg(long, value_parser = parse_cost)]
     heatmap: Option<Cost>,
-    /// The rays the heat map counts: primary, shadow (one per hit and light) or diffuse.
+    /// The rays the heat map counts: primary, shadow (one per hit and light), diffuse or
+    /// soft-shadow (the light-visibility query of the primary hits on the scene's quad light:
+    /// natively for mft, as its shadow rays for the others).
     #[arg(long, default_value = "primary", requires = "heatmap")]
     heatmap_rays: String,
-    /// Top of the colour scale in tests per ray (default: the map's largest), so several
-    /// tracers' maps share one scale.
+    /// Light samples per shading point of --heatmap-rays soft-shadow (a perfect square).
+    #[arg(long, default_value_t = DEFAULT_SOFT_SHADOW_SAMPLES, requires = "heatmap")]
+    heatmap_samples: u32,
+    /// Top of the colour scale in tests per ray (default: the map's largest; lanes: 1), so
+    /// several tracers' maps share one scale.
     #[arg(long, requires = "heatmap")]
     heatmap_max: Option<f64>,
 }
@@ -599,23 +606,26 @@ fn execute(command: Command) -> Result<bool> {
                 let tracer_name = tracer;
                 let tracer = raylab::tracers::tracer_for_frame(&tracer_name, &params, &frame)?;
                 let size = (width, height);
-                let rays = wavefront(&scene, &frame, tracer.as_ref(), &heatmap.heatmap_rays, size)?;
-                let (_, maps) =
-                    count_per_pixel(tracer.as_ref(), Work::of_batch(&rays), &rays.pixel, size)?;
-                let map = maps
-                    .iter()
-                    .find(|m| m.cost == cost)
-                    .expect("every cost is mapped");
-                let scale = heatmap.heatmap_max.unwrap_or(map.max().max(1.0));
+                let rays = (heatmap.heatmap_rays.as_str(), heatmap.heatmap_samples);
+                let wavefront = wavefront(&scene, &frame, tracer.as_ref(), rays, size)?;
+                let (work, pixel_of) = wavefront.work_for(tracer.as_ref());
+                let (_, maps) = count_per_pixel(tracer.as_ref(), work, &pixel_of, size)?;
+                let map = maps.iter().find(|m| m.cost == cost).ok_or_else(|| {
+                    Error::usage(format!(
+                        "--heatmap lanes: {tracer_name} traces single rays, it has no ray lanes \
+                         to share (the lanes map is for packet, stream, cgt and mft)"
+                    ))
+                })?;
+                let scale = heatmap.heatmap_max.unwrap_or(cost.scale([map]));
                 let caption = format!("{} on {} rays", tracer_name, heatmap.heatmap_rays);
                 let panels = [(caption, Panel::Map(map))];
                 save_panels(&output, &panels, cost.unit(), scale)?;
                 println!(
-                    "wrote {} ({} heat map of {} rays, {:.2} per ray, scale 0–{scale})",
+                    "wrote {} ({} heat map of {} rays, {}, scale 0–{scale})",
                     output.display(),
                     cost.name(),
                     heatmap.heatmap_rays,
-                    map.mean()
+                    cost.caption(map.mean())
                 );
                 return Ok(true);
             }

@@ -25,15 +25,16 @@ pub trait Stats: Default + Send {
     #[inline(always)]
     fn charge_ray(&mut self, _i: usize) {}
 
-    /// One box test for each ray of `owners` (a packet's lanes in use, a stream's rays).
+    /// One box test for each ray of `owners` (a packet's lanes in use, a stream's rays), made by
+    /// one SIMD operation over `lanes` lanes: `owners` are its active lanes (`RayCosts` lanes).
     #[inline(always)]
-    fn aabb_tests(&mut self, depth: usize, owners: Owners<'_>) {
+    fn aabb_tests(&mut self, depth: usize, owners: Owners<'_>, _lanes: u32) {
         (0..owners.len()).for_each(|_| self.aabb_test(depth));
     }
 
-    /// One triangle test for each ray of `owners`.
+    /// One triangle test for each ray of `owners`, one SIMD operation over `lanes` lanes.
     #[inline(always)]
-    fn triangle_tests(&mut self, depth: usize, owners: Owners<'_>) {
+    fn triangle_tests(&mut self, depth: usize, owners: Owners<'_>, _lanes: u32) {
         (0..owners.len()).for_each(|_| self.triangle_test(depth));
     }
 
@@ -196,6 +197,13 @@ pub struct Counters {
     pub triangle_by_depth: Vec<u64>,
     /// Indexed by `Event as usize`.
     pub events: [u64; Event::COUNT],
+    /// Of the box and triangle tests, those made by SIMD operations over rays (packets, streams,
+    /// cgt's cells, blocks of frusta): their active lanes, and the lanes the operations had.
+    /// `simd_lanes_active / simd_lanes` = the pass's lane utilisation (the `lanes` heat map).
+    #[serde(default)]
+    pub simd_lanes_active: u64,
+    #[serde(default)]
+    pub simd_lanes: u64,
     /// The same box tests, triangle tests and node visits per ray, when the pass attributes them
     /// (`Counters::attributing`).
     #[serde(skip)]
@@ -206,20 +214,11 @@ fn bump(by_depth: &mut Vec<u64>, depth: usize) {
     bump_by(by_depth, depth, 1);
 }
 
-/// One test per ray of `owners` at `depth`: into a count and its per-depth column, and, when
-/// attributing, into each owner's entry of `per_ray`.
-fn add_tests(
-    (total, by_depth): (&mut u64, &mut Vec<u64>),
-    per_ray: Option<&mut Vec<u64>>,
-    depth: usize,
-    owners: Owners<'_>,
-) {
-    let n = owners.len() as u64;
-    *total += n;
-    bump_by(by_depth, depth, n);
-    if let Some(column) = per_ray {
-        owners.for_each(|i| column[i as usize] += 1);
-    }
+/// Which tests `Counters::add_tests` adds.
+#[derive(Clone, Copy)]
+enum Test {
+    Box,
+    Triangle,
 }
 
 fn bump_by(by_depth: &mut Vec<u64>, depth: usize, n: u64) {
@@ -269,24 +268,12 @@ impl Stats for Counters {
         }
     }
     #[inline]
-    fn aabb_tests(&mut self, depth: usize, owners: Owners<'_>) {
-        let per_ray = self.per_ray.as_mut().map(|c| &mut c.boxes);
-        add_tests(
-            (&mut self.aabb_tests, &mut self.aabb_by_depth),
-            per_ray,
-            depth,
-            owners,
-        );
+    fn aabb_tests(&mut self, depth: usize, owners: Owners<'_>, lanes: u32) {
+        self.add_tests(Test::Box, depth, owners, lanes);
     }
     #[inline]
-    fn triangle_tests(&mut self, depth: usize, owners: Owners<'_>) {
-        let per_ray = self.per_ray.as_mut().map(|c| &mut c.triangles);
-        add_tests(
-            (&mut self.triangle_tests, &mut self.triangle_by_depth),
-            per_ray,
-            depth,
-            owners,
-        );
+    fn triangle_tests(&mut self, depth: usize, owners: Owners<'_>, lanes: u32) {
+        self.add_tests(Test::Triangle, depth, owners, lanes);
     }
     #[inline]
     fn node_shared(&mut self, _depth: usize, owners: Owners<'_>) {
@@ -319,6 +306,29 @@ impl Counters {
         }
     }
 
+    /// One `test` per ray of `owners` at `depth`, one SIMD operation over `lanes` lanes: into
+    /// the count, its per-depth column and the lane totals, and, when attributing, into each
+    /// owner's costs.
+    fn add_tests(&mut self, test: Test, depth: usize, owners: Owners<'_>, lanes: u32) {
+        let (total, by_depth) = match test {
+            Test::Box => (&mut self.aabb_tests, &mut self.aabb_by_depth),
+            Test::Triangle => (&mut self.triangle_tests, &mut self.triangle_by_depth),
+        };
+        let n = owners.len() as u64;
+        *total += n;
+        bump_by(by_depth, depth, n);
+        self.simd_lanes_active += n;
+        self.simd_lanes += lanes as u64;
+        if let Some(costs) = &mut self.per_ray {
+            let column = match test {
+                Test::Box => &mut costs.boxes,
+                Test::Triangle => &mut costs.triangles,
+            };
+            owners.for_each(|i| column[i as usize] += 1);
+            costs.lanes_shared(owners, lanes);
+        }
+    }
+
     pub fn get(&self, event: Event) -> u64 {
         self.events[event as usize]
     }
@@ -338,6 +348,8 @@ impl Counters {
         self.nodes_visited += other.nodes_visited;
         self.aabb_tests += other.aabb_tests;
         self.triangle_tests += other.triangle_tests;
+        self.simd_lanes_active += other.simd_lanes_active;
+        self.simd_lanes += other.simd_lanes;
         for (mine, theirs) in self.events.iter_mut().zip(&other.events) {
             *mine += theirs;
         }

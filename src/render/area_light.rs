@@ -13,8 +13,10 @@ use crate::render::interleaved::{SampleTable, K};
 use crate::render::qmc::Net;
 use crate::render::rays::SurfacePoint;
 use crate::render::shading::point_irradiance;
-use crate::scene::{Light, Mesh};
-use crate::tracers::visibility::{LightSamples, ShadingPoint, ShadingPoints};
+use crate::scene::{Light, Mesh, Scene};
+use crate::tracers::visibility::{
+    LightSamples, QuadLight, ShadingPoint, ShadingPoints, VisibilityQuery,
+};
 
 /// Where to aim the shadow ray, and the irradiance-like factor it delivers if unoccluded.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -147,6 +149,57 @@ pub fn soft_shadow_points(
         points.push(shading_point(&surface, pixel % width, pixel / width), true);
     }
     Ok((points, samples))
+}
+
+/// The soft-shadow workload of a frame's primary hits against its scene's first quad light, with
+/// the pixel of each shading point: what experiments measure and `render --heatmap soft-shadow`
+/// counts.
+pub struct SoftShadowWork {
+    pub points: ShadingPoints,
+    pub light: QuadLight,
+    pub samples: LightSamples,
+    /// The pixel of each shading point.
+    pub pixels: Vec<u32>,
+}
+
+impl SoftShadowWork {
+    /// `soft_shadow_points` of `primary`'s `hits` (a `width`-wide image), `samples` per point of
+    /// `sets`; `None` when `scene` has no quad light.
+    pub fn of_hits(
+        scene: &Scene,
+        mesh: &Mesh,
+        (primary, hits): (&RayBatch, &[Hit]),
+        width: u32,
+        (samples, sets): (u32, LightSampleSets),
+        seed: u64,
+    ) -> Result<Option<SoftShadowWork>> {
+        let Some(light) = scene.quad_light() else {
+            return Ok(None);
+        };
+        let (points, samples) =
+            soft_shadow_points(mesh, primary, hits, width, samples, sets, seed)?;
+        // `soft_shadow_points` makes one point per hit, in ray order.
+        let pixels = (0..primary.len())
+            .filter(|&i| hits[i].is_hit())
+            .map(|i| primary.pixel[i])
+            .collect();
+        Ok(Some(SoftShadowWork {
+            points,
+            light: QuadLight::of(light),
+            samples,
+            pixels,
+        }))
+    }
+
+    /// The light-visibility query.
+    pub fn query(&self) -> VisibilityQuery<'_> {
+        VisibilityQuery {
+            points: &self.points.points,
+            packet_start: &self.points.packet_start,
+            light: self.light,
+            samples: &self.samples,
+        }
+    }
 }
 
 /// The shading point of pixel `(x, y)` at `surface`, with the pixel's interleaved set.

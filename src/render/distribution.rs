@@ -537,7 +537,9 @@ pub fn render_sampled(
         Integrator::Distribution => {
             render_distribution(scene, frame, geometry, tracer, settings, tracing)
         }
-        Integrator::Path => render_path(scene, frame, geometry, tracer, settings, tracing),
+        Integrator::Path => {
+            render_path(scene, frame, geometry, tracer, settings, tracing, &mut None)
+        }
     }
 }
 

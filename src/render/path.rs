@@ -430,8 +430,34 @@ fn light_hits(lights: &[Light], ray: &Ray, t_max: f32) -> Vec3 {
     sum
 }
 
+/// The path rays of bounce `depth` (≥ 1; the camera rays are bounce 0) of `frame` path traced
+/// with `tracer` at `settings` (`max_depth` raised to `depth`), every wave's, each carrying the
+/// pixel its path started at (`render --heatmap-rays bounce-N`). Also the frame, whose batch
+/// records count the same rays.
+pub fn path_bounce_rays(
+    scene: &Scene,
+    frame: &Frame,
+    tracer: &dyn Tracer,
+    settings: &DrtSettings,
+    depth: u32,
+    tracing: Tracing,
+) -> Result<(RayBatch, DrtFrame)> {
+    let settings = DrtSettings {
+        max_depth: settings.max_depth.max(depth),
+        ..*settings
+    };
+    let mut kept = Some((depth, RayBatch::default()));
+    let geometry = FrameGeometry::Static(&frame.mesh);
+    let traced = render_path(
+        scene, frame, geometry, tracer, &settings, tracing, &mut kept,
+    )?;
+    let (_, rays) = kept.expect("left in place by render_path");
+    Ok((rays, traced))
+}
+
 /// Renders `frame` of `scene` by path tracing with `tracer`, which must have been built over
-/// `geometry`. `settings.max_depth` bounces at most after the camera ray.
+/// `geometry`. `settings.max_depth` bounces at most after the camera ray. With `keep` =
+/// `Some((depth, rays))`, the path rays of bounce `depth` are appended to `rays`.
 pub fn render_path(
     scene: &Scene,
     frame: &Frame,
@@ -439,6 +465,7 @@ pub fn render_path(
     tracer: &dyn Tracer,
     settings: &DrtSettings,
     tracing: Tracing,
+    keep: &mut Option<(u32, RayBatch)>,
 ) -> Result<DrtFrame> {
     settings.check()?;
     let start = Instant::now();
@@ -484,6 +511,9 @@ pub fn render_path(
                 break;
             }
             let kind = current.batch.kind();
+            if let Some((_, kept)) = keep.as_mut().filter(|(d, _)| *d == depth) {
+                append(kept, &current.batch);
+            }
             let packets = current.batch.packet_start.iter().filter(|s| **s).count();
             let work = Work::of_batch(&current.batch);
             let Answers::Hits(hits) = records.trace(tracer, work, kind, packets, depth, tracing)
@@ -640,6 +670,19 @@ pub fn render_path(
         }
     }
     Ok(records.finish(settings.width, settings.height, &sum, settings.spp, start))
+}
+
+/// `batch`'s rays, pixels and packets after `kept`'s, of its kind.
+fn append(kept: &mut RayBatch, batch: &RayBatch) {
+    if kept.is_empty() {
+        kept.clear(batch.kind());
+    }
+    for i in 0..batch.len() {
+        match batch.packet_start[i] {
+            true => kept.push_packet_start(batch.ray(i), batch.pixel[i]),
+            false => kept.push(batch.ray(i), batch.pixel[i]),
+        }
+    }
 }
 
 #[cfg(test)]

@@ -65,6 +65,8 @@ pub enum Panel<'a> {
     Map(&'a CostMap),
     /// A tracer that reports no counts (a production baseline).
     NoCounts,
+    /// A tracer that traces single rays, on a `lanes` figure: no ray lanes to share.
+    SingleRays,
 }
 
 /// Writes `panels` (each with its caption) to `path` as one PNG, rows of `COLUMNS`, every map in
@@ -84,7 +86,7 @@ pub fn save_panels(
     let Some((w, h)) = panels.iter().find_map(|(_, p)| match p {
         Panel::Shaded(image) => Some((image.width, image.height)),
         Panel::Map(map) => Some((map.width, map.height)),
-        Panel::NoCounts => None,
+        Panel::NoCounts | Panel::SingleRays => None,
     }) else {
         return Err(Error::usage(
             "a heat-map figure needs at least one map or image",
@@ -163,9 +165,10 @@ fn draw(
             }
             Panel::Map(map) => {
                 draw_map(&root, layout, map, scale_max, (x0, y0))?;
-                format!("mean {:.2} per ray", map.mean())
+                map.cost.caption(map.mean())
             }
             Panel::NoCounts => "no counts: a library's own kernels".to_string(),
+            Panel::SingleRays => "single rays: no lanes".to_string(),
         };
         let below = y0 + layout.panel.1 as i32;
         root.draw(&Text::new(caption.clone(), (x0, below + 3), style.clone()))?;
@@ -184,7 +187,11 @@ fn draw(
     for k in 0..=4 {
         let value = scale_max * k as f64 / 4.0;
         let y = top + ((bar_height - 1) as f64 * (1.0 - k as f64 / 4.0)) as i32 - 6;
-        let text = format!("{value:.1}");
+        // Quarters of a share (0.25) need two decimals; counts of tens, one.
+        let text = match scale_max <= 2.0 {
+            true => format!("{value:.2}"),
+            false => format!("{value:.1}"),
+        };
         root.draw(&Text::new(text, (left + 20, y), style.clone()))?;
     }
     root.draw(&Text::new(
@@ -196,7 +203,7 @@ fn draw(
     Ok(())
 }
 
-/// `map` at `corner`, each panel pixel the cost per ray of its block of image pixels.
+/// `map` at `corner`, each panel pixel the value of its block of image pixels.
 fn draw_map(
     root: &Canvas<'_>,
     layout: &Layout,
@@ -206,18 +213,18 @@ fn draw_map(
 ) -> std::result::Result<(), Box<dyn std::error::Error>> {
     for py in 0..layout.panel.1 {
         for px in 0..layout.panel.0 {
-            let (mut total, mut rays) = (0u64, 0u64);
+            let (mut total, mut per) = (0u64, 0u64);
             for y in layout.source(py) {
                 for x in layout.source(px) {
                     let i = (y * map.width + x) as usize;
                     total += map.total[i];
-                    rays += map.rays[i] as u64;
+                    per += map.per[i];
                 }
             }
-            let colour = match rays {
-                // No ray from here (a shadow map's background): grey, not "zero cost".
+            let colour = match per {
+                // No ray (a shadow map's background), or no lane, from here: grey, not zero.
                 0 => RGBColor(128, 128, 128),
-                _ => viridis(total as f64 / rays as f64 / scale_max),
+                _ => viridis(total as f64 / per as f64 / scale_max),
             };
             root.draw_pixel((corner.0 + px as i32, corner.1 + py as i32), &colour)?;
         }
@@ -246,8 +253,8 @@ fn draw_shaded(
 
 /// The run's figures (`heatmaps = [...]`): one per scene × ray kind × cost of `set`,
 /// `heatmap-<scene>-<kind>-<cost>.png`, the shaded frame first, then every tracer that counts in
-/// plan order, all on one scale (the largest per-ray cost of any pixel of them), then one panel
-/// for the baselines, which report no counts.
+/// plan order, all on one scale (`Cost::scale`), then one panel for the baselines, which report
+/// no counts. On a `lanes` figure a single-ray tracer's panel is blank.
 pub fn write_figures(dir: &Path, costs: &[Cost], set: &HeatmapSet) -> Result<()> {
     for (scene, image) in &set.shaded {
         let of_scene: Vec<&HeatmapPanel> =
@@ -257,22 +264,24 @@ pub fn write_figures(dir: &Path, costs: &[Cost], set: &HeatmapSet) -> Result<()>
         for kind in kinds {
             let tracers: Vec<&&HeatmapPanel> = of_scene.iter().filter(|p| p.kind == kind).collect();
             for &cost in costs {
-                let maps: Vec<Option<&CostMap>> = tracers
+                // `None` for a baseline; `Some(None)` for a counting tracer without this map.
+                let maps: Vec<Option<Option<&CostMap>>> = tracers
                     .iter()
                     .map(|p| {
                         p.maps
                             .as_ref()
-                            .and_then(|maps| maps.iter().find(|m| m.cost == cost))
+                            .map(|maps| maps.iter().find(|m| m.cost == cost))
                     })
                     .collect();
-                let scale = maps.iter().flatten().map(|m| m.max()).fold(1.0, f64::max);
+                let scale = cost.scale(maps.iter().flatten().flatten().copied());
                 let mut panels = vec![(scene.clone(), Panel::Shaded(image))];
-                panels.extend(
-                    tracers
-                        .iter()
-                        .zip(&maps)
-                        .filter_map(|(p, map)| map.map(|map| (p.tracer.clone(), Panel::Map(map)))),
-                );
+                panels.extend(tracers.iter().zip(&maps).filter_map(|(p, map)| {
+                    let panel = match map.as_ref()? {
+                        Some(map) => Panel::Map(map),
+                        None => Panel::SingleRays,
+                    };
+                    Some((p.tracer.clone(), panel))
+                }));
                 // The baselines (embree-best alone is 18 of them) share one blank panel.
                 let baselines = maps.iter().filter(|m| m.is_none()).count();
                 if baselines > 0 {

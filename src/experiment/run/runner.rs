@@ -22,9 +22,9 @@ use crate::experiment::record::heatmap_set::{HeatmapPanel, HeatmapSet};
 use crate::geometry::ray_file::read_rays;
 use crate::geometry::{RayBatch, RayKind};
 use crate::random::mix64;
-use crate::render::area_light::soft_shadow_points;
+use crate::render::area_light::SoftShadowWork;
 use crate::render::convergence::reference_image;
-use crate::render::cost_map::{count_per_pixel, CostMap};
+use crate::render::cost_map::{count_per_pixel, soft_shadow_work, CostMap};
 use crate::render::distribution::{render_sampled, DrtSettings, FrameGeometry};
 use crate::render::image::Image;
 use crate::render::motion::{tracer_for_motion, MovingMesh};
@@ -36,7 +36,6 @@ use crate::render::wavefront::{BatchRecord, Tracing, Work};
 use crate::render::whitted::render_whitted;
 use crate::scene::{Frame, Scene};
 use crate::tracers::chunked::{query_rays, trace_hits};
-use crate::tracers::visibility::{LightSamples, QuadLight, ShadingPoints};
 use crate::tracers::{
     make_tracer, oracle_params, tracer_for_frame, Params, Tracer, VisibilityQuery, ORACLE,
 };
@@ -181,15 +180,10 @@ pub fn run_plan(
                             let path = dir.join(dump::rays_name(spec, f, batch.kind()));
                             dump::write_batch(&path, batch)?;
                         }
-                        Workload::SoftShadow {
-                            points,
-                            light,
-                            samples,
-                            rays,
-                            ..
-                        } => {
+                        Workload::SoftShadow { work, rays, .. } => {
                             let path = dir.join(dump::points_name(spec, f));
-                            dump::write_points(&path, points, *light, samples.per_point())?;
+                            let per_point = work.samples.per_point();
+                            dump::write_points(&path, &work.points, work.light, per_point)?;
                             let path = dir.join(dump::rays_name(spec, f, rays.kind()));
                             dump::write_batch(&path, rays)?;
                         }
@@ -342,17 +336,9 @@ impl TracerOnFrame<'_> {
         let (mesh, tracer, oracle) = (&self.frame.mesh, self.tracer, self.oracle);
         let checked = self.widest.install(|| match workload {
             Workload::Rays(batch) => sampled_check::check(mesh, tracer, oracle, batch),
-            Workload::SoftShadow {
-                points,
-                light,
-                samples,
-                ..
-            } => sampled_check::check_visibility(
-                mesh,
-                tracer,
-                oracle,
-                &light_query(points, *light, samples),
-            ),
+            Workload::SoftShadow { work, .. } => {
+                sampled_check::check_visibility(mesh, tracer, oracle, &work.query())
+            }
         });
         Case {
             checked: Some(checked),
@@ -655,15 +641,11 @@ fn build_frame(
 enum Workload {
     Rays(RayBatch),
     SoftShadow {
-        points: ShadingPoints,
-        light: QuadLight,
-        samples: LightSamples,
+        work: SoftShadowWork,
         /// The query's shadow rays (`chunked::query_rays`), for the tracers that take rays.
         rays: RayBatch,
         /// Their generation, timed like a tracer's passes at every thread count.
         generation: Vec<Timing>,
-        /// The pixel of each shading point.
-        pixels: Vec<u32>,
     },
 }
 
@@ -689,13 +671,7 @@ impl Workload {
         let size = (exp.width, exp.height);
         let (work, pixel_of) = match self {
             Workload::Rays(batch) => (Work::of_batch(batch), batch.pixel.clone()),
-            Workload::SoftShadow { pixels, .. } if tracer.answers_visibility_natively() => {
-                (self.work(), pixels.clone())
-            }
-            Workload::SoftShadow { rays, pixels, .. } => (
-                Work::Occlusion(rays),
-                rays.pixel.iter().map(|&p| pixels[p as usize]).collect(),
-            ),
+            Workload::SoftShadow { work, rays, .. } => soft_shadow_work(tracer, work, rays),
         };
         let (_, maps) = pool.install(|| count_per_pixel(tracer, work, &pixel_of, size))?;
         Ok(Some(maps))
@@ -704,12 +680,7 @@ impl Workload {
     fn work(&self) -> Work<'_> {
         match self {
             Workload::Rays(batch) => Work::of_batch(batch),
-            Workload::SoftShadow {
-                points,
-                light,
-                samples,
-                ..
-            } => Work::LightVisibility(light_query(points, *light, samples)),
+            Workload::SoftShadow { work, .. } => Work::LightVisibility(work.query()),
         }
     }
 }
@@ -745,20 +716,6 @@ fn time_shadow_rays(
     (rays, timings)
 }
 
-/// The light-visibility query of every shading point.
-fn light_query<'a>(
-    points: &'a ShadingPoints,
-    light: QuadLight,
-    samples: &'a LightSamples,
-) -> VisibilityQuery<'a> {
-    VisibilityQuery {
-        points: &points.points,
-        packet_start: &points.packet_start,
-        light,
-        samples,
-    }
-}
-
 /// The workloads of the scene's ray kinds for one frame, in the plan's order. Secondary rays are
 /// seeded per frame and kind, so every run of the experiment traces the same rays.
 fn generate_workloads(
@@ -791,33 +748,20 @@ fn generate_workloads(
                 specular_rays(kind, &frame.mesh, &scene.materials, &primary, hits())
             }
             RayKind::SoftShadow => {
-                let light = scene
-                    .quad_light()
-                    .expect("the plan gives soft shadows only to scenes with a quad light");
-                let (points, samples) = soft_shadow_points(
+                let work = SoftShadowWork::of_hits(
+                    scene,
                     &frame.mesh,
-                    &primary,
-                    hits(),
+                    (&primary, hits()),
                     exp.width,
-                    exp.soft_shadow_samples,
-                    exp.soft_shadow_sets,
+                    (exp.soft_shadow_samples, exp.soft_shadow_sets),
                     seed(kind),
-                )?;
-                let light = QuadLight::of(light);
-                let query = light_query(&points, light, &samples);
-                let (rays, generation) = time_shadow_rays(exp, pools, query);
-                // `soft_shadow_points` makes one point per hit, in ray order.
-                let pixels = (0..primary.len())
-                    .filter(|&i| hits()[i].is_hit())
-                    .map(|i| primary.pixel[i])
-                    .collect();
+                )?
+                .expect("the plan gives soft shadows only to scenes with a quad light");
+                let (rays, generation) = time_shadow_rays(exp, pools, work.query());
                 workloads.push(Workload::SoftShadow {
-                    points,
-                    light,
-                    samples,
+                    work,
                     rays,
                     generation,
-                    pixels,
                 });
                 continue;
             }

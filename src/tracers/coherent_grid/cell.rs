@@ -114,8 +114,11 @@ impl<const L: usize, S: Stats, O: CellObserver, const ANY: bool> SliceVisitor
             }
             let tri = &grid.triangles[id as usize];
             if S::ENABLED {
+                // `LaneRays::intersect` runs over the active rays in whole SIMD rays of `L`.
                 let rays = self.lane_rays();
-                self.stats.triangle_tests(0, Owners::List(&rays));
+                let lanes = rays.len().div_ceil(L) * L;
+                self.stats
+                    .triangle_tests(0, Owners::List(&rays), lanes as u32);
             }
             let ws = &mut *self.ws;
             let (hits, group, march, d_s) = (&mut *self.hits, self.group, &ws.march, &ws.d_s);

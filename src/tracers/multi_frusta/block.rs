@@ -16,7 +16,7 @@ use crate::accel::Bvh;
 use crate::geometry::Ray;
 use crate::lanes::vector::{Native, Vector};
 use crate::lanes::SimdRay;
-use crate::stats::{Event, Stats};
+use crate::stats::{Event, Owners, Stats};
 use crate::tracers::multi_frusta::descend::{keep_counted, next_leaf, start_at_root, FrustumTree};
 use crate::tracers::multi_frusta::frusta::{bits, Frusta, Margins};
 use crate::tracers::multi_frusta::MftConfig;
@@ -232,7 +232,14 @@ pub fn trace_block<T: FrustumTree, S: Stats>(
                     box_tested |= 1 << f;
                     if S::ENABLED {
                         let lanes: u32 = point_alive.iter().map(|w| w.count_ones()).sum();
-                        (0..lanes).for_each(|_| stats.aabb_test(leaf.depth));
+                        stats.aabb_tests(
+                            leaf.depth,
+                            Owners::Repeat {
+                                ray: f as u32,
+                                n: lanes,
+                            },
+                            (groups * LANES) as u32,
+                        );
                     }
                     let (lo, hi) = (leaf.bounds.min.to_array(), leaf.bounds.max.to_array());
                     if !simd.iter().any(|ray| ray.hits_box(lo, hi)) {
@@ -248,7 +255,14 @@ pub fn trace_block<T: FrustumTree, S: Stats>(
                         continue;
                     }
                     if S::ENABLED {
-                        (0..lanes.count_ones()).for_each(|_| stats.triangle_test(leaf.depth));
+                        stats.triangle_tests(
+                            leaf.depth,
+                            Owners::Repeat {
+                                ray: f as u32,
+                                n: lanes.count_ones(),
+                            },
+                            LANES as u32,
+                        );
                     }
                     if ray.intersect::<true>(tri, 0) > 0 {
                         *word &= !((lanes & !ray.live_mask()) << shift);

@@ -139,6 +139,7 @@ pub fn count_child_tests<S: Stats>(
                 base: 0,
                 bits: mask,
             },
+            Frusta::lanes_issued(mask),
         )
     });
 }
@@ -162,6 +163,7 @@ pub fn start_at_root<T: FrustumTree, S: Stats>(
                 base: 0,
                 bits: mask,
             },
+            Frusta::lanes_issued(mask),
         );
     }
     let root = &bvh.nodes[Bvh::ROOT];

@@ -224,6 +224,13 @@ impl Frusta {
         self.box_masks_with::<Native, B>(boxes, candidates, m)
     }
 
+    /// The lanes `box_masks` issues for the frusta of `candidates`: up to the last one, in
+    /// whole vectors (per-ray lane counts, `Stats::aabb_tests`).
+    pub fn lanes_issued(candidates: u64) -> u32 {
+        let len = 64 - candidates.leading_zeros() as usize;
+        (len.div_ceil(Native::WIDTH) * Native::WIDTH) as u32
+    }
+
     /// `box_masks` on vectors `V`. Minima and maxima are compare-and-select (one instruction;
     /// `f32::min`'s NaN rule costs three): a NaN, which finite boxes and reciprocals never make,
     /// keeps the running bound, so it never culls.

@@ -36,7 +36,7 @@ use std::ops::Range;
 use crate::accel::Bvh;
 use crate::geometry::{CameraGrid, Hit, Rays};
 use crate::lanes::SimdRay;
-use crate::stats::{Event, Stats};
+use crate::stats::{Event, Owners, Stats};
 use crate::tracers::multi_frusta::descend::{keep_counted, next_leaf, start_at_root, FrustumTree};
 use crate::tracers::multi_frusta::frusta::{bits, Frusta, Margins, MAX_FRUSTA};
 use crate::tracers::multi_frusta::MftConfig;
@@ -254,6 +254,11 @@ fn trace_block<T: FrustumTree, S: Stats>(
             for f in bits(keep) {
                 stats.charge_ray(f);
                 let pixels = &rays.pixel[group[f].clone()];
+                // The frustum's rays, one SIMD ray, count as one ray here (`relabelled`).
+                let frustum_rays = Owners::Repeat {
+                    ray: f as u32,
+                    n: pixels.len() as u32,
+                };
                 if generated & 1 << f == 0 {
                     generated |= 1 << f;
                     generate(grid, pixels, &mut simd[f], stats);
@@ -261,7 +266,7 @@ fn trace_block<T: FrustumTree, S: Stats>(
                 if leaf_rays && box_tested & 1 << f == 0 {
                     box_tested |= 1 << f;
                     if S::ENABLED {
-                        (0..pixels.len()).for_each(|_| stats.aabb_test(leaf.depth));
+                        stats.aabb_tests(leaf.depth, frustum_rays, FRUSTUM_RAYS as u32);
                     }
                     let (lo, hi) = (leaf.bounds.min.to_array(), leaf.bounds.max.to_array());
                     if !simd[f].hits_box(lo, hi) {
@@ -270,7 +275,7 @@ fn trace_block<T: FrustumTree, S: Stats>(
                     }
                 }
                 if S::ENABLED {
-                    (0..pixels.len()).for_each(|_| stats.triangle_test(leaf.depth));
+                    stats.triangle_tests(leaf.depth, frustum_rays, FRUSTUM_RAYS as u32);
                 }
                 if simd[f].intersect::<false>(tri, prim) > 0 {
                     hit_frusta |= 1 << f;

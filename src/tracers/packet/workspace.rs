@@ -192,7 +192,7 @@ impl<const L: usize> Packet<L> {
     ) -> bool {
         let group = &self.groups[g as usize];
         if S::ENABLED {
-            stats.aabb_tests(depth, self.group_owners(g));
+            stats.aabb_tests(depth, self.group_owners(g), L as u32);
         }
         group.hits_box(lo, hi)
     }
@@ -298,6 +298,7 @@ impl<const L: usize> Packet<L> {
                     stats.triangle_tests(
                         depth,
                         Owners::span(first + g as usize * L, group.used as usize),
+                        L as u32,
                     );
                 }
                 let hits = match (moving_end, &relative) {

@@ -26,10 +26,11 @@ pub fn filter<const L: usize, const N: usize, S: Stats>(
 ) -> (usize, [bool; 3]) {
     let group = Width::<L, N>::GROUP;
     if S::ENABLED {
-        stats.aabb_tests(depth, Owners::List(&rays.ids(len)));
+        let issued = Width::<L, N>::issued(len);
+        stats.aabb_tests(depth, Owners::List(&rays.ids(len)), issued as u32);
         stats.event(Event::StreamBoxTests, 1);
         stats.event(Event::TraversalLanesActive, len as u64);
-        stats.event(Event::TraversalLanesIssued, Width::<L, N>::issued(len));
+        stats.event(Event::TraversalLanesIssued, issued);
     }
     let (lo, hi) = (bounds.min.to_array(), bounds.max.to_array());
     let mut negative = [0u32; 3];

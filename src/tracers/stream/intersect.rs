@@ -45,7 +45,7 @@ impl<const L: usize, const N: usize, A: Answer> Walk<'_, L, N, A> {
                     break;
                 }
                 if S::ENABLED {
-                    stats.triangle_tests(depth, Owners::List(&self.live_ids(base)));
+                    stats.triangle_tests(depth, Owners::List(&self.live_ids(base)), N as u32);
                     stats.event(Event::IntersectionLanesActive, live as u64);
                     stats.event(Event::IntersectionLanesIssued, N as u64);
                 }
