@@ -10,9 +10,10 @@
 //! - **Order**: a lone child met is entered at once (Embree's `BVHNNodeTraverser1Hit` does the
 //!   same; on incoherent rays it is the common case, and it saves the stack's store and load);
 //!   otherwise the children met go on the stack far to near by entry distance, so the nearest is
-//!   popped first (occlusion rays push them unsorted, as Embree's any-hit traversal); a popped child whose entry lies beyond the closest hit found meanwhile is
-//!   skipped untested. A pushed child's node or leaf triangles are prefetched (a wide node spans
-//!   four cache lines and the walk is bound by their loads: the siblings' misses overlap).
+//!   popped first (occlusion rays push them unsorted, as Embree's any-hit traversal); a popped
+//!   child whose entry lies beyond the closest hit found meanwhile is skipped untested. A pushed
+//!   child's node or leaf triangles are prefetched (a wide node spans four cache lines and the
+//!   walk is bound by their loads: the siblings' misses overlap).
 //! - **Leaves**: the reference tracer's leaf stage (`reference::intersect_leaf`: the watertight
 //!   test, in the leaf's order, moving triangles at the ray's time), and the slab verdicts are the
 //!   reference's, so every ray gets the reference's closest hit (up to the order in which
