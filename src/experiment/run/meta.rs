@@ -130,10 +130,16 @@ pub fn write(dir: &Path, meta: &Meta) -> crate::error::Result<()> {
 
 /// The commit of the source tree this binary was built from, read when the run starts.
 pub fn commit() -> Commit {
+    commit_of(Path::new(env!("CARGO_MANIFEST_DIR")))
+}
+
+/// The commit of the git tree at `dir`. Changes under `results/` do not make it dirty: they are
+/// what runs write (a reproduction regenerates its reports between runs), not what they measure.
+fn commit_of(dir: &Path) -> Commit {
     let git = |args: &[&str]| -> Option<String> {
         let out = Command::new("git")
             .arg("-C")
-            .arg(env!("CARGO_MANIFEST_DIR"))
+            .arg(dir)
             .args(args)
             .output()
             .ok()?;
@@ -141,10 +147,18 @@ pub fn commit() -> Commit {
             .success()
             .then(|| String::from_utf8_lossy(&out.stdout).trim().to_string())
     };
+    let status = [
+        "status",
+        "--porcelain",
+        "--untracked-files=no",
+        "--",
+        ".",
+        ":(exclude)results",
+    ];
     match git(&["rev-parse", "HEAD"]) {
         Some(hash) => Commit {
             hash,
-            dirty: git(&["status", "--porcelain", "--untracked-files=no"]).map(|s| !s.is_empty()),
+            dirty: git(&status).map(|s| !s.is_empty()),
         },
         None => Commit {
             hash: "unknown".into(),
@@ -286,6 +300,33 @@ mod tests {
             locked_version(CARGO_LOCK, "obvhs").as_deref(),
             Some("0.4.0")
         );
+    }
+
+    #[test]
+    fn results_written_do_not_make_the_tree_dirty_source_does() {
+        let dir = std::env::temp_dir().join(format!("raylab-commit-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        for sub in ["src", "results/paper"] {
+            std::fs::create_dir_all(dir.join(sub)).unwrap();
+        }
+        let git = |args: &[&str]| {
+            let out = Command::new("git").arg("-C").arg(&dir).args(args).output();
+            assert!(out.unwrap().status.success(), "git {args:?}");
+        };
+        let write = |file: &str, text: &str| std::fs::write(dir.join(file), text).unwrap();
+        write("src/lib.rs", "fn a() {}");
+        write("results/paper/REPORT.md", "old");
+        git(&["init", "-q"]);
+        git(&["add", "."]);
+        let who = ["-c", "user.name=t", "-c", "user.email=t@t"];
+        git(&[who.as_slice(), &["commit", "-qm", "one"]].concat());
+        assert_eq!(commit_of(&dir).dirty, Some(false));
+        write("results/paper/REPORT.md", "regenerated");
+        assert_eq!(commit_of(&dir).dirty, Some(false));
+        write("src/lib.rs", "fn b() {}");
+        assert_eq!(commit_of(&dir).dirty, Some(true));
+        assert_eq!(commit_of(&dir.join("missing")).hash, "unknown");
+        let _ = std::fs::remove_dir_all(&dir);
     }
 
     #[test]
