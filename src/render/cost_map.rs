@@ -248,6 +248,34 @@ impl CostMap {
         map
     }
 
+    /// The map over blocks of `by × by` pixels (the last row and column of blocks may be
+    /// partial): each block's `total` and `per` the sums of its pixels', so its value is its
+    /// rays' cost per ray and the map's `mean` is unchanged.
+    pub fn shrunk(self, by: u32) -> CostMap {
+        if by <= 1 {
+            return self;
+        }
+        let (width, height) = (self.width.div_ceil(by), self.height.div_ceil(by));
+        let mut out = CostMap {
+            cost: self.cost,
+            width,
+            height,
+            total: vec![0; width as usize * height as usize],
+            per: vec![0; width as usize * height as usize],
+        };
+        for y in 0..self.height {
+            for x in 0..self.width {
+                let (from, to) = (
+                    (y * self.width + x) as usize,
+                    ((y / by) * width + x / by) as usize,
+                );
+                out.total[to] += self.total[from];
+                out.per[to] += self.per[from];
+            }
+        }
+        out
+    }
+
     /// Pixel `i`'s value: cost per ray, or share of lanes active (0 where `per` is 0).
     pub fn value(&self, i: usize) -> f64 {
         match self.per[i] {
@@ -324,6 +352,26 @@ pub fn count_per_pixel(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_shrunk_map_sums_blocks_and_keeps_its_mean() {
+        // 5 × 3 pixels, pixel i: total i, per 1 (pixel 7: no ray); blocks of 2 × 2.
+        let map = CostMap {
+            cost: Cost::Box,
+            width: 5,
+            height: 3,
+            total: (0..15).collect(),
+            per: (0..15).map(|i| u64::from(i != 7)).collect(),
+        };
+        let mean = map.mean();
+        let small = map.shrunk(2);
+        assert_eq!((small.width, small.height), (3, 2));
+        // Row 0: {0,1,5,6} {2,3,7,8} {4,9}; row 1: {10,11} {12,13} {14}.
+        assert_eq!(small.total, vec![12, 20, 13, 21, 25, 14]);
+        assert_eq!(small.per, vec![4, 3, 2, 2, 2, 1]);
+        assert_eq!(small.mean(), mean);
+        assert_eq!(small.clone().shrunk(1), small);
+    }
 
     #[test]
     fn rays_sum_into_their_pixels() {

@@ -10,7 +10,7 @@ use crate::error::{Error, Result};
 use crate::render::cost_map::CostMap;
 use crate::render::image::Image;
 
-use crate::experiment::record::heatmap_set::{HeatmapPanel, HeatmapSet};
+use crate::experiment::record::heatmap_set::{panel_shrink, HeatmapPanel, HeatmapSet};
 use crate::geometry::RayKind;
 use crate::render::cost_map::Cost;
 
@@ -45,9 +45,8 @@ pub fn viridis(x: f64) -> RGBColor {
 
 /// Width of the colour bar and its labels beside the panels.
 const BAR_PANEL: u32 = 150;
-/// Panels are shrunk (whole pixel blocks averaged) to at most this many pixels a side, or
-/// magnified (whole pixels repeated) to at least `PANEL_MIN` wide, room for their captions.
-const PANEL_SIDE: u32 = 256;
+/// Panels are magnified (whole pixels repeated) to at least this wide, room for their captions
+/// (and shrunk to at most `heatmap_set::PANEL_SIDE` a side).
 const PANEL_MIN: u32 = 192;
 /// Panels per row.
 const COLUMNS: usize = 4;
@@ -93,11 +92,9 @@ pub fn save_panels(
         ));
     };
     register_font()?;
-    let shrink = w.max(h).div_ceil(PANEL_SIDE).max(1);
+    let shrink = panel_shrink(w, h);
     let zoom = PANEL_MIN.div_ceil(w).max(1);
     let layout = Layout {
-        shrink,
-        zoom,
         panel: (w * zoom / shrink, h * zoom / shrink),
         rows: panels.len().div_ceil(COLUMNS) as u32,
         columns: panels.len().min(COLUMNS) as u32,
@@ -112,10 +109,7 @@ pub fn save_panels(
 
 /// Where the panels go.
 struct Layout {
-    /// Image pixels per panel pixel, along each axis (≥ 1) ...
-    shrink: u32,
-    /// ... or panel pixels per image pixel (≥ 1; one of the two is 1).
-    zoom: u32,
+    /// Every panel's size in pixels: the first image's or map's, shrunk or magnified.
     panel: (u32, u32),
     rows: u32,
     columns: u32,
@@ -126,12 +120,6 @@ impl Layout {
         let width = self.columns * (self.panel.0 + GAP) + BAR_PANEL;
         let height = (self.rows * (self.panel.1 + CAPTION + GAP)).max(MIN_HEIGHT);
         (width, height)
-    }
-
-    /// The image pixels, along one axis, that panel pixel `p` shows.
-    fn source(&self, p: u32) -> std::ops::Range<u32> {
-        let first = p * self.shrink / self.zoom;
-        first..first + self.shrink
     }
 
     /// The top-left corner of panel `i`.
@@ -203,7 +191,17 @@ fn draw(
     Ok(())
 }
 
-/// `map` at `corner`, each panel pixel the value of its block of image pixels.
+/// The pixels, along an axis of a source `len` of them, that pixel `p` of a panel `side` wide
+/// shows: a block of them when the source is larger, one pixel (repeated) when it is smaller. A
+/// map shrunk for its figure (`heatmap_set::for_figure`) and the image it came from, shrunk here, show
+/// the same blocks.
+fn source(p: u32, side: u32, len: u32) -> std::ops::Range<u32> {
+    let at = |p: u32| (p as u64 * len as u64 / side as u64) as u32;
+    let start = at(p).min(len - 1);
+    start..at(p + 1).clamp(start + 1, len)
+}
+
+/// `map` at `corner`, each panel pixel the value of its block of map pixels.
 fn draw_map(
     root: &Canvas<'_>,
     layout: &Layout,
@@ -214,8 +212,8 @@ fn draw_map(
     for py in 0..layout.panel.1 {
         for px in 0..layout.panel.0 {
             let (mut total, mut per) = (0u64, 0u64);
-            for y in layout.source(py) {
-                for x in layout.source(px) {
+            for y in source(py, layout.panel.1, map.height) {
+                for x in source(px, layout.panel.0, map.width) {
                     let i = (y * map.width + x) as usize;
                     total += map.total[i];
                     per += map.per[i];
@@ -240,10 +238,18 @@ fn draw_shaded(
     corner: (i32, i32),
 ) -> std::result::Result<(), Box<dyn std::error::Error>> {
     let bytes = image.to_srgb8(image.auto_exposure());
-    let middle = |p: u32| layout.source(p).start + layout.shrink / 2;
+    // One image pixel per block: its middle one.
+    let middle = |p: u32, side: u32, len: u32| {
+        let block = source(p, side, len);
+        (block.start + block.end) / 2
+    };
     for py in 0..layout.panel.1 {
         for px in 0..layout.panel.0 {
-            let i = 3 * (middle(py) * image.width + middle(px)) as usize;
+            let (x, y) = (
+                middle(px, layout.panel.0, image.width),
+                middle(py, layout.panel.1, image.height),
+            );
+            let i = 3 * (y * image.width + x) as usize;
             let colour = RGBColor(bytes[i], bytes[i + 1], bytes[i + 2]);
             root.draw_pixel((corner.0 + px as i32, corner.1 + py as i32), &colour)?;
         }
@@ -303,6 +309,21 @@ pub fn write_figures(dir: &Path, costs: &[Cost], set: &HeatmapSet) -> Result<()>
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn panel_pixels_show_blocks_of_a_larger_source_and_repeat_a_smaller_one() {
+        // 1024 shrunk to 256: blocks of 4; a map already shrunk to 256: one pixel each.
+        assert_eq!(source(3, 256, 1024), 12..16);
+        assert_eq!(source(3, 256, 256), 3..4);
+        // 64 magnified to 192: each pixel three times.
+        assert_eq!(
+            [0, 1, 2, 3].map(|p| source(p, 192, 64)),
+            [0..1, 0..1, 0..1, 1..2]
+        );
+        // A source not a multiple of the panel: blocks cover it all, never past its end.
+        assert_eq!(source(186, 187, 750), 745..750);
+        assert_eq!(source(186, 187, 188), 186..188);
+    }
 
     #[test]
     fn viridis_ends_and_middle() {

@@ -18,7 +18,7 @@ use rayon::{ThreadPool, ThreadPoolBuilder};
 
 use crate::accel::Accel;
 use crate::error::{Error, Result};
-use crate::experiment::record::heatmap_set::{HeatmapPanel, HeatmapSet};
+use crate::experiment::record::heatmap_set::{for_figure, HeatmapPanel, HeatmapSet};
 use crate::geometry::ray_file::read_rays;
 use crate::geometry::{RayBatch, RayKind};
 use crate::random::mix64;
@@ -207,7 +207,9 @@ pub fn run_plan(
                             scene: spec.name.clone(),
                             kind: workload.kind(),
                             tracer: plan.instances[i].label.clone(),
-                            maps: workload.cost_maps(tracer.as_ref(), exp, widest)?,
+                            maps: workload
+                                .cost_maps(tracer.as_ref(), exp, widest)?
+                                .map(|maps| for_figure(maps, &exp.heatmaps)),
                         });
                     }
                 }
