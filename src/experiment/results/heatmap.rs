@@ -196,6 +196,9 @@ fn draw(
 /// map shrunk for its figure (`heatmap_set::for_figure`) and the image it came from, shrunk here, show
 /// the same blocks.
 fn source(p: u32, side: u32, len: u32) -> std::ops::Range<u32> {
+    if len == 0 || side == 0 {
+        return 0..0;
+    }
     let at = |p: u32| (p as u64 * len as u64 / side as u64) as u32;
     let start = at(p).min(len - 1);
     start..at(p + 1).clamp(start + 1, len)
@@ -323,6 +326,8 @@ mod tests {
         // A source not a multiple of the panel: blocks cover it all, never past its end.
         assert_eq!(source(186, 187, 750), 745..750);
         assert_eq!(source(186, 187, 188), 186..188);
+        // Nothing to show: an empty range, not a panic.
+        assert_eq!(source(0, 192, 0), 0..0);
     }
 
     #[test]
