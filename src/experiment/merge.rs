@@ -5,8 +5,9 @@
 //! 0…n−1 is given exactly once, re-derives the plan from the experiment file recorded in
 //! meta.json, reads the rows back, orders them as the unsharded runner would (scene, frame, tracer
 //! instance), fills the `embree_best_*` columns again from the whole sweep's Embree rows (whichever
-//! shard measured them) and writes every output from the rows. Written whole or not at all, like
-//! a run.
+//! shard measured them) and writes every output from the rows. An experiment with heat maps has
+//! each shard's panels in its heatmaps.bin (`heatmap_file`); the merge joins them and draws the
+//! sweep's figures. Written whole or not at all, like a run.
 
 use std::path::{Path, PathBuf};
 
@@ -16,11 +17,13 @@ use crate::error::{Error, Result};
 
 use super::record::csv_file::read_typed;
 use super::record::files::META_JSON;
-use super::record::files::{HISTOGRAMS_CSV, RUNS_CSV, VERIFY_CSV};
+use super::record::files::{HEATMAPS_BIN, HISTOGRAMS_CSV, RUNS_CSV, VERIFY_CSV};
+use super::record::heatmap_file;
+use super::record::heatmap_set::HeatmapSet;
 use super::record::{results_dir, utc};
 use super::record::{CheckRow, HistogramRow, Records, RunRow};
-use super::results::embree_best;
 use super::results::plots;
+use super::results::{embree_best, heatmap};
 use super::run::meta::{self, MergedShard};
 use super::spec::config::Experiment;
 use super::spec::overrides::RunOverrides;
@@ -149,6 +152,7 @@ pub fn merge(dirs: &[PathBuf], output: Option<&Path>, load: SceneLoader) -> Resu
     let started = utc::UtcTime::now();
     let plan = Plan::derive(&exp, load)?;
     let mut records = Keyed::default();
+    let mut heatmaps = Vec::new();
     for s in &shards {
         let expected = Part::of(
             &plan,
@@ -213,6 +217,9 @@ pub fn merge(dirs: &[PathBuf], output: Option<&Path>, load: SceneLoader) -> Resu
             )?;
             records.checks.push(((scene, c.frame, instance), c));
         }
+        if !exp.heatmaps.is_empty() {
+            heatmaps.push(shard_heatmaps(&plan, s)?);
+        }
     }
     // The unsharded runner's order; stable, so each (scene, frame, instance) keeps its order.
     let mut records = Records {
@@ -231,6 +238,8 @@ pub fn merge(dirs: &[PathBuf], output: Option<&Path>, load: SceneLoader) -> Resu
 
     let results = results_dir::PendingResults::create(&exp.output, &exp.name, &started.compact())?;
     write_outputs(results.dir(), &exp, &plan, &records)?;
+    let heatmaps = HeatmapSet::joined(heatmaps);
+    heatmap::write_figures(results.dir(), &exp.heatmaps, &heatmaps)?;
     let mut meta = meta::gather(
         &plan.experiment,
         Some(&plan),
@@ -255,6 +264,40 @@ pub fn merge(dirs: &[PathBuf], output: Option<&Path>, load: SceneLoader) -> Resu
     meta::write(results.dir(), &meta)?;
     write_summary(results.dir())?;
     results.commit()
+}
+
+/// Shard `s`'s heat-map panels, each checked to be of a (scene × tracer) unit the shard measured.
+fn shard_heatmaps(plan: &Plan, s: &ShardDir) -> Result<HeatmapSet> {
+    let path = s.dir.join(HEATMAPS_BIN);
+    let set = heatmap_file::read(&path)?;
+    let foreign = |what: String| {
+        Error::input(
+            &path,
+            None,
+            format!("{what}: not among the shard's units of the plan"),
+        )
+    };
+    let scene_name = |scene: usize| plan.scenes.get(scene).map(|p| p.name.as_str());
+    for frame in &set.shaded {
+        if !s.shard.units.iter().any(|&(scene, _)| scene == frame.scene) {
+            return Err(foreign(format!(
+                "the shaded frame of scene {} ({})",
+                frame.scene, frame.name
+            )));
+        }
+    }
+    for p in &set.panels {
+        let planned = plan.instances.get(p.instance).map(|i| i.label.as_str());
+        if !s.shard.units.contains(&(p.scene, p.instance)) || planned != Some(p.tracer.as_str()) {
+            return Err(foreign(format!(
+                "the maps of {} on scene {} ({})",
+                p.tracer,
+                p.scene,
+                scene_name(p.scene).unwrap_or("no such scene")
+            )));
+        }
+    }
+    Ok(set)
 }
 
 /// (scene, frame, tracer instance): the unsharded runner's order.
@@ -321,13 +364,17 @@ mod tests {
     }
 
     fn run_into(out: &Path, shard: Option<Shard>) -> PathBuf {
-        let mut exp = Experiment::parse(Path::new("m.toml"), TEXT).unwrap();
+        run_text_into(TEXT, out, shard)
+    }
+
+    fn run_text_into(text: &str, out: &Path, shard: Option<Shard>) -> PathBuf {
+        let mut exp = Experiment::parse(Path::new("m.toml"), text).unwrap();
         exp.output = out.to_path_buf();
         let overrides = RunOverrides {
             shard,
             ..RunOverrides::default()
         };
-        run(&exp, TEXT, &overrides, &load_quads).unwrap()
+        run(&exp, text, &overrides, &load_quads).unwrap()
     }
 
     fn rows(path: &Path) -> Vec<BTreeMap<String, String>> {
@@ -421,6 +468,74 @@ mod tests {
             .unwrap();
         assert_eq!(parts.matches(" on ").count(), 3, "{parts}");
         assert!(parts.starts_with("0/3 on "), "{parts}");
+        let _ = fs::remove_dir_all(&out);
+    }
+
+    /// The heat-map figures in `dir`, by name.
+    fn heat_maps(dir: &Path) -> BTreeMap<String, Vec<u8>> {
+        files(dir)
+            .into_iter()
+            .filter(|f| f.starts_with("heatmap-"))
+            .map(|f| (f.clone(), fs::read(dir.join(&f)).unwrap()))
+            .collect()
+    }
+
+    #[test]
+    fn merged_shards_draw_the_heat_maps_of_the_unsharded_run() {
+        let text = "name = \"m\"\nscenes = [\"lit\", \"dark\"]\n\
+            tracers = [\"reference\", { name = \"packet\", params = { packet = [4, 8] } }, \"embree1\"]\n\
+            rays = [\"primary\", \"shadow\"]\nresolution = { width = 16, height = 16 }\n\
+            frames = 1\nthreads = [1]\nwarmup = 0\nrepeats = 1\nheatmaps = [\"box\", \"lanes\"]\n";
+        let out = scratch("maps");
+        let whole = run_text_into(text, &out.join("whole"), None);
+        let shards: Vec<PathBuf> = (0..3)
+            .map(|index| {
+                let dir = out.join(format!("s{index}"));
+                run_text_into(text, &dir, Some(Shard { index, count: 3 }))
+            })
+            .collect();
+        // A shard writes its panels, not figures of a part.
+        for shard in &shards {
+            assert!(heat_maps(shard).is_empty());
+            assert!(shard.join(HEATMAPS_BIN).is_file());
+        }
+        let merged = merge(&shards, Some(&out.join("merged")), &load_quads).unwrap();
+        let drawn = heat_maps(&whole);
+        // lit: primary and shadow rays, dark (no light): primary; box and lanes each.
+        assert_eq!(drawn.len(), 6, "{:?}", drawn.keys());
+        // Counts do not depend on timing: the merged figures are the whole run's, byte for byte.
+        assert!(
+            heat_maps(&merged) == drawn,
+            "{:?}",
+            heat_maps(&merged).keys()
+        );
+
+        // A shard's panels in another shard's directory, or a damaged file: an error naming it.
+        let into = out.join("bad");
+        let swapped = out.join("swapped");
+        let _ = fs::remove_dir_all(&swapped);
+        fs::create_dir_all(&swapped).unwrap();
+        for f in fs::read_dir(&shards[0]).unwrap() {
+            let f = f.unwrap();
+            fs::copy(f.path(), swapped.join(f.file_name())).unwrap();
+        }
+        fs::copy(shards[1].join(HEATMAPS_BIN), swapped.join(HEATMAPS_BIN)).unwrap();
+        let dirs = [swapped.clone(), shards[1].clone(), shards[2].clone()];
+        let e = merge(&dirs, Some(&into), &load_quads).unwrap_err();
+        assert_eq!(e.exit_code(), 2);
+        let e = e.to_string();
+        assert!(
+            e.contains(&swapped.join(HEATMAPS_BIN).display().to_string()),
+            "{e}"
+        );
+        assert!(e.contains("not among the shard's units"), "{e}");
+        let bytes = fs::read(shards[0].join(HEATMAPS_BIN)).unwrap();
+        fs::write(swapped.join(HEATMAPS_BIN), &bytes[..bytes.len() - 3]).unwrap();
+        let e = merge(&dirs, Some(&into), &load_quads)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("the file ends in"), "{e}");
+        assert!(!into.exists());
         let _ = fs::remove_dir_all(&out);
     }
 

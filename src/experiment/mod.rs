@@ -20,9 +20,9 @@ pub use spec::config::{check_threads, Experiment, SceneSpec, StructureKey, Trace
 pub use spec::overrides::{Chatter, RunOverrides};
 pub use spec::plan::{Plan, SceneLoader};
 
-use record::files::{HISTOGRAMS_CSV, RUNS_CSV, SUMMARY_MD, TABLES_MD, VERIFY_CSV};
+use record::files::{HEATMAPS_BIN, HISTOGRAMS_CSV, RUNS_CSV, SUMMARY_MD, TABLES_MD, VERIFY_CSV};
 use record::selection::Row;
-use record::{check_row, histogram_row, results_dir, run_row, utc};
+use record::{check_row, heatmap_file, histogram_row, results_dir, run_row, utc};
 use record::{HistogramRow, Records, RunRow};
 use results::{error_plot, plots, summary, tables};
 use run::{meta, runner};
@@ -108,7 +108,6 @@ pub fn run(
     let measured = runner::run_plan(exp, &plan, &part, load, &progress, dump.as_deref());
     progress.finish_and_clear();
     let (cases, heatmaps) = measured?;
-    results::heatmap::write_figures(results.dir(), &exp.heatmaps, &heatmaps)?;
     let mut records = run::case::records(&plan, &cases);
     results::embree_best::fill(&plan, &mut records.runs);
 
@@ -126,6 +125,9 @@ pub fn run(
         // A part's plots and tables would show a part: `raylab merge` draws them for the whole.
         Some(shard) => {
             write_records(dir, &records)?;
+            if !exp.heatmaps.is_empty() {
+                heatmap_file::write(&dir.join(HEATMAPS_BIN), &heatmaps)?;
+            }
             meta.shard = Some(shard::ShardMeta {
                 index: shard.index,
                 count: shard.count,
@@ -133,7 +135,10 @@ pub fn run(
                 units: part.units(),
             });
         }
-        None => write_outputs(dir, exp, &plan, &records)?,
+        None => {
+            write_outputs(dir, exp, &plan, &records)?;
+            results::heatmap::write_figures(dir, &exp.heatmaps, &heatmaps)?;
+        }
     }
     meta.wall_seconds = Some(clock.elapsed().as_secs_f64());
     meta::write(dir, &meta)?;

@@ -15,5 +15,7 @@ pub const TABLES_MD: &str = "tables.md";
 pub const SUMMARY_MD: &str = "summary.md";
 /// The stability suite's rows (an experiment with `[stability]`).
 pub const STABILITY_CSV: &str = "stability.csv";
+/// A shard's heat-map panels (`heatmap_file`), drawn by `raylab merge`.
+pub const HEATMAPS_BIN: &str = "heatmaps.bin";
 /// Where `--dump-rays` writes the generated batches.
 pub const RAYS_DIR: &str = "rays";

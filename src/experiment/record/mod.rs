@@ -9,6 +9,7 @@ pub mod check_row;
 pub mod csv_file;
 pub mod digest;
 pub mod files;
+pub mod heatmap_file;
 pub mod heatmap_set;
 pub mod histogram_row;
 pub mod provenance;

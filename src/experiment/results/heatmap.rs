@@ -261,15 +261,22 @@ fn draw_shaded(
 }
 
 /// The run's figures (`heatmaps = [...]`): one per scene × ray kind × cost of `set`,
-/// `heatmap-<scene>-<kind>-<cost>.png`, the shaded frame first, then every tracer that counts in
-/// plan order, all on one scale (`Cost::scale`), then one panel for the baselines, which report
-/// no counts. On a `lanes` figure a single-ray tracer's panel is blank.
+/// `heatmap-<scene>[-<size>]-<kind>-<cost>.png`, the shaded frame first, then every tracer that
+/// counts in plan order, all on one scale (`Cost::scale`), then one panel for the baselines,
+/// which report no counts. On a `lanes` figure a single-ray tracer's panel is blank.
 pub fn write_figures(dir: &Path, costs: &[Cost], set: &HeatmapSet) -> Result<()> {
-    for (scene, image) in &set.shaded {
-        let of_scene: Vec<&HeatmapPanel> =
-            set.panels.iter().filter(|p| &p.scene == scene).collect();
-        let mut kinds: Vec<RayKind> = of_scene.iter().map(|p| p.kind).collect();
-        kinds.dedup();
+    for shaded in &set.shaded {
+        let of_scene: Vec<&HeatmapPanel> = set
+            .panels
+            .iter()
+            .filter(|p| p.scene == shaded.scene)
+            .collect();
+        let mut kinds: Vec<RayKind> = Vec::new();
+        for p in &of_scene {
+            if !kinds.contains(&p.kind) {
+                kinds.push(p.kind);
+            }
+        }
         for kind in kinds {
             let tracers: Vec<&&HeatmapPanel> = of_scene.iter().filter(|p| p.kind == kind).collect();
             for &cost in costs {
@@ -283,7 +290,7 @@ pub fn write_figures(dir: &Path, costs: &[Cost], set: &HeatmapSet) -> Result<()>
                     })
                     .collect();
                 let scale = cost.scale(maps.iter().flatten().flatten().copied());
-                let mut panels = vec![(scene.clone(), Panel::Shaded(image))];
+                let mut panels = vec![(shaded.name.clone(), Panel::Shaded(&shaded.image))];
                 panels.extend(tracers.iter().zip(&maps).filter_map(|(p, map)| {
                     let panel = match map.as_ref()? {
                         Some(map) => Panel::Map(map),
@@ -298,7 +305,7 @@ pub fn write_figures(dir: &Path, costs: &[Cost], set: &HeatmapSet) -> Result<()>
                 }
                 let name = format!(
                     "heatmap-{}-{}-{}.png",
-                    file_stem(scene),
+                    file_stem(&shaded.name),
                     kind.name(),
                     cost.name()
                 );

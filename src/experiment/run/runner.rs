@@ -18,7 +18,7 @@ use rayon::{ThreadPool, ThreadPoolBuilder};
 
 use crate::accel::Accel;
 use crate::error::{Error, Result};
-use crate::experiment::record::heatmap_set::{for_figure, HeatmapPanel, HeatmapSet};
+use crate::experiment::record::heatmap_set::{for_figure, HeatmapPanel, HeatmapSet, ShadedFrame};
 use crate::geometry::ray_file::read_rays;
 use crate::geometry::{RayBatch, RayKind};
 use crate::random::mix64;
@@ -195,7 +195,15 @@ pub fn run_plan(
                 let oracle = frame_tracers.oracle.as_ref();
                 let image = widest
                     .install(|| render_raycast(&scene, &frame, oracle, exp.width, exp.height));
-                heatmaps.shaded.push((spec.name.clone(), image));
+                heatmaps.shaded.push(ShadedFrame {
+                    scene: scene_index,
+                    // As the plots name it (`plots::scene_stem`): one name may come in sizes.
+                    name: match spec.size {
+                        Some(size) => format!("{}-{size}", spec.name),
+                        None => spec.name.clone(),
+                    },
+                    image,
+                });
             }
             for (i, tracer) in frame_tracers.tracers.iter().enumerate() {
                 let Some(tracer) = tracer else {
@@ -204,8 +212,9 @@ pub fn run_plan(
                 if maps_now {
                     for workload in &workloads {
                         heatmaps.panels.push(HeatmapPanel {
-                            scene: spec.name.clone(),
+                            scene: scene_index,
                             kind: workload.kind(),
+                            instance: i,
                             tracer: plan.instances[i].label.clone(),
                             maps: workload
                                 .cost_maps(tracer.as_ref(), exp, widest)?
