@@ -1,8 +1,9 @@
-//! Claims that read an experiment with no committed run yet cannot be checked against its
-//! tables.md, so they are checked against what its experiment file declares: every experiment a
-//! claims file lists exists as `experiments/<name>.toml`, and every reference into one without a
-//! run names a declared table (by its title or a unique prefix), one of its columns, and, where
-//! the file lists its rows, one of its rows. A typo is caught here, not on the day of the run.
+//! Claims are checked against what their experiment files declare, whether or not a run is
+//! committed: every experiment a claims file lists exists as `experiments/<name>.toml`, and every
+//! reference names a declared table (by its title or a unique prefix), one of its columns, and,
+//! where the file lists its rows, one of its rows (an experiment that declares no tables, the
+//! stability suite, is judged against its committed run's by the report). A typo is caught here, not on the day of the
+//! run, and a table renamed in an experiment file is caught before its next run reads "not run".
 
 use std::path::Path;
 
@@ -40,7 +41,7 @@ fn declared_tables(experiment: &str) -> Vec<(String, Option<Vec<String>>, Vec<St
 }
 
 #[test]
-fn references_to_experiments_not_yet_run_name_declared_tables_rows_and_columns() {
+fn references_name_declared_tables_rows_and_columns() {
     let mut checked = 0;
     for dir in papers_under(Path::new("results")).unwrap() {
         let (claims, _) = Claims::read(&dir.join(CLAIMS_TOML)).unwrap_or_else(|e| panic!("{e}"));
@@ -51,10 +52,12 @@ fn references_to_experiments_not_yet_run_name_declared_tables_rows_and_columns()
             for test in &claim.tests {
                 for r in Test::parse(test).unwrap().references() {
                     let experiment = r.experiment.as_deref().unwrap_or(&claim.experiment);
-                    if dir.join(experiment).join("meta.json").is_file() {
-                        continue; // judged against its run's tables.md by the report
-                    }
                     let tables = declared_tables(experiment);
+                    // The stability suite's tables are made by its code, not declared: the
+                    // report judges them against the committed run.
+                    if tables.is_empty() && dir.join(experiment).join("meta.json").is_file() {
+                        continue;
+                    }
                     let exact: Vec<_> = tables.iter().filter(|t| t.0 == r.table).collect();
                     let matching: Vec<_> = match exact.is_empty() {
                         true => tables
@@ -84,8 +87,5 @@ fn references_to_experiments_not_yet_run_name_declared_tables_rows_and_columns()
             }
         }
     }
-    assert!(
-        checked > 0,
-        "no reference to an experiment without a run was checked"
-    );
+    assert!(checked > 0, "no reference was checked");
 }
