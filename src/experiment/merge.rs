@@ -22,8 +22,8 @@ use super::record::heatmap_file;
 use super::record::heatmap_set::HeatmapSet;
 use super::record::{results_dir, utc};
 use super::record::{CheckRow, HistogramRow, Records, RunRow};
+use super::results::embree_best;
 use super::results::plots;
-use super::results::{embree_best, heatmap};
 use super::run::meta::{self, MergedShard};
 use super::spec::config::Experiment;
 use super::spec::overrides::RunOverrides;
@@ -237,9 +237,8 @@ pub fn merge(dirs: &[PathBuf], output: Option<&Path>, load: SceneLoader) -> Resu
     }
 
     let results = results_dir::PendingResults::create(&exp.output, &exp.name, &started.compact())?;
-    write_outputs(results.dir(), &exp, &plan, &records)?;
     let heatmaps = HeatmapSet::joined(heatmaps);
-    heatmap::write_figures(results.dir(), &exp.heatmaps, &heatmaps)?;
+    write_outputs(results.dir(), &exp, &plan, (&records, &heatmaps))?;
     let mut meta = meta::gather(
         &plan.experiment,
         Some(&plan),

@@ -21,6 +21,7 @@ pub use spec::overrides::{Chatter, RunOverrides};
 pub use spec::plan::{Plan, SceneLoader};
 
 use record::files::{HEATMAPS_BIN, HISTOGRAMS_CSV, RUNS_CSV, SUMMARY_MD, TABLES_MD, VERIFY_CSV};
+use record::heatmap_set::HeatmapSet;
 use record::selection::Row;
 use record::{check_row, heatmap_file, histogram_row, results_dir, run_row, utc};
 use record::{HistogramRow, Records, RunRow};
@@ -135,10 +136,7 @@ pub fn run(
                 units: part.units(),
             });
         }
-        None => {
-            write_outputs(dir, exp, &plan, &records)?;
-            results::heatmap::write_figures(dir, &exp.heatmaps, &heatmaps)?;
-        }
+        None => write_outputs(dir, exp, &plan, (&records, &heatmaps))?,
     }
     meta.wall_seconds = Some(clock.elapsed().as_secs_f64());
     meta::write(dir, &meta)?;
@@ -164,10 +162,17 @@ fn write_records(dir: &Path, records: &Records) -> Result<()> {
     check_row::write_checks(&dir.join(VERIFY_CSV), &records.checks)
 }
 
-/// Everything a run writes from its rows except meta.json: the rows, the plots, the error plots,
-/// and the experiment's tables and figures. A merged sweep writes the same.
-fn write_outputs(dir: &Path, exp: &Experiment, plan: &Plan, records: &Records) -> Result<()> {
+/// Everything a run writes from its rows and heat-map panels except meta.json: the rows, the heat
+/// maps, the plots, the error plots, and the experiment's tables and figures. A merged sweep
+/// writes the same.
+fn write_outputs(
+    dir: &Path,
+    exp: &Experiment,
+    plan: &Plan,
+    (records, heatmaps): (&Records, &HeatmapSet),
+) -> Result<()> {
     write_records(dir, records)?;
+    results::heatmap::write_figures(dir, &exp.heatmaps, heatmaps)?;
     plots::write_plots(dir, plan, &records.runs, &records.histograms)?;
     error_plot::write_error_plots(dir, exp, plan, &records.runs)?;
     let rows: Vec<Row> = records.runs.iter().map(RunRow::fields).collect();
