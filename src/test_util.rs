@@ -3,7 +3,7 @@
 
 use glam::Vec3;
 
-use crate::geometry::{Hit, Ray, RayBatch, RayKind, Triangle, WatertightRay};
+use crate::geometry::{Hit, Ray, RayBatch, RayKind, RayTests, Robust, Triangle};
 use crate::random::SplitMix64;
 
 /// A seeded triangle soup: triangles with centres uniform in the cube `[lo, hi]³`, each corner
@@ -67,13 +67,22 @@ pub fn with_slivers(mut small: Vec<Triangle>) -> Vec<Triangle> {
 /// Whether `got` is `want`, or an exact tie: the same distance, and the ray's watertight test
 /// really hits `got`'s triangle at that distance (two triangles meeting at an edge).
 pub fn same_or_tie(triangles: &[Triangle], ray: &Ray, got: &Hit, want: &Hit) -> bool {
+    same_or_tie_with::<Robust>(triangles, ray, got, want)
+}
+
+/// `same_or_tie` for answers of the triangle test `R` (`robust = false`: Möller–Trumbore).
+pub fn same_or_tie_with<R: RayTests>(
+    triangles: &[Triangle],
+    ray: &Ray,
+    got: &Hit,
+    want: &Hit,
+) -> bool {
+    let test = R::triangle_ray(ray.origin, ray.dir);
     got == want
         || got.is_hit()
             && want.is_hit()
             && got.t == want.t
-            && WatertightRay::new(ray.origin, ray.dir)
-                .intersect(&triangles[got.prim as usize], ray.tmin, ray.tmax)
-                .map(|h| h.0)
+            && R::intersect(&test, &triangles[got.prim as usize], ray.tmin, ray.tmax).map(|h| h.0)
                 == Some(got.t)
 }
 

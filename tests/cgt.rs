@@ -35,6 +35,7 @@ fn configs() -> Vec<CgtConfig> {
                 mailbox: bits & 1 != 0,
                 cull: bits & 2 != 0,
                 macrocells: bits & 4 != 0,
+                robust: true,
             });
         }
     }
@@ -442,6 +443,7 @@ fn hand_worked_counts_of_a_packet_down_one_column() {
                 mailbox: bits & 1 != 0,
                 cull: bits & 2 != 0,
                 macrocells: bits & 4 != 0,
+                robust: true,
             };
             let what = format!("M = {macro_size}, {config:?}");
             let cgt = CgtTracer::new(grid.clone(), config);

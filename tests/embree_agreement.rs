@@ -126,7 +126,16 @@ fn fast_tests_agree_with_embree_without_robust_mode() {
         max_unexplained: 4,
         ..Tolerance::default()
     };
-    for tracer in ["reference", "wide-single"] {
+    let ours = [
+        "reference",
+        "wide-single",
+        "packet",
+        "stream",
+        "cgt",
+        "grid-dda",
+        "mft",
+    ];
+    for tracer in ours {
         let fast = Params::new().with("robust", false);
         agrees_within(tracer, &fast, ORACLE, &embree_fast, &leaks);
     }

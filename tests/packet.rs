@@ -100,6 +100,7 @@ fn count(traversal: Traversal, width: usize) -> (Counts, Vec<Hit>) {
             lanes: 4,
             traversal,
             frustum: false,
+            robust: true,
         },
     );
     let batch = column_packet([0.5, 10.0, 0.5, 3.5]);
@@ -216,6 +217,7 @@ fn occlusion_stops_when_every_ray_is_occluded() {
             lanes: 4,
             traversal,
             frustum: false,
+            robust: true,
         };
         let tracer = PacketTracer::new(Arc::new(four_leaf_tree()), config);
         let batch = column_packet([0.5, 10.0, 0.5, 3.5]);
@@ -237,6 +239,7 @@ fn occlusion_stops_when_every_ray_is_occluded() {
             lanes: 4,
             traversal: Traversal::Ranged,
             frustum: false,
+            robust: true,
         };
         let tracer = PacketTracer::new(
             BvhOfWidth::of_width(Arc::new(four_leaf_tree()), width).unwrap(),
@@ -280,6 +283,7 @@ fn agrees_with_reference(name: &str, size: Option<u32>) {
                         lanes,
                         traversal,
                         frustum,
+                        robust: true,
                     };
                     let tracer = PacketTracer::new(
                         BvhOfWidth::of_width(bvh.clone(), width).unwrap(),
@@ -333,14 +337,16 @@ fn bad_parameters_are_rejected() {
         .with("packet", "32")
         .with("lanes", "8")
         .with("traversal", "partition")
-        .with("frustum", "false");
+        .with("frustum", "false")
+        .with("robust", "false");
     assert_eq!(
         PacketConfig::from_params(&p).unwrap(),
         PacketConfig {
             packet: 32,
             lanes: 8,
             traversal: Traversal::Partition,
-            frustum: false
+            frustum: false,
+            robust: false,
         }
     );
     let ranged = Params::new().with("traversal", "ranged");
@@ -388,6 +394,7 @@ fn explicit_packets_are_respected() {
             lanes: 4,
             traversal,
             frustum: true,
+            robust: true,
         };
         let tracer = PacketTracer::new(BvhOfWidth::of_width(tree.clone(), width).unwrap(), config);
         let mut hits = vec![Hit::MISS; 16];
@@ -412,6 +419,7 @@ fn wide_trees_trace_moving_geometry_like_the_reference() {
                 lanes: 16,
                 traversal: Traversal::Ranged,
                 frustum,
+                robust: true,
             };
             let tracer =
                 PacketTracer::new(BvhOfWidth::of_width(bvh.clone(), width).unwrap(), config);
@@ -478,6 +486,7 @@ fn every_ray_overwrites_a_stale_result() {
                     lanes,
                     traversal,
                     frustum: false,
+                    robust: true,
                 };
                 let tracer =
                     PacketTracer::new(BvhOfWidth::of_width(bvh.clone(), width).unwrap(), config);

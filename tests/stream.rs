@@ -480,7 +480,10 @@ fn bad_parameters_are_rejected() {
         zero.to_string(),
         "stream tracer: stream must be a number of rays ≥ 1 or \"frame\" (got \"0\")"
     );
-    let p = Params::new().with("stream", "frame").with("width", "12");
+    let p = Params::new()
+        .with("stream", "frame")
+        .with("width", "12")
+        .with("robust", false);
     assert_eq!(
         StreamConfig::from_params(&p).unwrap(),
         StreamConfig {
@@ -488,6 +491,7 @@ fn bad_parameters_are_rejected() {
             width: 12,
             single: 0,
             single_tree: TreeWidth::Binary,
+            robust: false,
         }
     );
     assert_eq!(

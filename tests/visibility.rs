@@ -152,3 +152,39 @@ fn mft_bits_equal_the_reference_tracers_shadow_rays() {
         }
     }
 }
+
+/// `robust = false` like for like: every tracer of ours with plain slabs and Möller–Trumbore in
+/// its lanes gives the bits the reference tracer gives with `robust = false` (every lane is the
+/// scalar test bit for bit, all culling conservative); mft answering natively among them.
+#[test]
+fn fast_tests_give_the_fast_reference_tracers_bits() {
+    let fast = || Params::new().with("robust", false);
+    let tracers = [
+        ("grid-dda", fast()),
+        ("cgt", fast()),
+        (
+            "packet",
+            fast().with("traversal", "masked").with("packet", 4),
+        ),
+        ("packet", fast().with("traversal", "ia").with("lanes", 4)),
+        ("packet", fast().with("width", 8)),
+        ("stream", fast()),
+        ("stream", fast().with("single", 8).with("single_tree", 4)),
+        ("mft", fast()),
+        (
+            "mft",
+            fast()
+                .with("cr", false)
+                .with("fs", false)
+                .with("leaf_rays", false),
+        ),
+        ("mft", fast().with("width", 8).with("block", 64)),
+    ];
+    for (name, scene) in scenes() {
+        let (expected, rays) = visibility(&scene, "reference", &fast());
+        for (tracer, params) in &tracers {
+            let (got, _) = visibility(&scene, tracer, params);
+            assert_eq!(got, expected, "{name}: {tracer} {params} ({rays} rays)");
+        }
+    }
+}

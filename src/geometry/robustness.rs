@@ -14,9 +14,20 @@ use glam::Vec3;
 use super::aabb::FAR_SCALE;
 use super::moller::MollerRay;
 use super::{Triangle, WatertightRay};
+use crate::error::Result;
+use crate::params::Params;
+
+/// The parameter that picks the tests, named and meant as Embree's `robust`: accepted by every
+/// tracer of ours.
+pub const PARAM: &str = "robust";
+
+/// The `robust` parameter of `params` (default `true`).
+pub fn robust_param(params: &Params) -> Result<bool> {
+    params.get_or(PARAM, true)
+}
 
 /// The pair of tests a kernel runs (`Robust` or `Fast`).
-pub trait RayTests: Copy + Send + Sync + 'static {
+pub trait RayTests: Copy + Default + Send + Sync + 'static {
     /// The `robust` parameter's value that picks these tests.
     const ROBUST: bool;
     /// What a slab test multiplies each far distance by.
@@ -24,6 +35,14 @@ pub trait RayTests: Copy + Send + Sync + 'static {
     /// A ray prepared for many triangle tests.
     type TriangleRay: Copy + Send + Sync;
     fn triangle_ray(origin: Vec3, dir: Vec3) -> Self::TriangleRay;
+    /// `triangle_ray` of a ray whose watertight frame (`WatertightRay::parts`: axes, shear) is
+    /// already known, so the watertight test needs nothing more; `dir` is asked for only by a
+    /// test that reads the direction.
+    fn triangle_ray_in_frame(
+        origin: [f32; 3],
+        frame: ([usize; 3], [f32; 3]),
+        dir: impl FnOnce() -> Vec3,
+    ) -> Self::TriangleRay;
     /// `(t, u, v)` if `ray` hits `tri` with `tmin ≤ t ≤ tmax` (`u` weights v1, `v` weights v2).
     fn intersect(
         ray: &Self::TriangleRay,
@@ -50,6 +69,14 @@ impl RayTests for Robust {
         WatertightRay::new(origin, dir)
     }
     #[inline(always)]
+    fn triangle_ray_in_frame(
+        origin: [f32; 3],
+        (k, shear): ([usize; 3], [f32; 3]),
+        _: impl FnOnce() -> Vec3,
+    ) -> WatertightRay {
+        WatertightRay::from_parts(origin, k, shear)
+    }
+    #[inline(always)]
     fn intersect(
         ray: &WatertightRay,
         tri: &Triangle,
@@ -67,6 +94,14 @@ impl RayTests for Fast {
     #[inline(always)]
     fn triangle_ray(origin: Vec3, dir: Vec3) -> MollerRay {
         MollerRay::new(origin, dir)
+    }
+    #[inline(always)]
+    fn triangle_ray_in_frame(
+        origin: [f32; 3],
+        _: ([usize; 3], [f32; 3]),
+        dir: impl FnOnce() -> Vec3,
+    ) -> MollerRay {
+        MollerRay::new(Vec3::from(origin), dir())
     }
     #[inline(always)]
     fn intersect(ray: &MollerRay, tri: &Triangle, tmin: f32, tmax: f32) -> Option<(f32, f32, f32)> {

@@ -16,9 +16,12 @@
 //!   triangle is made relative to it once for all of them.
 //! - `SimdRay<L>`: `L` rays traced in lock step with their closest hits (the packet tracer's
 //!   SIMD ray, Overbeck et al. 2008 §2.1), running `slab` and `watertight` per lane.
-//! - `slab`: the conservative ray–box test (Ize 2013) per lane, bit for bit `RayBoxTest::hit`.
+//! - `slab`: the ray–box test per lane, bit for bit `RayBoxTest::hit_with::<R>` (conservative,
+//!   Ize 2013, with `Robust`; plain with `Fast`).
 //! - `watertight`: the f32 stage of the watertight ray–triangle test (Woop et al. 2013) per lane,
-//!   bit for bit `WatertightRay::intersect`.
+//!   bit for bit `WatertightRay::intersect` (`robust = true`).
+//! - `moller`: the Möller–Trumbore test per lane, bit for bit `MollerRay::intersect`
+//!   (`robust = false`).
 //! - `stream`: in-place compaction and partition of a stream of rays in SoA columns by a lane
 //!   predicate — what coherent grid traversal drops finished rays with, and what stream filtering
 //!   (Gribble & Ramani 2008) is built on.
@@ -27,11 +30,14 @@
 //!
 //! A tracer picks `L` once (its `lanes` parameter) and every lane type and test of its kernel
 //! takes that `L`; `with_lanes!` (`dispatch`) turns the run-time count into the kernel's const.
+//! Likewise its tests `R: RayTests` (its `robust` parameter, `geometry::robustness`): every box
+//! and triangle test of the lane layer takes `R`.
 
 mod broadcast_ray;
 mod dispatch;
 mod mask;
 mod min_max;
+pub mod moller;
 mod shared_frame;
 mod simd_ray;
 pub mod slab;

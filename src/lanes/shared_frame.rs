@@ -61,7 +61,7 @@ impl SharedFrame {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::geometry::{Ray, RayBatch, RayKind};
+    use crate::geometry::{Ray, RayBatch, RayKind, Robust};
     use crate::random::SplitMix64;
     use glam::Vec3;
 
@@ -75,7 +75,7 @@ mod tests {
         (0..2)
             .map(|g| {
                 let mut simd = SimdRay::<16>::default();
-                simd.load(&batch.view(), g * 16, 16);
+                simd.load::<Robust>(&batch.view(), g * 16, 16);
                 simd
             })
             .collect()
@@ -94,7 +94,7 @@ mod tests {
             let rel = frame.relative(&tri);
             for g in &groups {
                 let (mut own, mut shared) = (*g, *g);
-                let n = own.intersect::<false>(&tri, prim);
+                let n = own.intersect::<Robust, false>(&tri, prim);
                 assert_eq!(shared.intersect_relative::<false>(&rel, prim), n);
                 for l in 0..16 {
                     let (a, b) = (own.hit(l), shared.hit(l));

@@ -5,13 +5,15 @@
 //! width (`target-cpu=native`).
 //!
 //! Both tests perform, lane by lane, exactly the floating-point operations of the single-ray
-//! tests (`RayBoxTest::hit`, `WatertightRay::intersect`), so every lane gets bit for bit the answer
-//! the reference tracer's ray gets:
-//! - slabs: `lanes::slab`;
-//! - triangles (`lanes::watertight`): each lane carries its own watertight frame (`kx, ky, kz`, shear). When every lane
-//!   of the group has the same frame (the common case for coherent rays) the vertices are
-//!   permuted once per axis; otherwise per lane by selects. Edge functions that come out exactly
-//!   zero are redone in f64 for those lanes, as the scalar test does.
+//! tests of the tracer's `robust` switch (`R: RayTests`: `RayBoxTest::hit_with::<R>` and
+//! `R::intersect`), so every lane gets bit for bit the answer the reference tracer's ray gets:
+//! - slabs: `lanes::slab` (conservative with `Robust`, plain with `Fast`);
+//! - triangles, `Robust` (`lanes::watertight`): each lane carries its own watertight frame (`kx,
+//!   ky, kz`, shear). When every lane of the group has the same frame (the common case for
+//!   coherent rays) the vertices are permuted once per axis; otherwise per lane by selects. Edge
+//!   functions that come out exactly zero are redone in f64 for those lanes, as the scalar test
+//!   does;
+//! - triangles, `Fast` (`lanes::moller`): Möller–Trumbore from each lane's origin and direction.
 //!
 //! Unused lanes (padding of a packet whose size is not a multiple of `L`) and, in occlusion
 //! mode, lanes already occluded have `tmax = −∞`, so no box and no triangle can hit them.
@@ -21,19 +23,22 @@
 
 use glam::Vec3;
 
+use super::moller::MollerLanes;
 use super::slab::SlabRays;
 use super::watertight::{
     accept, any_may_hit, common_axes, edge_functions, in_lane_frames, needs_f64, redo_edges_in_f64,
     Permuted,
 };
 use super::{highest, LaneMask};
-use crate::geometry::{Hit, Ray, Rays, Triangle, WatertightRay};
+use crate::geometry::{Hit, Ray, RayTests, Rays, Triangle, WatertightRay};
 
 /// `L` rays, their current closest hits, and what the box and triangle tests precompute.
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(64))]
 pub struct SimdRay<const L: usize> {
     pub origin: [[f32; L]; 3],
+    /// The directions, which only the Möller–Trumbore test (`Fast`) reads.
+    pub dir: [[f32; L]; 3],
     pub inv_dir: [[f32; L]; 3],
     /// 1 where the direction's sign bit is set (−0.0 counts as negative, as in `RayBoxTest`).
     pub negative: [[u32; L]; 3],
@@ -59,6 +64,7 @@ impl<const L: usize> Default for SimdRay<L> {
     fn default() -> Self {
         SimdRay {
             origin: [[0.0; L]; 3],
+            dir: [[1.0; L]; 3],
             inv_dir: [[0.0; L]; 3],
             negative: [[0; L]; 3],
             tmin: [f32::INFINITY; L],
@@ -79,7 +85,7 @@ impl<const L: usize> SimdRay<L> {
     /// Loads rays `first .. first + used` of `rays` (`used ≤ L`) into the lanes; the rest become
     /// padding. Returns how many lanes hold a well-formed ray. A full group reads the batch's
     /// arrays in place; only a partial one (a batch's last) is first copied into padded lanes.
-    pub fn load(&mut self, rays: &Rays<'_>, first: usize, used: usize) -> u32 {
+    pub fn load<R: RayTests>(&mut self, rays: &Rays<'_>, first: usize, used: usize) -> u32 {
         debug_assert!(used <= L);
         self.used = used as u32;
         if used == L {
@@ -89,7 +95,7 @@ impl<const L: usize> SimdRay<L> {
                 true => [0.0; L],
                 false => *at(rays.time),
             };
-            self.load_lanes(
+            self.load_lanes::<R>(
                 [at(rays.ox), at(rays.oy), at(rays.oz)],
                 [at(rays.dx), at(rays.dy), at(rays.dz)],
                 [at(rays.tmin), at(rays.tmax)],
@@ -111,7 +117,7 @@ impl<const L: usize> SimdRay<L> {
                 padded(rays.tmin, f32::INFINITY),
                 padded(rays.tmax, f32::NEG_INFINITY),
             ];
-            self.load_lanes(
+            self.load_lanes::<R>(
                 [&origin[0], &origin[1], &origin[2]],
                 [&dir[0], &dir[1], &dir[2]],
                 [&range[0], &range[1]],
@@ -126,7 +132,7 @@ impl<const L: usize> SimdRay<L> {
     /// `WatertightRay::new` compute per ray, written with plain scalars and selects so LLVM
     /// vectorizes it (a scalar load was a third of the packet tracer's time on camera rays).
     #[inline(always)]
-    fn load_lanes(
+    fn load_lanes<R: RayTests>(
         &mut self,
         origin: [&[f32; L]; 3],
         dir: [&[f32; L]; 3],
@@ -163,6 +169,13 @@ impl<const L: usize> SimdRay<L> {
             self.origin[2][l] = if ok { oz } else { 0.0 };
             self.tmin[l] = if ok { tmin } else { f32::INFINITY };
             self.tmax[l] = if ok { tmax } else { f32::NEG_INFINITY };
+            // Read by Möller–Trumbore only (stored for the watertight test they cost the
+            // packet tracer's 8×8 camera rays 3%).
+            if !R::ROBUST {
+                self.dir[0][l] = x;
+                self.dir[1][l] = y;
+                self.dir[2][l] = z;
+            }
             let (ix, iy, iz) = (1.0 / x, 1.0 / y, 1.0 / z);
             self.inv_dir[0][l] = ix;
             self.inv_dir[1][l] = iy;
@@ -215,6 +228,7 @@ impl<const L: usize> SimdRay<L> {
         let (_, k, shear) = WatertightRay::new(Vec3::ZERO, dir).parts();
         for a in 0..3 {
             self.origin[a][l] = origin[a];
+            self.dir[a][l] = dir[a];
             self.inv_dir[a][l] = 1.0 / dir[a];
             self.negative[a][l] = dir[a].is_sign_negative() as u32;
             self.axes[a][l] = k[a] as u32;
@@ -253,17 +267,17 @@ impl<const L: usize> SimdRay<L> {
         mask
     }
 
-    /// Whether any lane's segment `[tmin, tmax]` meets the box `[lo, hi]` (`RayBoxTest::hit` per
-    /// lane).
+    /// Whether any lane's segment `[tmin, tmax]` meets the box `[lo, hi]`
+    /// (`RayBoxTest::hit_with::<R>` per lane).
     #[inline(always)]
-    pub fn hits_box(&self, lo: [f32; 3], hi: [f32; 3]) -> bool {
-        self.slabs().any_hit(lo, hi)
+    pub fn hits_box<R: RayTests>(&self, lo: [f32; 3], hi: [f32; 3]) -> bool {
+        self.slabs().any_hit::<R>(lo, hi)
     }
 
     /// The lanes whose segment meets the box `[lo, hi]`.
     #[inline(always)]
-    pub fn box_lanes(&self, lo: [f32; 3], hi: [f32; 3]) -> LaneMask<L> {
-        self.slabs().hits(lo, hi)
+    pub fn box_lanes<R: RayTests>(&self, lo: [f32; 3], hi: [f32; 3]) -> LaneMask<L> {
+        self.slabs().hits::<R>(lo, hi)
     }
 
     /// The lanes as the slab test reads them.
@@ -319,20 +333,24 @@ impl<const L: usize> SimdRay<L> {
         in_lane_frames(rel, &self.axes, self.common_axes)
     }
 
-    /// The watertight test of every lane against `tri` (scene id `prim`); lanes that hit within
-    /// their `[tmin, tmax]` record it and shorten `tmax` to it (or, with `ANY`, are marked
-    /// occluded and end). Returns how many lanes hit.
+    /// The triangle test `R` of every lane against `tri` (scene id `prim`); lanes that hit
+    /// within their `[tmin, tmax]` record it and shorten `tmax` to it (or, with `ANY`, are
+    /// marked occluded and end). Returns how many lanes hit.
     #[inline(always)]
-    pub fn intersect<const ANY: bool>(&mut self, tri: &Triangle, prim: u32) -> u32 {
+    pub fn intersect<R: RayTests, const ANY: bool>(&mut self, tri: &Triangle, prim: u32) -> u32 {
+        if !R::ROBUST {
+            return self.intersect_moller::<ANY>(&MollerLanes::broadcast(tri), prim);
+        }
         let a = self.permute(tri.v[0].to_array());
         let b = self.permute(tri.v[1].to_array());
         let c = self.permute(tri.v[2].to_array());
         self.intersect_permuted::<ANY>(&a, &b, &c, prim)
     }
 
-    /// As `intersect`, with the triangle's vertices already relative to the origin along the
-    /// axes that every lane shares (`SharedFrame::relative`): the same numbers `intersect`
-    /// computes in each lane, so the same verdicts, without the per-lane subtractions.
+    /// As `intersect::<Robust>`, with the triangle's vertices already relative to the origin
+    /// along the axes that every lane shares (`SharedFrame::relative`): the same numbers
+    /// `intersect` computes in each lane, so the same verdicts, without the per-lane
+    /// subtractions.
     #[inline(always)]
     pub fn intersect_relative<const ANY: bool>(&mut self, rel: &[[f32; 3]; 3], prim: u32) -> u32 {
         // Broadcast by hand: `array::map` here was left as an out-of-line call.
@@ -347,12 +365,17 @@ impl<const L: usize> SimdRay<L> {
     /// for bit. The cost over a static triangle: three vertex interpolations and a per-lane
     /// gather of the vertices into each lane's frame, for every lane in use.
     #[inline(always)]
-    pub fn intersect_moving<const ANY: bool>(
+    pub fn intersect_moving<R: RayTests, const ANY: bool>(
         &mut self,
         open: &Triangle,
         close: &Triangle,
         prim: u32,
     ) -> u32 {
+        if !R::ROBUST {
+            let at_time = |l| open.lerp(close, self.time[l]);
+            let tri = MollerLanes::per_lane(self.used as usize, at_time);
+            return self.intersect_moller::<ANY>(&tri, prim);
+        }
         let mut at_time = [[[0.0f32; L]; 3]; 3];
         for l in 0..self.used as usize {
             let tri = open.lerp(close, self.time[l]);
@@ -398,6 +421,32 @@ impl<const L: usize> SimdRay<L> {
         if !hit.contains(&true) {
             return 0;
         }
+        self.take::<ANY>(prim, |l| {
+            let t = t_scaled[l] / abs_det[l];
+            let inv = 1.0 / (e[0][l] + e[1][l] + e[2][l]);
+            (hit[l] & t.is_finite(), t, e[1][l] * inv, e[2][l] * inv)
+        })
+    }
+
+    /// The Möller–Trumbore test (`Fast`) of every lane against its triangle `tri`.
+    #[inline(always)]
+    fn intersect_moller<const ANY: bool>(&mut self, tri: &MollerLanes<L>, prim: u32) -> u32 {
+        let hits = tri.intersect(&self.origin, &self.dir, &self.tmin, &self.tmax);
+        if !hits.hit.contains(&true) {
+            return 0;
+        }
+        self.take::<ANY>(prim, |l| (hits.hit[l], hits.t[l], hits.u[l], hits.v[l]))
+    }
+
+    /// Records `prim` in the lanes that hit: `lane(l)` is lane `l`'s verdict, distance and
+    /// barycentrics `(hit, t, u, v)`, computed inside the store loop (as arrays first, the
+    /// watertight test's camera rays were 6–18% slower). Returns how many lanes hit.
+    #[inline(always)]
+    fn take<const ANY: bool>(
+        &mut self,
+        prim: u32,
+        lane: impl Fn(usize) -> (bool, f32, f32, f32),
+    ) -> u32 {
         // Every lane is written: the new value where it hits, else the old one, read by a
         // volatile load. A store under the hit mask, or of a select with an ordinary load of the
         // same slot, compiles to a masked store (`vmaskmovps`), microcoded and slow on AMD's
@@ -413,13 +462,11 @@ impl<const L: usize> SimdRay<L> {
         };
         let mut count = 0;
         for l in 0..L {
-            let t = t_scaled[l] / abs_det[l];
-            let take = hit[l] & t.is_finite();
-            let inv = 1.0 / (e[0][l] + e[1][l] + e[2][l]);
+            let (take, t, u, v) = lane(l);
             let tmax = if ANY { f32::NEG_INFINITY } else { t };
             self.prim[l] = if take { prim } else { old_prim[l] };
-            self.u[l] = if take { e[1][l] * inv } else { old_u[l] };
-            self.v[l] = if take { e[2][l] * inv } else { old_v[l] };
+            self.u[l] = if take { u } else { old_u[l] };
+            self.v[l] = if take { v } else { old_v[l] };
             self.tmax[l] = if take { tmax } else { old_tmax[l] };
             count += take as u32;
         }
@@ -495,7 +542,7 @@ fn lanes_at<const L: usize>(src: &[f32], first: usize) -> &[f32; L] {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::geometry::{Aabb, Ray, RayBatch, RayBoxTest, RayKind, WatertightRay};
+    use crate::geometry::{Aabb, Fast, Ray, RayBatch, RayBoxTest, RayKind, Robust, WatertightRay};
     use crate::random::SplitMix64;
     use glam::Vec3;
 
@@ -526,24 +573,25 @@ mod tests {
             .collect()
     }
 
-    /// Every lane's box and triangle verdicts are the scalar tests' (`RayBoxTest::hit`,
-    /// `WatertightRay::intersect`), bit for bit, at width `L`, full and partial groups.
-    fn lanes_agree_with_the_scalar_tests<const L: usize>() {
+    /// Every lane's box and triangle verdicts are the scalar tests' of `R`
+    /// (`RayBoxTest::hit_with::<R>`, `R::intersect`), bit for bit, at width `L`, full and partial
+    /// groups.
+    fn lanes_agree_with_the_scalar_tests<R: RayTests, const L: usize>() {
         let mut rng = SplitMix64::new(11);
         let rays = random_rays(&mut rng, L * 400);
         let mut simd = SimdRay::<L>::default();
         for (chunk_i, chunk) in rays.chunks(L).enumerate() {
             // Some groups partial, to exercise padding.
             let used = if chunk_i % 5 == 0 { L - 3 } else { L };
-            simd.load(&batch(&chunk[..used]).view(), 0, used);
+            simd.load::<R>(&batch(&chunk[..used]).view(), 0, used);
             let mut v = |s: f32| (rng.unit() * 2.0 - 1.0) * s;
             let p = Vec3::new(v(1.0), v(1.0), v(1.0));
             let tri = Triangle::new(p, p + Vec3::new(v(1.0), v(1.0), v(1.0)), p + Vec3::Z);
             let lo = Vec3::new(v(1.0), v(1.0), v(1.0));
             let b = Aabb::new(lo, lo + Vec3::new(v(1.0).abs(), v(1.0).abs(), 0.5));
-            let box_lanes = simd.box_lanes(b.min.to_array(), b.max.to_array());
+            let box_lanes = simd.box_lanes::<R>(b.min.to_array(), b.max.to_array());
             for (l, r) in chunk[..used].iter().enumerate() {
-                let want = RayBoxTest::new(r.origin, r.dir).hit(&b, r.tmin, r.tmax);
+                let want = RayBoxTest::new(r.origin, r.dir).hit_with::<R>(&b, r.tmin, r.tmax);
                 assert_eq!(box_lanes.contains(l), want.is_some(), "L = {L}, lane {l}");
             }
             assert!(
@@ -551,13 +599,13 @@ mod tests {
                 "padding never hits"
             );
             assert_eq!(
-                simd.hits_box(b.min.to_array(), b.max.to_array()),
+                simd.hits_box::<R>(b.min.to_array(), b.max.to_array()),
                 box_lanes.any()
             );
-            let n = simd.intersect::<false>(&tri, 7);
+            let n = simd.intersect::<R, false>(&tri, 7);
             let mut expected = 0;
             for (l, r) in chunk[..used].iter().enumerate() {
-                let want = WatertightRay::new(r.origin, r.dir).intersect(&tri, r.tmin, r.tmax);
+                let want = R::intersect(&R::triangle_ray(r.origin, r.dir), &tri, r.tmin, r.tmax);
                 match want {
                     Some((t, u, v)) => {
                         expected += 1;
@@ -574,9 +622,12 @@ mod tests {
 
     #[test]
     fn lanes_agree_bit_for_bit_with_the_scalar_tests() {
-        lanes_agree_with_the_scalar_tests::<4>();
-        lanes_agree_with_the_scalar_tests::<8>();
-        lanes_agree_with_the_scalar_tests::<16>();
+        lanes_agree_with_the_scalar_tests::<Robust, 4>();
+        lanes_agree_with_the_scalar_tests::<Robust, 8>();
+        lanes_agree_with_the_scalar_tests::<Robust, 16>();
+        lanes_agree_with_the_scalar_tests::<Fast, 4>();
+        lanes_agree_with_the_scalar_tests::<Fast, 8>();
+        lanes_agree_with_the_scalar_tests::<Fast, 16>();
     }
 
     #[test]
@@ -617,7 +668,7 @@ mod tests {
         // Ill-formed: becomes padding either way.
         rays[5].dir = Vec3::ZERO;
         let mut loaded = SimdRay::<16>::default();
-        loaded.load(&batch(&rays).view(), 0, 16);
+        loaded.load::<Fast>(&batch(&rays).view(), 0, 16);
         let mut set = SimdRay::<16>::default();
         for (l, ray) in rays.iter().enumerate() {
             set.set_lane(l, Some(ray));
@@ -632,6 +683,7 @@ mod tests {
             })
         };
         assert_eq!(bits(&set.origin), bits(&loaded.origin));
+        assert_eq!(bits(&set.dir), bits(&loaded.dir));
         assert_eq!(bits(&set.inv_dir), bits(&loaded.inv_dir));
         assert_eq!(
             live_frames(bits(&set.shear)),
@@ -657,8 +709,8 @@ mod tests {
         .map(|&p| Ray::new(p + Vec3::Z, -Vec3::Z, 0.0, 10.0))
         .collect();
         let mut simd = SimdRay::<4>::default();
-        simd.load(&batch(&rays).view(), 0, rays.len());
-        assert_eq!(simd.intersect::<false>(&tri, 3), 3);
+        simd.load::<Robust>(&batch(&rays).view(), 0, rays.len());
+        assert_eq!(simd.intersect::<Robust, false>(&tri, 3), 3);
         for (l, r) in rays.iter().enumerate() {
             let (t, u, v) = WatertightRay::new(r.origin, r.dir)
                 .intersect(&tri, 0.0, 10.0)

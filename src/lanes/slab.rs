@@ -1,6 +1,6 @@
-//! The conservative ray–box slab test (Ize 2013, as `RayBoxTest::hit`) for `L` rays at once: near
-//! and far planes chosen by the sign bit of each lane's direction, far distances scaled by
-//! `FAR_SCALE`, and running max/min written `if t > acc { t } else { acc }`, which ignores a NaN
+//! The ray–box slab test (as `RayBoxTest::hit_with`) for `L` rays at once: near and far planes
+//! chosen by the sign bit of each lane's direction, far distances scaled by the tests' `FAR_SCALE`
+//! (`R = Robust`: the conservative test of Ize 2013; `Fast`: plain slabs), and running max/min written `if t > acc { t } else { acc }`, which ignores a NaN
 //! `t` like `f32::max` does (0·∞ when an origin lies on a slab plane). Each lane performs the
 //! scalar test's operations in its order, so each lane's verdict is the scalar test's.
 
@@ -8,7 +8,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use super::LaneMask;
-use crate::geometry::aabb::FAR_SCALE;
+use crate::geometry::RayTests;
 
 /// `L` rays as the slab test reads them, `[axis][lane]`: origins, inverse directions and
 /// direction sign bits (1 where set, −0.0 included), and each lane's segment `[tmin, tmax]`.
@@ -25,7 +25,7 @@ impl<const L: usize> SlabRays<'_, L> {
     /// Each lane's entry and exit distance of the box `[lo, hi]` within its segment: the lane
     /// meets the box when entry ≤ exit.
     #[inline(always)]
-    fn enter_exit(&self, lo: [f32; 3], hi: [f32; 3]) -> ([f32; L], [f32; L]) {
+    fn enter_exit<R: RayTests>(&self, lo: [f32; 3], hi: [f32; 3]) -> ([f32; L], [f32; L]) {
         let (mut enter, mut exit) = ([0.0f32; L], [0.0f32; L]);
         // Lanes outside, axes inside: each lane's running entry and exit are values, stored
         // once. Updated in place axis by axis, they compiled to masked stores where the arrays
@@ -41,7 +41,7 @@ impl<const L: usize> SlabRays<'_, L> {
                 } else {
                     (t_lo, t_hi)
                 };
-                let far = far * FAR_SCALE;
+                let far = far * R::FAR_SCALE;
                 en = if near > en { near } else { en };
                 ex = if far < ex { far } else { ex };
             }
@@ -53,8 +53,8 @@ impl<const L: usize> SlabRays<'_, L> {
 
     /// The lanes whose segment meets the box `[lo, hi]`.
     #[inline(always)]
-    pub fn hits(&self, lo: [f32; 3], hi: [f32; 3]) -> LaneMask<L> {
-        let (enter, exit) = self.enter_exit(lo, hi);
+    pub fn hits<R: RayTests>(&self, lo: [f32; 3], hi: [f32; 3]) -> LaneMask<L> {
+        let (enter, exit) = self.enter_exit::<R>(lo, hi);
         LaneMask::from_fn(|l| enter[l] <= exit[l])
     }
 
@@ -62,8 +62,8 @@ impl<const L: usize> SlabRays<'_, L> {
     /// lanes rather than through a mask (the packet traversal's hottest test asks only this; the
     /// mask form cost it 25–40% at 1 thread).
     #[inline(always)]
-    pub fn any_hit(&self, lo: [f32; 3], hi: [f32; 3]) -> bool {
-        let (enter, exit) = self.enter_exit(lo, hi);
+    pub fn any_hit<R: RayTests>(&self, lo: [f32; 3], hi: [f32; 3]) -> bool {
+        let (enter, exit) = self.enter_exit::<R>(lo, hi);
         let mut any = 0u32;
         for l in 0..L {
             any |= (enter[l] <= exit[l]) as u32;

@@ -12,7 +12,8 @@
 //!
 //! The walk runs in the grid's local frame (`Grid::local`): the ray's origin is translated once,
 //! rounding by at most 2⁻²⁴ of its local coordinates, far inside the slack `cell_at` leaves
-//! (2⁻²⁰ of them). Its triangle tests use the world ray, so its hits are every tracer's.
+//! (2⁻²⁰ of them). Its triangle tests use the world ray, so its hits are every tracer's:
+//! watertight, or with `robust = false` Möller–Trumbore (`geometry::robustness`).
 //!
 //! Counters: the grid has no depth, so everything is counted at depth 0 — `node(0)` once per cell
 //! visited (an empty macrocell skipped at once counts as the one cell where the ray entered it),
@@ -25,15 +26,18 @@
 //! triangle could only give the hit already recorded — and catches the common case of a triangle
 //! spanning the consecutive cells a ray walks through.
 
+use std::marker::PhantomData;
 use std::sync::Arc;
 
 use crate::accel::Grid;
-use crate::geometry::{Hit, Ray, WatertightRay};
+use crate::geometry::{Hit, Ray, RayTests, Robust};
 use crate::stats::{Event, Stats};
 use crate::tracers::SingleRayKernel;
 
-pub struct GridDdaTracer {
+/// `R`: the triangle test (`robust`): watertight, or Möller–Trumbore.
+pub struct GridDdaTracer<R: RayTests = Robust> {
     grid: Arc<Grid>,
+    tests: PhantomData<R>,
 }
 
 /// A hit is accepted in a cell only if `t <= exit - |exit| · ACCEPT_SLACK`: 2⁻²⁰ relative is
@@ -189,120 +193,127 @@ impl Walk<'_> {
 }
 
 impl GridDdaTracer {
+    /// The robust tracer (watertight triangles).
     pub fn new(grid: Arc<Grid>) -> Self {
-        GridDdaTracer { grid }
+        Self::with_tests(grid)
     }
 }
 
-impl SingleRayKernel for GridDdaTracer {
+impl<R: RayTests> GridDdaTracer<R> {
+    pub fn with_tests(grid: Arc<Grid>) -> Self {
+        GridDdaTracer {
+            grid,
+            tests: PhantomData,
+        }
+    }
+}
+
+impl<R: RayTests> SingleRayKernel for GridDdaTracer<R> {
     #[inline(always)]
     fn trace<S: Stats, const ANY: bool>(&self, ray: &Ray, stats: &mut S) -> Hit {
         if S::ENABLED {
             stats.ray();
         }
-        self.walk::<S, ANY>(ray, stats)
+        walk::<R, S, ANY>(&self.grid, ray, stats)
     }
 }
 
-impl GridDdaTracer {
-    /// `trace` without counting the ray: for tracers that hand single rays to the DDA (`cgt`'s
-    /// lone rays) and have counted them already.
-    #[inline(always)]
-    pub fn walk<S: Stats, const ANY: bool>(&self, ray: &Ray, stats: &mut S) -> Hit {
-        let g = &*self.grid;
-        let mut best = Hit::MISS;
-        if g.cell_tris.is_empty() {
-            return best;
-        }
-        let origin = g.local(ray.origin).to_array();
-        let dir = ray.dir.to_array();
-        let inv_dir = dir.map(|d| 1.0 / d);
-        // Clip to the grid box by slabs. The near/far face is picked by the sign bit, so −0.0 acts
-        // as negative; an origin on a face plane with a zero component gives 0·∞ = NaN, which
-        // f32::max/min ignore (that axis does not restrict the interval).
-        let (mut enter, mut leave) = (ray.tmin, ray.tmax);
-        for a in 0..3 {
-            let (lo, hi) = (g.bounds.min[a], g.bounds.max[a]);
-            let (near, far) = if dir[a].is_sign_negative() {
-                (hi, lo)
-            } else {
-                (lo, hi)
-            };
-            enter = enter.max((near - origin[a]) * inv_dir[a]);
-            leave = leave.min((far - origin[a]) * inv_dir[a]);
-        }
-        // f32::max/min never return NaN unless both sides are NaN, so plain comparisons suffice.
-        if enter > leave || enter == f32::INFINITY {
-            return best;
-        }
-        let mut walk = Walk {
-            grid: g,
-            grid_min: g.bounds.min.to_array(),
-            cell_size: g.cell_size.to_array(),
-            origin,
-            dir,
-            inv_dir,
-            cell: [0; 3],
-            next: [0.0; 3],
+/// `ray` through grid `g` with the triangle tests `R`, without counting the ray: `trace`, and
+/// what tracers that hand single rays to the DDA (`cgt`'s lone rays) run, having counted them.
+#[inline(always)]
+pub fn walk<R: RayTests, S: Stats, const ANY: bool>(g: &Grid, ray: &Ray, stats: &mut S) -> Hit {
+    let mut best = Hit::MISS;
+    if g.cell_tris.is_empty() {
+        return best;
+    }
+    let origin = g.local(ray.origin).to_array();
+    let dir = ray.dir.to_array();
+    let inv_dir = dir.map(|d| 1.0 / d);
+    // Clip to the grid box by slabs. The near/far face is picked by the sign bit, so −0.0 acts
+    // as negative; an origin on a face plane with a zero component gives 0·∞ = NaN, which
+    // f32::max/min ignore (that axis does not restrict the interval).
+    let (mut enter, mut leave) = (ray.tmin, ray.tmax);
+    for a in 0..3 {
+        let (lo, hi) = (g.bounds.min[a], g.bounds.max[a]);
+        let (near, far) = if dir[a].is_sign_negative() {
+            (hi, lo)
+        } else {
+            (lo, hi)
         };
-        for a in 0..3 {
-            walk.cell[a] = walk.cell_at(a, enter);
-            walk.next[a] = walk.exit_crossing(a);
+        enter = enter.max((near - origin[a]) * inv_dir[a]);
+        leave = leave.min((far - origin[a]) * inv_dir[a]);
+    }
+    // f32::max/min never return NaN unless both sides are NaN, so plain comparisons suffice.
+    if enter > leave || enter == f32::INFINITY {
+        return best;
+    }
+    let mut walk = Walk {
+        grid: g,
+        grid_min: g.bounds.min.to_array(),
+        cell_size: g.cell_size.to_array(),
+        origin,
+        dir,
+        inv_dir,
+        cell: [0; 3],
+        next: [0.0; 3],
+    };
+    for a in 0..3 {
+        walk.cell[a] = walk.cell_at(a, enter);
+        walk.next[a] = walk.exit_crossing(a);
+    }
+    let tris = R::triangle_ray(ray.origin, ray.dir);
+    let (tmin, mut tmax) = (ray.tmin, ray.tmax);
+    let mut mailbox = [u32::MAX; MAILBOX];
+    let mut slot = 0;
+    loop {
+        if S::ENABLED {
+            stats.node(0);
         }
-        let tris = WatertightRay::new(ray.origin, ray.dir);
-        let (tmin, mut tmax) = (ray.tmin, ray.tmax);
-        let mut mailbox = [u32::MAX; MAILBOX];
-        let mut slot = 0;
-        loop {
-            if S::ENABLED {
-                stats.node(0);
-            }
-            let c = walk.cell_index();
-            let (first, end) = (g.cell_start[c] as usize, g.cell_start[c + 1] as usize);
-            if first == end {
-                // An empty cell may sit in an empty macrocell: skip all of it at once.
-                let m = g.config.macro_size;
-                let [x, y, z] = walk.cell;
-                if g.macro_is_empty(x / m, y / m, z / m) {
-                    if S::ENABLED {
-                        stats.event(Event::MacrocellsSkipped, 1);
-                    }
-                    match walk.skip_macrocell() {
-                        Some(t) if t < tmax => continue,
-                        _ => return best,
-                    }
-                }
-            }
-            for &id in &g.cell_tris[first..end] {
-                if mailbox.contains(&id) {
-                    if S::ENABLED {
-                        stats.event(Event::MailboxHits, 1);
-                    }
-                    continue;
-                }
-                mailbox[slot] = id;
-                slot = (slot + 1) & (MAILBOX - 1);
+        let c = walk.cell_index();
+        let (first, end) = (g.cell_start[c] as usize, g.cell_start[c + 1] as usize);
+        if first == end {
+            // An empty cell may sit in an empty macrocell: skip all of it at once.
+            let m = g.config.macro_size;
+            let [x, y, z] = walk.cell;
+            if g.macro_is_empty(x / m, y / m, z / m) {
                 if S::ENABLED {
-                    stats.triangle_test(0);
+                    stats.event(Event::MacrocellsSkipped, 1);
                 }
-                if let Some((t, u, v)) = tris.intersect(&g.triangles[id as usize], tmin, tmax) {
-                    best = Hit { t, prim: id, u, v };
-                    if ANY {
-                        return best;
-                    }
-                    tmax = t;
+                match walk.skip_macrocell() {
+                    Some(t) if t < tmax => continue,
+                    _ => return best,
                 }
             }
-            let axis = walk.exit_axis();
-            let exit = walk.next[axis];
-            // Done when the closest hit (or the end of the ray) lies within this cell, or the ray
-            // never leaves it (a zero direction).
-            if tmax <= exit - exit.abs() * ACCEPT_SLACK || exit == f32::INFINITY {
-                return best;
+        }
+        for &id in &g.cell_tris[first..end] {
+            if mailbox.contains(&id) {
+                if S::ENABLED {
+                    stats.event(Event::MailboxHits, 1);
+                }
+                continue;
             }
-            if !walk.step(axis) {
-                return best;
+            mailbox[slot] = id;
+            slot = (slot + 1) & (MAILBOX - 1);
+            if S::ENABLED {
+                stats.triangle_test(0);
             }
+            if let Some((t, u, v)) = R::intersect(&tris, &g.triangles[id as usize], tmin, tmax) {
+                best = Hit { t, prim: id, u, v };
+                if ANY {
+                    return best;
+                }
+                tmax = t;
+            }
+        }
+        let axis = walk.exit_axis();
+        let exit = walk.next[axis];
+        // Done when the closest hit (or the end of the ray) lies within this cell, or the ray
+        // never leaves it (a zero direction).
+        if tmax <= exit - exit.abs() * ACCEPT_SLACK || exit == f32::INFINITY {
+            return best;
+        }
+        if !walk.step(axis) {
+            return best;
         }
     }
 }
@@ -313,7 +324,7 @@ mod tests {
 
     use super::*;
     use crate::accel::{Bvh, BvhConfig, GridConfig};
-    use crate::geometry::{RayBatch, RayKind, Triangle};
+    use crate::geometry::{RayBatch, RayKind, Triangle, WatertightRay};
     use crate::random::SplitMix64;
     use crate::stats::{Counters, NoStats};
     use crate::test_util::Soup;

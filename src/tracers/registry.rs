@@ -55,6 +55,9 @@ pub enum TracerConfig {
         width: wide_single::Width,
         robust: bool,
     },
+    GridDda {
+        robust: bool,
+    },
     /// Every Embree entry point: the coherence hint (`context`).
     Embree(Coherence),
     Cgt(CgtConfig),
@@ -122,18 +125,10 @@ fn plain(_: &Params) -> Result<TracerConfig> {
     Ok(TracerConfig::Plain)
 }
 
+use crate::geometry::robustness::robust_param as robust;
 /// The switch between our robust tests and the fast ones, named and meant as Embree's `robust`
 /// (`geometry::robustness`): accepted by every tracer of ours, default `true`.
-pub const ROBUST: &str = "robust";
-
-/// Our tracers whose kernels take `robust = false` (plain slabs, Möller–Trumbore); the others
-/// run the lane layer's robust tests only and refuse it.
-pub const FAST_TESTS: &[&str] = &["reference", "wide-single"];
-
-/// The `robust` parameter (default `true`).
-fn robust(params: &Params) -> Result<bool> {
-    params.get_or(ROBUST, true)
-}
+pub use crate::geometry::robustness::PARAM as ROBUST;
 
 fn embree_config(params: &Params) -> Result<TracerConfig> {
     Coherence::from_params(params).map(TracerConfig::Embree)
@@ -466,9 +461,20 @@ pub const TRACERS: &[TracerInfo] = &[
         role: Role::Paper,
         accel: AccelKind::Grid,
         params: &[],
-        about: "single rays, uniform grid by 3D-DDA (Amanatides & Woo 1987), empty macrocells skipped; watertight triangles",
-        parse: plain,
-        make: |_, accel| Ok(Box::new(GridDdaTracer::new(accel.grid()?.clone()))),
+        about: "single rays, uniform grid by 3D-DDA (Amanatides & Woo 1987), empty macrocells skipped; watertight triangles (robust = false: Möller–Trumbore)",
+        parse: |params| Ok(TracerConfig::GridDda { robust: robust(params)? }),
+        make: |config, accel| {
+            let grid = accel.grid()?.clone();
+            match *config {
+                TracerConfig::GridDda { robust: true } => {
+                    Ok(Box::new(GridDdaTracer::<Robust>::with_tests(grid)))
+                }
+                TracerConfig::GridDda { robust: false } => {
+                    Ok(Box::new(GridDdaTracer::<Fast>::with_tests(grid)))
+                }
+                _ => Err(other_family(config)),
+            }
+        },
         counts_internals: true,
         motion_blur: false,
         chunk_rays: CHUNK_RAYS,
@@ -478,7 +484,7 @@ pub const TRACERS: &[TracerInfo] = &[
         role: Role::Paper,
         accel: AccelKind::Grid,
         params: CgtConfig::PARAMS,
-        about: "coherent grid traversal (Wald et al. 2006): n×n packets walk the uniform grid slice by slice in their frustum; per-packet mailboxing, SIMD frustum culling, macrocells",
+        about: "coherent grid traversal (Wald et al. 2006): n×n packets walk the uniform grid slice by slice in their frustum; per-packet mailboxing, SIMD frustum culling, macrocells; watertight triangles (robust = false: Möller–Trumbore)",
         parse: |params| CgtConfig::from_params(params).map(TracerConfig::Cgt),
         make: |config, accel| match *config {
             TracerConfig::Cgt(c) => Ok(Box::new(CgtTracer::new(accel.grid()?.clone(), c))),
@@ -493,7 +499,7 @@ pub const TRACERS: &[TracerInfo] = &[
         role: Role::Paper,
         accel: AccelKind::Bvh,
         params: PacketConfig::PARAMS,
-        about: "large ray packets (Overbeck et al. 2008): n×n packets (packet ∈ 2,4,8,16,32) of L-lane SIMD rays (lanes ∈ 4,8,16) through the SAH BVH by masked, ranged, partition or ia (Wald et al. 2007 first hit + interval arithmetic) traversal, front to back by direction signs; frustum culling of boxes and triangles (shared-origin, shared-end-point or general frustum, from the data); exact closest hits (watertight, robust slabs per lane)",
+        about: "large ray packets (Overbeck et al. 2008): n×n packets (packet ∈ 2,4,8,16,32) of L-lane SIMD rays (lanes ∈ 4,8,16) through the SAH BVH by masked, ranged, partition or ia (Wald et al. 2007 first hit + interval arithmetic) traversal, front to back by direction signs; frustum culling of boxes and triangles (shared-origin, shared-end-point or general frustum, from the data); exact closest hits (watertight, robust slabs per lane; robust = false: plain slabs, Möller–Trumbore)",
         parse: |params| {
             let config = PacketConfig::from_params(params)?;
             let width = config.width_from_params(params)?;
@@ -514,7 +520,7 @@ pub const TRACERS: &[TracerInfo] = &[
         role: Role::Paper,
         accel: AccelKind::Bvh,
         params: MftConfig::PARAMS,
-        about: "multi-frusta tracing (Benthin & Wald 2009): light-visibility queries as blocks of shadow frusta (block points, ≤ 64) through the SAH BVH together, rays generated on demand at leaves, box culling for all frusta at once, plane and corner-ray triangle culling, occlusion bits, corner-ray recomputation (cr), frustum shrinking (fs) and leaf ray–box tests (leaf_rays); with primary = frusta, pinhole camera batches as blocks of 4×4-pixel primary frusta, their rays made on demand from the camera grid; other ray batches (and camera rays by default) by 4×4 packets; exact answers (watertight)",
+        about: "multi-frusta tracing (Benthin & Wald 2009): light-visibility queries as blocks of shadow frusta (block points, ≤ 64) through the SAH BVH together, rays generated on demand at leaves, box culling for all frusta at once, plane and corner-ray triangle culling, occlusion bits, corner-ray recomputation (cr), frustum shrinking (fs) and leaf ray–box tests (leaf_rays); with primary = frusta, pinhole camera batches as blocks of 4×4-pixel primary frusta, their rays made on demand from the camera grid; other ray batches (and camera rays by default) by 4×4 packets; exact answers (watertight; robust = false: Möller–Trumbore, plain slabs)",
         parse: |params| MftConfig::from_params(params).map(TracerConfig::Mft),
         make: |config, accel| match *config {
             TracerConfig::Mft(c) => Ok(Box::new(MftTracer::new(accel.tree()?, c))),
@@ -529,7 +535,7 @@ pub const TRACERS: &[TracerInfo] = &[
         role: Role::Paper,
         accel: AccelKind::Bvh,
         params: StreamConfig::PARAMS,
-        about: "stream filtering (Gribble & Ramani 2008): streams of S rays (stream = S or frame) through the SAH BVH; at each node a box filter tests N rays at a time (width ∈ 4,8,12,16,32,64) and partitions the stream in place, the rays that meet the box going on to the leaf or to both children, front to back; exact closest hits (watertight, robust slabs per lane)",
+        about: "stream filtering (Gribble & Ramani 2008): streams of S rays (stream = S or frame) through the SAH BVH; at each node a box filter tests N rays at a time (width ∈ 4,8,12,16,32,64) and partitions the stream in place, the rays that meet the box going on to the leaf or to both children, front to back; exact closest hits (watertight, robust slabs per lane; robust = false: plain slabs, Möller–Trumbore)",
         parse: |params| StreamConfig::from_params(params).map(TracerConfig::Stream),
         make: |config, accel| match *config {
             TracerConfig::Stream(c) => {
@@ -573,13 +579,6 @@ impl TracerInfo {
     /// does not read, and the tracer's own values parsed into its configuration.
     pub fn config(&self, params: &Params) -> Result<TracerConfig> {
         params.check_known(self.name, &self.accepts())?;
-        if self.is_ours() && !FAST_TESTS.contains(&self.name) && !robust(params)? {
-            return Err(Error::usage(format!(
-                "tracer {}: robust = false is not available (its kernels run only the robust tests: conservative slabs, watertight triangles); the tracers with fast tests are {}",
-                self.name,
-                FAST_TESTS.join(", ")
-            )));
-        }
         (self.parse)(params)
     }
 
@@ -837,11 +836,10 @@ mod tests {
         assert!(matches!(wrong, Err(Error::Runtime(_))));
     }
 
-    /// `robust` is ours (default true) and Embree's structure parameter; the tracers whose kernels
-    /// have the fast tests take `false`, the others refuse it naming themselves, and a baseline
-    /// that is not Embree does not know it.
+    /// `robust` is ours (default true) and Embree's structure parameter: every tracer of ours
+    /// takes `false` into its configuration, and a baseline that is not Embree does not know it.
     #[test]
-    fn robust_is_parsed_once_and_refused_where_a_kernel_cannot_honour_it() {
+    fn robust_is_parsed_into_every_tracer_of_ours() {
         let fast = Params::new().with(ROBUST, false);
         let config = |name: &str, params: &Params| TracerInfo::find(name).unwrap().config(params);
         assert_eq!(
@@ -859,18 +857,17 @@ mod tests {
                 robust: false
             }
         );
+        let robust_of = |config: TracerConfig| match config {
+            TracerConfig::Packet { config, .. } => config.robust,
+            TracerConfig::Stream(c) => c.robust,
+            TracerConfig::Cgt(c) => c.robust,
+            TracerConfig::Mft(c) => c.robust,
+            TracerConfig::GridDda { robust } => robust,
+            other => panic!("{other:?}"),
+        };
         for name in ["packet", "stream", "cgt", "mft", "grid-dda"] {
-            assert!(
-                config(name, &Params::new().with(ROBUST, true)).is_ok(),
-                "{name}"
-            );
-            let err = config(name, &fast).unwrap_err();
-            assert!(matches!(err, Error::Usage(_)), "{name}: {err:?}");
-            assert!(
-                err.to_string()
-                    .starts_with(&format!("tracer {name}: robust = false")),
-                "{err}"
-            );
+            assert!(robust_of(config(name, &Params::new()).unwrap()), "{name}");
+            assert!(!robust_of(config(name, &fast).unwrap()), "{name}");
         }
         assert!(config("embree3-1", &fast).is_ok());
         let err = config("obvhs", &fast).unwrap_err();

@@ -7,7 +7,7 @@ use super::setup::Workspace;
 use super::traversal::SliceVisitor;
 use super::{CgtConfig, CULL_MIN_RAYS};
 use crate::accel::Grid;
-use crate::geometry::Hit;
+use crate::geometry::{Hit, RayTests};
 use crate::stats::{Event, Owners, Stats};
 
 /// Something told about every cell a packet visits (`()` for tracing, a list for tests).
@@ -27,19 +27,21 @@ impl CellObserver for Vec<[u32; 3]> {
 }
 
 /// A packet on its walk: decides when its rays are done and tests the triangles of each cell.
-pub(super) struct Packet<'a, const L: usize, S, O, const ANY: bool> {
+pub(super) struct Packet<'a, const L: usize, R: RayTests, S, O, const ANY: bool> {
     pub(super) grid: &'a Grid,
     pub(super) frame: &'a MarchFrame,
     pub(super) frustum: &'a MarchFrustum,
     pub(super) config: &'a CgtConfig,
     pub(super) group: &'a [u32],
-    pub(super) ws: &'a mut Workspace<L>,
+    pub(super) ws: &'a mut Workspace<L, R>,
     pub(super) hits: &'a mut [Hit],
     pub(super) stats: &'a mut S,
     pub(super) observer: &'a mut O,
 }
 
-impl<const L: usize, S: Stats, O: CellObserver, const ANY: bool> Packet<'_, L, S, O, ANY> {
+impl<const L: usize, R: RayTests, S: Stats, O: CellObserver, const ANY: bool>
+    Packet<'_, L, R, S, O, ANY>
+{
     /// The chunk indices of the rays in the lanes (per-ray counters).
     fn lane_rays(&self) -> Vec<u32> {
         let lanes = &self.ws.lanes;
@@ -59,8 +61,8 @@ impl<const L: usize, S: Stats, O: CellObserver, const ANY: bool> Packet<'_, L, S
     }
 }
 
-impl<const L: usize, S: Stats, O: CellObserver, const ANY: bool> SliceVisitor
-    for Packet<'_, L, S, O, ANY>
+impl<const L: usize, R: RayTests, S: Stats, O: CellObserver, const ANY: bool> SliceVisitor
+    for Packet<'_, L, R, S, O, ANY>
 {
     fn begin_slice(&mut self, slice: u32) -> bool {
         // A ray is done when the slab about to be entered starts past its hit or its end

@@ -13,24 +13,33 @@
 //! functions come out exactly zero (where the scalar test recomputes them in f64), is handed to
 //! the scalar `WatertightRay::intersect`, which gives the hit. So every hit is bit for bit the
 //! scalar test's, and the scalar test runs about once per hit.
+//!
+//! With `robust = false` the lanes hold the world origins and the directions instead and run
+//! Möller–Trumbore (`lanes::moller`), whose lanes are the scalar test's bit for bit, so their
+//! hits are final.
+
+use std::marker::PhantomData;
 
 use glam::Vec3;
 
 use crate::geometry::triangle::axis_component;
-use crate::geometry::{Triangle, WatertightRay};
+use crate::geometry::{RayTests, Triangle, WatertightRay};
+use crate::lanes::moller::MollerLanes;
 use crate::lanes::stream::{compact, SoaRays};
 use crate::lanes::watertight::{accept, edge_functions, needs_f64, Permuted};
 use crate::lanes::LaneMask;
 
 /// A packet's active rays, one lane slot each; the vectors' length is a multiple of `L`, and the
 /// slots from `len` on are padding, masked off.
-pub struct LaneRays<const L: usize> {
+pub struct LaneRays<const L: usize, R: RayTests> {
     /// The ray's position in the packet.
     pub ray: Vec<u32>,
-    /// Origin components along the ray's `kx, ky, kz`.
+    /// Origin components along the ray's `kx, ky, kz` (`robust`), or along x, y, z.
     origin: [Vec<f32>; 3],
     axes: [Vec<u32>; 3],
     shear: [Vec<f32>; 3],
+    /// The directions: Möller–Trumbore's (`robust = false`) only.
+    dir: [Vec<f32>; 3],
     pub tmin: Vec<f32>,
     /// Shrinks to the closest hit so far.
     pub tmax: Vec<f32>,
@@ -40,25 +49,29 @@ pub struct LaneRays<const L: usize> {
     len: usize,
     /// The scalar test of each ray, by packet position (decides the lanes' candidates).
     tests: Vec<WatertightRay>,
+    /// The triangle test: watertight (`axes`, `shear`, then `tests`) or Möller–Trumbore (`dir`).
+    tests_of: PhantomData<R>,
 }
 
-impl<const L: usize> Default for LaneRays<L> {
+impl<const L: usize, R: RayTests> Default for LaneRays<L, R> {
     fn default() -> Self {
         LaneRays {
             ray: vec![],
             origin: Default::default(),
             axes: Default::default(),
             shear: Default::default(),
+            dir: Default::default(),
             tmin: vec![],
             tmax: vec![],
             s_limit: vec![],
             len: 0,
             tests: vec![],
+            tests_of: PhantomData,
         }
     }
 }
 
-impl<const L: usize> LaneRays<L> {
+impl<const L: usize, R: RayTests> LaneRays<L, R> {
     pub fn len(&self) -> usize {
         self.len
     }
@@ -82,6 +95,17 @@ impl<const L: usize> LaneRays<L> {
         self.len = n;
         self.pad();
         self.tests.clear();
+        self.tmin[..n].copy_from_slice(tmin);
+        self.tmax[..n].copy_from_slice(tmax);
+        self.s_limit[..n].copy_from_slice(&s_limit[..n]);
+        if !R::ROBUST {
+            for a in 0..3 {
+                self.origin[a][..n].copy_from_slice(&origin[a][..n]);
+                self.dir[a][..n].copy_from_slice(&dir[a][..n]);
+            }
+            self.ray[..n].iter_mut().zip(0..).for_each(|(r, p)| *r = p);
+            return;
+        }
         for p in 0..n {
             let o = [origin[0][p], origin[1][p], origin[2][p]];
             let d = Vec3::new(dir[0][p], dir[1][p], dir[2][p]);
@@ -95,9 +119,6 @@ impl<const L: usize> LaneRays<L> {
                 self.shear[a][p] = shear[a];
             }
         }
-        self.tmin[..n].copy_from_slice(tmin);
-        self.tmax[..n].copy_from_slice(tmax);
-        self.s_limit[..n].copy_from_slice(&s_limit[..n]);
     }
 
     /// Whether some active ray's `s_limit` lies below `s` (branch-free, so it vectorizes).
@@ -121,6 +142,9 @@ impl<const L: usize> LaneRays<L> {
         tri: &Triangle,
         mut on_hit: impl FnMut(&mut Self, usize, f32, f32, f32),
     ) {
+        if !R::ROBUST {
+            return self.intersect_moller(tri, on_hit);
+        }
         let v = tri.v.map(|p| p.to_array());
         for base in (0..self.len).step_by(L) {
             let live = LaneMask::first((self.len - base).min(L));
@@ -131,6 +155,29 @@ impl<const L: usize> LaneRays<L> {
                     self.tmax[slot] = t;
                     on_hit(self, slot, t, u, w);
                 }
+            }
+        }
+    }
+
+    /// `intersect` by Möller–Trumbore: the lanes' verdicts are the scalar test's, so final.
+    #[inline]
+    fn intersect_moller(
+        &mut self,
+        tri: &Triangle,
+        mut on_hit: impl FnMut(&mut Self, usize, f32, f32, f32),
+    ) {
+        let moller = MollerLanes::<L>::broadcast(tri);
+        for base in (0..self.len).step_by(L) {
+            let lanes = |x: &Vec<f32>| -> [f32; L] { x[base..base + L].try_into().unwrap() };
+            let origin = [0, 1, 2].map(|a| lanes(&self.origin[a]));
+            let dir = [0, 1, 2].map(|a| lanes(&self.dir[a]));
+            let (tmin, tmax) = (lanes(&self.tmin), lanes(&self.tmax));
+            let hits = moller.intersect(&origin, &dir, &tmin, &tmax);
+            let live = LaneMask::first((self.len - base).min(L));
+            for lane in (LaneMask::from_bools(&hits.hit) & live).iter() {
+                let slot = base + lane;
+                self.tmax[slot] = hits.t[lane];
+                on_hit(self, slot, hits.t[lane], hits.u[lane], hits.v[lane]);
             }
         }
     }
@@ -173,6 +220,7 @@ impl<const L: usize> LaneRays<L> {
             self.origin[a].resize(n, 0.0);
             self.axes[a].resize(n, a as u32);
             self.shear[a].resize(n, 0.0);
+            self.dir[a].resize(n, 0.0);
         }
         self.tmin.resize(n, 0.0);
         self.tmax.resize(n, 0.0);
@@ -189,13 +237,14 @@ impl<const L: usize> LaneRays<L> {
     }
 }
 
-impl<const L: usize> SoaRays for LaneRays<L> {
+impl<const L: usize, R: RayTests> SoaRays for LaneRays<L, R> {
     fn move_ray(&mut self, from: usize, to: usize) {
         self.ray[to] = self.ray[from];
         for a in 0..3 {
             self.origin[a][to] = self.origin[a][from];
             self.axes[a][to] = self.axes[a][from];
             self.shear[a][to] = self.shear[a][from];
+            self.dir[a][to] = self.dir[a][from];
         }
         self.tmin[to] = self.tmin[from];
         self.tmax[to] = self.tmax[from];
@@ -208,6 +257,7 @@ impl<const L: usize> SoaRays for LaneRays<L> {
             self.origin[axis].swap(a, b);
             self.axes[axis].swap(a, b);
             self.shear[axis].swap(a, b);
+            self.dir[axis].swap(a, b);
         }
         self.tmin.swap(a, b);
         self.tmax.swap(a, b);
@@ -218,11 +268,13 @@ impl<const L: usize> SoaRays for LaneRays<L> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::geometry::{Fast, Robust};
     use crate::random::SplitMix64;
 
-    /// Every lane width finds exactly the scalar test's hits, including rays of mixed dominant
-    /// axes in one group, edge and vertex hits (exactly zero edge functions) and partial groups.
-    fn agrees_with_scalar<const L: usize>() {
+    /// Every lane width finds exactly the scalar test's hits (`R`: watertight or
+    /// Möller–Trumbore), including rays of mixed dominant axes in one group, edge and vertex hits
+    /// (exactly zero edge functions) and partial groups.
+    fn agrees_with_scalar<R: RayTests, const L: usize>() {
         let mut rng = SplitMix64::new(5);
         let tris: Vec<Triangle> = (0..200)
             .map(|i| {
@@ -257,11 +309,9 @@ mod tests {
                     }
                 })
                 .collect();
-            let scalar: Vec<WatertightRay> = rays
-                .iter()
-                .map(|&(o, d)| WatertightRay::new(o, d))
-                .collect();
-            let mut lanes = LaneRays::<L>::default();
+            let scalar: Vec<R::TriangleRay> =
+                rays.iter().map(|&(o, d)| R::triangle_ray(o, d)).collect();
+            let mut lanes = LaneRays::<L, R>::default();
             let columns = |f: fn(&(Vec3, Vec3)) -> Vec3| {
                 [0, 1, 2].map(|a| rays.iter().map(|r| f(r)[a]).collect::<Vec<f32>>())
             };
@@ -273,7 +323,7 @@ mod tests {
             for (id, tri) in tris.iter().enumerate() {
                 for (p, s) in scalar.iter().enumerate() {
                     let tmax = expected[p].map_or(f32::INFINITY, |h| h.1);
-                    if let Some((t, u, v)) = s.intersect(tri, 0.0, tmax) {
+                    if let Some((t, u, v)) = R::intersect(s, tri, 0.0, tmax) {
                         expected[p] = Some((id as u32, t, u, v));
                     }
                 }
@@ -289,14 +339,17 @@ mod tests {
 
     #[test]
     fn lanes_find_exactly_the_scalar_hits() {
-        agrees_with_scalar::<4>();
-        agrees_with_scalar::<8>();
-        agrees_with_scalar::<16>();
+        agrees_with_scalar::<Robust, 4>();
+        agrees_with_scalar::<Robust, 8>();
+        agrees_with_scalar::<Robust, 16>();
+        agrees_with_scalar::<Fast, 4>();
+        agrees_with_scalar::<Fast, 8>();
+        agrees_with_scalar::<Fast, 16>();
     }
 
     #[test]
     fn retain_keeps_the_matching_rays() {
-        let mut lanes = LaneRays::<4>::default();
+        let mut lanes = LaneRays::<4, Robust>::default();
         let column = |x: f32| vec![x; 6];
         let (origin, dir) = (
             [column(0.0), column(0.0), column(0.0)],

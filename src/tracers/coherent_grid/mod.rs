@@ -53,7 +53,8 @@
 //!   here; coherent primary and shadow packets never do.
 //! - **SIMD (§2.3).** The active rays of a packet live in SoA lanes (`lanes`), and each triangle
 //!   is tested against `lanes` = L of them at a time (4, 8 or 16: the lane layer's width), with
-//!   hits bit for bit those of the scalar watertight test.
+//!   hits bit for bit those of the scalar watertight test (with `robust = false`, of
+//!   Möller–Trumbore).
 //!
 //! Counters: `ray` per ray; `node(0)` per grid cell visited (per packet, and per cell a lone
 //! ray's DDA visits); `triangle_test(0)` per ray–triangle test (one per active ray of a packet for
@@ -79,10 +80,10 @@ use std::sync::Arc;
 
 use crate::accel::Grid;
 use crate::error::{Error, Result};
-use crate::geometry::{Hit, Rays};
+use crate::geometry::robustness::robust_param;
+use crate::geometry::{Fast, Hit, RayTests, Rays, Robust};
 use crate::lanes::{with_lanes, WIDTHS};
 use crate::stats::{NoStats, Stats};
-use crate::tracers::grid_dda::GridDdaTracer;
 use crate::tracers::{Kernel, Params};
 
 pub use cell::CellObserver;
@@ -98,6 +99,9 @@ pub struct CgtConfig {
     pub mailbox: bool,
     pub cull: bool,
     pub macrocells: bool,
+    /// The triangle tests every lane runs (`robust`; `geometry::robustness`): watertight, or
+    /// Möller–Trumbore.
+    pub robust: bool,
 }
 
 impl Default for CgtConfig {
@@ -109,6 +113,7 @@ impl Default for CgtConfig {
             mailbox: true,
             cull: true,
             macrocells: true,
+            robust: true,
         }
     }
 }
@@ -127,6 +132,7 @@ impl CgtConfig {
             mailbox: p.get_or("mailbox", d.mailbox)?,
             cull: p.get_or("cull", d.cull)?,
             macrocells: p.get_or("macrocells", d.macrocells)?,
+            robust: robust_param(p)?,
         };
         if !Self::PACKET_SIDES.contains(&c.packet) {
             return Err(Error::usage(format!(
@@ -160,8 +166,6 @@ pub struct CgtTracer {
     config: CgtConfig,
     /// Rounding scale of the local → grid transform (see `frustum`).
     scale: f32,
-    /// Lone rays (packets split down to one ray) take the single-ray 3D-DDA.
-    dda: GridDdaTracer,
 }
 
 impl CgtTracer {
@@ -172,7 +176,6 @@ impl CgtTracer {
         let res = grid.res.iter().copied().max().unwrap_or(1) as f32;
         let scale = res.max(world * grid.inv_cell_size.max_element());
         CgtTracer {
-            dda: GridDdaTracer::new(grid.clone()),
             grid,
             config,
             scale,
@@ -196,12 +199,15 @@ impl CgtTracer {
         stats: &mut S,
         observer: &mut O,
     ) {
-        with_lanes!(self.config.lanes, L => {
-            self.trace_lanes::<L, S, O, ANY>(rays, hits, stats, observer)
+        // The triangle tests are a type parameter of the whole walk, so each `robust` value is
+        // built with only its own tests inline.
+        with_lanes!(self.config.lanes, L => match self.config.robust {
+            true => self.trace_lanes::<L, Robust, S, O, ANY>(rays, hits, stats, observer),
+            false => self.trace_lanes::<L, Fast, S, O, ANY>(rays, hits, stats, observer),
         })
     }
 
-    fn trace_lanes<const L: usize, S: Stats, O: CellObserver, const ANY: bool>(
+    fn trace_lanes<const L: usize, R: RayTests, S: Stats, O: CellObserver, const ANY: bool>(
         &self,
         rays: Rays<'_>,
         hits: &mut [Hit],
@@ -209,7 +215,7 @@ impl CgtTracer {
         observer: &mut O,
     ) {
         hits.fill(Hit::MISS);
-        let mut ws = Workspace::<L>::default();
+        let mut ws = Workspace::<L, R>::default();
         let size = (self.config.packet * self.config.packet) as usize;
         for packet in rays.packets(size) {
             if S::ENABLED {
@@ -220,7 +226,7 @@ impl CgtTracer {
             self.usable_rays(rays, packet, &mut ws);
             if !ws.group.is_empty() {
                 let mut group = std::mem::take(&mut ws.group);
-                self.split::<L, S, O, ANY>(rays, &mut group, &mut ws, hits, stats, observer);
+                self.split::<L, R, S, O, ANY>(rays, &mut group, &mut ws, hits, stats, observer);
                 ws.group = group;
             }
         }

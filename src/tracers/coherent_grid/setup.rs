@@ -12,12 +12,13 @@ use super::lanes::LaneRays;
 use super::mailbox::Mailbox;
 use super::traversal::walk;
 use super::{CgtTracer, MAX_ORIGIN_SPREAD, MAX_SLOPE_SPREAD};
-use crate::geometry::{Hit, RayBoxTest, Rays};
+use crate::geometry::{Hit, RayBoxTest, RayTests, Rays};
 use crate::stats::{Event, Stats};
+use crate::tracers::grid_dda;
 
 /// Per-call scratch space, reused by every packet of a chunk.
 #[derive(Default)]
-pub(super) struct Workspace<const L: usize> {
+pub(super) struct Workspace<const L: usize, R: RayTests> {
     /// Chunk indices of the packet being split or traversed.
     pub(super) group: Vec<u32>,
     /// The traversed packet's rays in march coordinates, and per ray its speed along s and its
@@ -29,7 +30,7 @@ pub(super) struct Workspace<const L: usize> {
     /// Per ray of the packet being gathered: whether it can hit anything.
     pub(super) inside: Vec<bool>,
     /// The rays still active, in SIMD lanes.
-    pub(super) lanes: LaneRays<L>,
+    pub(super) lanes: LaneRays<L, R>,
     pub(super) mailbox: Mailbox,
     /// Split keys with chunk indices, for the median split.
     pub(super) keys: Vec<(f32, u32)>,
@@ -39,17 +40,17 @@ impl CgtTracer {
     /// Traverses the packet `group` along the dominant axis of its first ray if all its rays
     /// agree in direction along it and are coherent; otherwise splits it (module doc). A lone ray
     /// takes the 3D-DDA.
-    pub(super) fn split<const L: usize, S: Stats, O: CellObserver, const ANY: bool>(
+    pub(super) fn split<const L: usize, R: RayTests, S: Stats, O: CellObserver, const ANY: bool>(
         &self,
         rays: Rays<'_>,
         group: &mut [u32],
-        ws: &mut Workspace<L>,
+        ws: &mut Workspace<L, R>,
         hits: &mut [Hit],
         stats: &mut S,
         observer: &mut O,
     ) {
         if group.len() == 1 {
-            self.trace_alone::<S, ANY>(rays, group, hits, stats);
+            self.trace_alone::<R, S, ANY>(rays, group, hits, stats);
             return;
         }
         let inv_cell = self.grid.inv_cell_size;
@@ -68,7 +69,7 @@ impl CgtTracer {
                 let c = class(&rest[0]);
                 let n = rest.iter().take_while(|i| class(i) == c).count();
                 let (part, tail) = std::mem::take(&mut rest).split_at_mut(n);
-                self.split::<L, S, O, ANY>(rays, part, ws, hits, stats, observer);
+                self.split::<L, R, S, O, ANY>(rays, part, ws, hits, stats, observer);
                 rest = tail;
             }
             return;
@@ -79,7 +80,7 @@ impl CgtTracer {
             // Halves that would be single rays before they are coherent: the DDA at once.
             let halvings = frustum.halvings(MAX_SLOPE_SPREAD, MAX_ORIGIN_SPREAD);
             if (group.len() as u64) < 2u64 << halvings.min(62) {
-                self.trace_alone::<S, ANY>(rays, group, hits, stats);
+                self.trace_alone::<R, S, ANY>(rays, group, hits, stats);
                 return;
             }
             // §4.7: an incoherent packet would drag a wide frustum through the grid. Halve
@@ -103,15 +104,15 @@ impl CgtTracer {
                 *g = i;
             }
             let (front, back) = group.split_at_mut(half);
-            self.split::<L, S, O, ANY>(rays, front, ws, hits, stats, observer);
-            self.split::<L, S, O, ANY>(rays, back, ws, hits, stats, observer);
+            self.split::<L, R, S, O, ANY>(rays, front, ws, hits, stats, observer);
+            self.split::<L, R, S, O, ANY>(rays, back, ws, hits, stats, observer);
             return;
         }
         if S::ENABLED {
             stats.event(Event::Packets, 1);
         }
         self.load_lanes(ws);
-        let mut packet = Packet::<L, S, O, ANY> {
+        let mut packet = Packet::<L, R, S, O, ANY> {
             grid: &self.grid,
             frame: &frame,
             frustum: &frustum,
@@ -132,7 +133,7 @@ impl CgtTracer {
     }
 
     /// Each ray of `group` alone, by the 3D-DDA (a packet of one for the counters).
-    fn trace_alone<S: Stats, const ANY: bool>(
+    fn trace_alone<R: RayTests, S: Stats, const ANY: bool>(
         &self,
         rays: Rays<'_>,
         group: &[u32],
@@ -144,18 +145,19 @@ impl CgtTracer {
                 stats.event(Event::Packets, 1);
                 stats.charge_ray(i as usize);
             }
-            hits[i as usize] = self.dda.walk::<S, ANY>(&rays.ray(i as usize), stats);
+            let ray = rays.ray(i as usize);
+            hits[i as usize] = grid_dda::walk::<R, S, ANY>(&self.grid, &ray, stats);
         }
     }
 
     /// Sets `ws.group` to the rays of `packet` that can hit anything: well formed (finite, a
     /// non-zero direction, a non-empty interval from tmin ≥ 0) and meeting the grid's box. Branch-free over the packet (`&`, not `&&`), so it
     /// runs in SIMD lanes.
-    pub(super) fn usable_rays<const L: usize>(
+    pub(super) fn usable_rays<const L: usize, R: RayTests>(
         &self,
         rays: Rays<'_>,
         packet: std::ops::Range<usize>,
-        ws: &mut Workspace<L>,
+        ws: &mut Workspace<L, R>,
     ) {
         let bounds = &self.grid.bounds;
         let start = packet.start;
@@ -188,12 +190,12 @@ impl CgtTracer {
 
     /// Fills the workspace's march coordinates for the packet `group`, whose rays all travel
     /// towards +s in `frame`, and returns its frustum.
-    fn march<const L: usize>(
+    fn march<const L: usize, R: RayTests>(
         &self,
         rays: Rays<'_>,
         group: &[u32],
         frame: &MarchFrame,
-        ws: &mut Workspace<L>,
+        ws: &mut Workspace<L, R>,
     ) -> MarchFrustum {
         ws.gathered.gather(rays, group);
         let (grid, g, n) = (&*self.grid, &ws.gathered, group.len());
@@ -262,7 +264,7 @@ impl CgtTracer {
 
     /// Loads the rays of the packet `group` (marched by `march`) into the lanes, all active, and
     /// empties the mailbox.
-    fn load_lanes<const L: usize>(&self, ws: &mut Workspace<L>) {
+    fn load_lanes<const L: usize, R: RayTests>(&self, ws: &mut Workspace<L, R>) {
         let g = &ws.gathered;
         ws.lanes.load(
             &g.origin,

@@ -13,7 +13,7 @@
 use glam::Vec3;
 
 use crate::accel::Bvh;
-use crate::geometry::Ray;
+use crate::geometry::{Ray, RayTests};
 use crate::lanes::vector::{Native, Vector};
 use crate::lanes::SimdRay;
 use crate::stats::{Event, Owners, Stats};
@@ -126,9 +126,9 @@ pub fn sample_ray(
 
 /// Block `first..first + len` of `query`: `occluded` (the block's words) must hold every sample
 /// occluded on entry; the samples found visible are cleared. The frusta walk `tree`, made from
-/// `bvh` (`bvh` itself or a wide tree collapsed from it).
+/// `bvh` (`bvh` itself or a wide tree collapsed from it). `R`: the rays' box and triangle tests.
 #[allow(clippy::too_many_arguments)]
-pub fn trace_block<T: FrustumTree, S: Stats>(
+pub fn trace_block<T: FrustumTree, R: RayTests, S: Stats>(
     bvh: &Bvh,
     tree: &T,
     config: &MftConfig,
@@ -242,7 +242,7 @@ pub fn trace_block<T: FrustumTree, S: Stats>(
                         );
                     }
                     let (lo, hi) = (leaf.bounds.min.to_array(), leaf.bounds.max.to_array());
-                    if !simd.iter().any(|ray| ray.hits_box(lo, hi)) {
+                    if !simd.iter().any(|ray| ray.hits_box::<R>(lo, hi)) {
                         box_missed |= 1 << f;
                         continue;
                     }
@@ -264,7 +264,7 @@ pub fn trace_block<T: FrustumTree, S: Stats>(
                             LANES as u32,
                         );
                     }
-                    if ray.intersect::<true>(tri, 0) > 0 {
+                    if ray.intersect::<R, true>(tri, 0) > 0 {
                         *word &= !((lanes & !ray.live_mask()) << shift);
                         newly_occluded |= 1 << f;
                     }

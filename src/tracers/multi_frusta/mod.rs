@@ -32,7 +32,7 @@
 //!   boxes per frustum (a child is culled only at its wide node: sibenik 6.3 box tests per ray
 //!   against 5.1) and was slower on sibenik in a same-run A/B on a loaded machine.
 //! - **Exact answers**: the sample rays meet triangles through the reference tracer's watertight
-//!   test, and all culling is conservative with rounding margins, so the bits equal the reference
+//!   test (with `robust = false` its Möller–Trumbore, and plain slabs), and all culling is conservative with rounding margins, so the bits equal the reference
 //!   tracer's on the same rays.
 //! - **Primary frusta** (`primary` = frusta, the paper's P-Frusta): closest hits of a batch of pinhole
 //!   camera rays (one carrying its `CameraGrid`) as blocks of `block` frusta of 4×4 rays each,
@@ -73,7 +73,8 @@ use std::sync::Arc;
 
 use crate::accel::{Bvh, BvhOfWidth, WideNodes};
 use crate::error::{Error, Result};
-use crate::geometry::{Hit, Rays};
+use crate::geometry::robustness::robust_param;
+use crate::geometry::{CameraGrid, Fast, Hit, RayTests, Rays, Robust};
 use crate::stats::Stats;
 use crate::tracers::packet::{PacketConfig, PacketTracer, Traversal};
 use crate::tracers::{Kernel, Params, VisibilityQuery};
@@ -121,6 +122,8 @@ pub struct MftConfig {
     /// Children per node of the tree the frusta walk (`WIDTHS`): 2 is the binary tree (the
     /// paper's), 4 and 8 a wide tree collapsed from it (`wide_walk`).
     pub width: usize,
+    /// The tests every lane runs (`robust`, set by the registry; `geometry::robustness`).
+    pub robust: bool,
 }
 
 impl Default for MftConfig {
@@ -135,6 +138,7 @@ impl Default for MftConfig {
             primary: PrimaryRays::Packets,
             backface: false,
             width: 2,
+            robust: true,
         }
     }
 }
@@ -161,6 +165,7 @@ impl MftConfig {
             primary: p.get_or("primary", d.primary)?,
             backface: p.get_or("backface", d.backface)?,
             width: p.get_or("width", d.width)?,
+            robust: robust_param(p)?,
         };
         if !Self::WIDTHS.contains(&c.width) {
             return Err(Error::usage(format!(
@@ -205,6 +210,7 @@ impl MftTracer {
                 lanes: 16,
                 traversal: Traversal::Ranged,
                 frustum: true,
+                robust: config.robust,
             },
         );
         MftTracer {
@@ -235,6 +241,26 @@ impl MftTracer {
         Margins::new(scale)
     }
 
+    /// Camera rays as primary frusta through the configured tree, with the tests `R`.
+    fn primary_frusta<R: RayTests, S: Stats>(
+        &self,
+        grid: &CameraGrid,
+        rays: Rays<'_>,
+        hits: &mut [Hit],
+        stats: &mut S,
+    ) {
+        let (bvh, config) = (&*self.bvh, &self.config);
+        match self.tree.wide() {
+            None => primary::intersect::<_, R, S>(bvh, bvh, grid, config, rays, hits, stats),
+            Some(WideNodes::Four(w)) => {
+                primary::intersect::<_, R, S>(bvh, w, grid, config, rays, hits, stats)
+            }
+            Some(WideNodes::Eight(w)) => {
+                primary::intersect::<_, R, S>(bvh, w, grid, config, rays, hits, stats)
+            }
+        }
+    }
+
     /// `light_visibility_with` with the frusta walking `tree` (`self.bvh` or a wide tree from it).
     fn visibility_over<T: FrustumTree, S: Stats>(
         &self,
@@ -259,19 +285,15 @@ impl MftTracer {
                         .collect(),
                     false => Vec::new(),
                 };
-                stats.relabelled(&points, |stats| {
-                    block::trace_block(
-                        &self.bvh,
-                        tree,
-                        &self.config,
-                        &margins,
-                        &query,
-                        first,
-                        len,
-                        &mut occluded[first * words..(first + len) * words],
-                        scratch,
-                        stats,
-                    )
+                let occluded = &mut occluded[first * words..(first + len) * words];
+                let (bvh, config) = (&*self.bvh, &self.config);
+                stats.relabelled(&points, |stats| match config.robust {
+                    true => block::trace_block::<T, Robust, S>(
+                        bvh, tree, config, &margins, &query, first, len, occluded, scratch, stats,
+                    ),
+                    false => block::trace_block::<T, Fast, S>(
+                        bvh, tree, config, &margins, &query, first, len, occluded, scratch, stats,
+                    ),
                 });
             }
         })
@@ -292,15 +314,9 @@ impl Kernel for MftTracer {
             Some(grid)
                 if self.config.primary == PrimaryRays::Frusta && self.bvh.motion_end.is_none() =>
             {
-                let (bvh, config) = (&*self.bvh, &self.config);
-                match self.tree.wide() {
-                    None => primary::intersect(bvh, bvh, grid, config, rays, hits, stats),
-                    Some(WideNodes::Four(w)) => {
-                        primary::intersect(bvh, w, grid, config, rays, hits, stats)
-                    }
-                    Some(WideNodes::Eight(w)) => {
-                        primary::intersect(bvh, w, grid, config, rays, hits, stats)
-                    }
+                match self.config.robust {
+                    true => self.primary_frusta::<Robust, S>(grid, rays, hits, stats),
+                    false => self.primary_frusta::<Fast, S>(grid, rays, hits, stats),
                 }
             }
             _ => self.packets.intersect_with(rays, hits, stats),

@@ -34,7 +34,7 @@ use std::cell::RefCell;
 use std::ops::Range;
 
 use crate::accel::Bvh;
-use crate::geometry::{CameraGrid, Hit, Rays};
+use crate::geometry::{CameraGrid, Hit, RayTests, Rays};
 use crate::lanes::SimdRay;
 use crate::stats::{Event, Owners, Stats};
 use crate::tracers::multi_frusta::descend::{keep_counted, next_leaf, start_at_root, FrustumTree};
@@ -78,7 +78,7 @@ thread_local! {
 /// `hits[i]` becomes the closest hit of camera ray `i` of `rays` (`grid`'s rays through the
 /// centres of `rays.pixel`), `config.block` frusta at a time, walking `tree` (`bvh` or a wide tree
 /// collapsed from it).
-pub fn intersect<T: FrustumTree, S: Stats>(
+pub fn intersect<T: FrustumTree, R: RayTests, S: Stats>(
     bvh: &Bvh,
     tree: &T,
     grid: &CameraGrid,
@@ -141,7 +141,7 @@ pub fn intersect<T: FrustumTree, S: Stats>(
                 false => Vec::new(),
             };
             stats.relabelled(&pixels, |stats| {
-                trace_block(&frame, group, rays, hits, scratch, stats)
+                trace_block::<T, R, S>(&frame, group, rays, hits, scratch, stats)
             });
         }
         scratch.packets = packets;
@@ -174,7 +174,7 @@ struct Frame<'a, T> {
 
 /// The frusta of `group` (ray ranges of `rays`, ≤ `MAX_FRUSTA` of them) through the BVH; their
 /// hits into `hits`, which holds misses on entry.
-fn trace_block<T: FrustumTree, S: Stats>(
+fn trace_block<T: FrustumTree, R: RayTests, S: Stats>(
     frame: &Frame<'_, T>,
     group: &[Range<usize>],
     rays: Rays<'_>,
@@ -269,7 +269,7 @@ fn trace_block<T: FrustumTree, S: Stats>(
                         stats.aabb_tests(leaf.depth, frustum_rays, FRUSTUM_RAYS as u32);
                     }
                     let (lo, hi) = (leaf.bounds.min.to_array(), leaf.bounds.max.to_array());
-                    if !simd[f].hits_box(lo, hi) {
+                    if !simd[f].hits_box::<R>(lo, hi) {
                         box_missed |= 1 << f;
                         continue;
                     }
@@ -277,7 +277,7 @@ fn trace_block<T: FrustumTree, S: Stats>(
                 if S::ENABLED {
                     stats.triangle_tests(leaf.depth, frustum_rays, FRUSTUM_RAYS as u32);
                 }
-                if simd[f].intersect::<false>(tri, prim) > 0 {
+                if simd[f].intersect::<R, false>(tri, prim) > 0 {
                     hit_frusta |= 1 << f;
                 }
             }

@@ -231,7 +231,7 @@ fn on_demand_rays_are_the_batchs_rays_bit_for_bit_and_made_once() {
             &mut on_demand,
             &mut NoStats,
         );
-        loaded.load(&rays, packet.start, packet.len());
+        loaded.load::<Robust>(&rays, packet.start, packet.len());
         // `generate` gives padding lanes a live lane's frame, as `set_common_axes` does.
         loaded.set_common_axes();
         assert_eq!(lanes(&on_demand), lanes(&loaded), "packet {packet:?}");

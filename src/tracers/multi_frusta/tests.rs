@@ -472,6 +472,7 @@ fn blocks_out_of_range_are_refused() {
             primary: PrimaryRays::Packets,
             backface: true,
             width: 2,
+            robust: true,
         }
     );
     assert!(MftConfig::from_params(&Params::new().with("cr", "maybe")).is_err());

@@ -8,6 +8,7 @@
 //! With `frustum` on, the frustum also culls boxes after the interval test, and triangles at the
 //! leaves. Children front to back by the packet's summed direction (`order`).
 
+use crate::geometry::RayTests;
 use crate::stats::{Event, Stats};
 
 use super::ranged::first_hit;
@@ -20,8 +21,8 @@ impl RaySelection for FirstHit {
     /// The first SIMD ray from `ia` on that meets the box of `node`; when ray `ia` misses, the
     /// interval bounds, then the frustum, may cull the box for the whole packet.
     #[inline(always)]
-    fn enter<const L: usize, S: Stats>(
-        packet: &mut Packet<L>,
+    fn enter<const L: usize, R: RayTests, S: Stats>(
+        packet: &mut Packet<L, R>,
         tree: &Tree,
         node: u32,
         ia: u32,
@@ -46,8 +47,8 @@ impl RaySelection for FirstHit {
         })
     }
 
-    fn at_leaf<const L: usize, S: Stats>(
-        packet: &Packet<L>,
+    fn at_leaf<const L: usize, R: RayTests, S: Stats>(
+        packet: &Packet<L, R>,
         _: &Tree,
         _: u32,
         ia: u32,

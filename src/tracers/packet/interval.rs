@@ -214,7 +214,7 @@ impl IntervalPacket {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::geometry::{Aabb, Ray, RayBatch, RayBoxTest, RayKind};
+    use crate::geometry::{Aabb, Ray, RayBatch, RayBoxTest, RayKind, Robust};
     use crate::random::SplitMix64;
 
     /// `n` rays about one random origin and direction (origins ±0.3, directions ±`spread`
@@ -271,7 +271,7 @@ mod tests {
             let rays = b.view();
             let mut groups = vec![SimdRay::<16>::default(); n.div_ceil(16)];
             for (g, group) in groups.iter_mut().enumerate() {
-                group.load(&rays, g * 16, 16.min(n - g * 16));
+                group.load::<Robust>(&rays, g * 16, 16.min(n - g * 16));
             }
             assert_eq!(
                 IntervalPacket::from_lanes(&groups),

@@ -6,6 +6,7 @@
 //! The frustum test of line 8 comes first, before any ray test. Children front to back as in
 //! Ranged (`order`).
 
+use crate::geometry::RayTests;
 use crate::stats::Stats;
 
 use super::walk::RaySelection;
@@ -16,8 +17,8 @@ pub struct Masked;
 
 impl RaySelection for Masked {
     #[inline(always)]
-    fn enter<const L: usize, S: Stats>(
-        packet: &mut Packet<L>,
+    fn enter<const L: usize, R: RayTests, S: Stats>(
+        packet: &mut Packet<L, R>,
         tree: &Tree,
         node: u32,
         _: u32,
@@ -39,8 +40,8 @@ impl RaySelection for Masked {
         (!packet.alive.is_empty()).then_some(0)
     }
 
-    fn at_leaf<const L: usize, S: Stats>(
-        _: &Packet<L>,
+    fn at_leaf<const L: usize, R: RayTests, S: Stats>(
+        _: &Packet<L, R>,
         _: &Tree,
         _: u32,
         _: u32,

@@ -17,7 +17,9 @@
 //!   the packet's farthest current closest hit.
 //! - **Exact closest hits**: every lane runs the reference tracer's slab and watertight tests
 //!   bit for bit (`simd`), and culling is conservative, so each ray gets the reference's closest
-//!   hit (up to the order in which triangles at exactly equal distance are met).
+//!   hit (up to the order in which triangles at exactly equal distance are met). With `robust =
+//!   false` the lanes run plain slabs and Möller–Trumbore instead, bit for bit the reference's
+//!   with `robust = false` (`geometry::robustness`).
 //! - **Motion blur**: on a moving BVH (`Bvh::build_moving`, swept boxes) each lane meets a leaf's
 //!   triangle where it is at that lane's time (`SimdRay::intersect_moving`: the reference tracer's
 //!   interpolation, so hits stay bit-exact); frustum culling then skips triangles (a static
@@ -64,7 +66,8 @@ use std::sync::Arc;
 use crate::accel::{Bvh, BvhOfWidth, WideNodes};
 use crate::error::{Error, Result};
 use crate::geometry::ray::prefetch;
-use crate::geometry::{Hit, Rays};
+use crate::geometry::robustness::robust_param;
+use crate::geometry::{Fast, Hit, RayTests, Rays, Robust};
 use crate::lanes::with_lanes;
 use crate::stats::{Event, Stats};
 use crate::tracers::{Kernel, Params};
@@ -123,6 +126,9 @@ pub struct PacketConfig {
     pub lanes: usize,
     pub traversal: Traversal,
     pub frustum: bool,
+    /// The tests every lane runs (`robust`; `geometry::robustness`): conservative slabs and
+    /// watertight triangles, or plain slabs and Möller–Trumbore.
+    pub robust: bool,
 }
 
 impl Default for PacketConfig {
@@ -132,6 +138,7 @@ impl Default for PacketConfig {
             lanes: 16,
             traversal: Traversal::Ranged,
             frustum: true,
+            robust: true,
         }
     }
 }
@@ -165,6 +172,7 @@ impl PacketConfig {
             lanes: p.get_or("lanes", d.lanes)?,
             traversal: p.get_or("traversal", d.traversal)?,
             frustum: p.get_or("frustum", d.frustum)?,
+            robust: robust_param(p)?,
         };
         if !Self::PACKET_SIDES.contains(&c.packet) || !Self::LANES.contains(&c.lanes) {
             return Err(Error::usage(format!(
@@ -236,12 +244,13 @@ impl PacketTracer {
         self.config
     }
 
-    /// Traces `rays` packet by packet, handing each packet's results to `out(first ray, hits)`.
-    fn run<const L: usize, S: Stats, const ANY: bool>(
+    /// Traces `rays` packet by packet with the tests `R`, handing each packet's results to
+    /// `out(first ray, hits)`.
+    fn run<const L: usize, R: RayTests, S: Stats, const ANY: bool>(
         &self,
         rays: Rays<'_>,
         stats: &mut S,
-        mut out: impl FnMut(usize, &Packet<L>),
+        mut out: impl FnMut(usize, &Packet<L, R>),
     ) {
         let size = self.config.packet * self.config.packet;
         if S::ENABLED {
@@ -255,7 +264,7 @@ impl PacketTracer {
             order: &self.order,
         };
         let traversal = self.config.traversal;
-        let mut packet = Packet::<L>::with_capacity(size);
+        let mut packet = Packet::<L, R>::with_capacity(size);
         let mut wide_stack = WideStack::default();
         let mut packets = rays.packets(size).peekable();
         while let Some(range) = packets.next() {
@@ -271,26 +280,38 @@ impl PacketTracer {
             packet.load(rays.slice(range), &tree, self.config.frustum, interval);
             packet.first = first;
             match (self.nodes.wide(), traversal) {
-                (Some(WideNodes::Four(wide)), _) => {
-                    traverse_wide::<4, L, S, ANY>(&mut packet, &tree, wide, &mut wide_stack, stats)
-                }
-                (Some(WideNodes::Eight(wide)), _) => {
-                    traverse_wide::<8, L, S, ANY>(&mut packet, &tree, wide, &mut wide_stack, stats)
-                }
+                (Some(WideNodes::Four(wide)), _) => traverse_wide::<4, L, R, S, ANY>(
+                    &mut packet,
+                    &tree,
+                    wide,
+                    &mut wide_stack,
+                    stats,
+                ),
+                (Some(WideNodes::Eight(wide)), _) => traverse_wide::<8, L, R, S, ANY>(
+                    &mut packet,
+                    &tree,
+                    wide,
+                    &mut wide_stack,
+                    stats,
+                ),
                 (None, traversal) => match traversal {
-                    Traversal::Masked => traverse::<Masked, L, S, ANY>(&mut packet, &tree, stats),
-                    Traversal::Ranged => traverse::<Ranged, L, S, ANY>(&mut packet, &tree, stats),
-                    Traversal::Partition => {
-                        traverse::<Partition, L, S, ANY>(&mut packet, &tree, stats)
+                    Traversal::Masked => {
+                        traverse::<Masked, L, R, S, ANY>(&mut packet, &tree, stats)
                     }
-                    Traversal::Ia => traverse::<FirstHit, L, S, ANY>(&mut packet, &tree, stats),
+                    Traversal::Ranged => {
+                        traverse::<Ranged, L, R, S, ANY>(&mut packet, &tree, stats)
+                    }
+                    Traversal::Partition => {
+                        traverse::<Partition, L, R, S, ANY>(&mut packet, &tree, stats)
+                    }
+                    Traversal::Ia => traverse::<FirstHit, L, R, S, ANY>(&mut packet, &tree, stats),
                 },
             }
             out(first, &packet);
         }
     }
 
-    fn intersect_lanes<const L: usize, S: Stats>(
+    fn intersect_lanes<const L: usize, R: RayTests, S: Stats>(
         &self,
         rays: Rays<'_>,
         hits: &mut [Hit],
@@ -300,7 +321,7 @@ impl PacketTracer {
         if self.bvh.is_empty() {
             hits.fill(Hit::MISS);
         }
-        self.run::<L, S, false>(rays, stats, |first, packet| {
+        self.run::<L, R, S, false>(rays, stats, |first, packet| {
             packet.store_hits(&mut hits[first..]);
             // The next packet's slots, cached by the time it has been traced.
             let next = first + packet.rays;
@@ -308,7 +329,7 @@ impl PacketTracer {
         });
     }
 
-    fn occluded_lanes<const L: usize, S: Stats>(
+    fn occluded_lanes<const L: usize, R: RayTests, S: Stats>(
         &self,
         rays: Rays<'_>,
         occluded: &mut [bool],
@@ -317,7 +338,7 @@ impl PacketTracer {
         if self.bvh.is_empty() {
             occluded.fill(false);
         }
-        self.run::<L, S, true>(rays, stats, |first, packet| {
+        self.run::<L, R, S, true>(rays, stats, |first, packet| {
             packet.store_occluded(&mut occluded[first..]);
         });
     }
@@ -325,10 +346,19 @@ impl PacketTracer {
 
 impl Kernel for PacketTracer {
     fn intersect_with<S: Stats>(&self, rays: Rays<'_>, hits: &mut [Hit], stats: &mut S) {
-        with_lanes!(self.config.lanes, L => self.intersect_lanes::<L, S>(rays, hits, stats))
+        // The tests are a type parameter of every traversal, so each is built once per `robust`
+        // value with only its own tests inline (a value branched on at each test cost the robust
+        // camera rays 25% at 512²).
+        with_lanes!(self.config.lanes, L => match self.config.robust {
+            true => self.intersect_lanes::<L, Robust, S>(rays, hits, stats),
+            false => self.intersect_lanes::<L, Fast, S>(rays, hits, stats),
+        })
     }
 
     fn occluded_with<S: Stats>(&self, rays: Rays<'_>, occluded: &mut [bool], stats: &mut S) {
-        with_lanes!(self.config.lanes, L => self.occluded_lanes::<L, S>(rays, occluded, stats))
+        with_lanes!(self.config.lanes, L => match self.config.robust {
+            true => self.occluded_lanes::<L, Robust, S>(rays, occluded, stats),
+            false => self.occluded_lanes::<L, Fast, S>(rays, occluded, stats),
+        })
     }
 }

@@ -8,6 +8,7 @@
 //! to back as in Ranged (`order`). Popping a node restores its `ia`: the subtree below only
 //! permuted `I[0..ia)` among itself, so those entries are still the node's alive SIMD rays.
 
+use crate::geometry::RayTests;
 use crate::stats::Stats;
 
 use super::walk::RaySelection;
@@ -17,15 +18,15 @@ use super::workspace::{ActiveRays, Packet, Tree};
 pub struct Partition;
 
 impl RaySelection for Partition {
-    fn root<const L: usize>(packet: &Packet<L>) -> u32 {
+    fn root<const L: usize, R: RayTests>(packet: &Packet<L, R>) -> u32 {
         packet.groups.len() as u32
     }
 
     /// `partRays`: moves the SIMD rays among `I[0..ia)` that meet the box of `node` to the front
     /// and keeps their count.
     #[inline(always)]
-    fn enter<const L: usize, S: Stats>(
-        packet: &mut Packet<L>,
+    fn enter<const L: usize, R: RayTests, S: Stats>(
+        packet: &mut Packet<L, R>,
         tree: &Tree,
         node: u32,
         ia: u32,
@@ -46,8 +47,8 @@ impl RaySelection for Partition {
         (ie > 0).then_some(ie as u32)
     }
 
-    fn at_leaf<const L: usize, S: Stats>(
-        _: &Packet<L>,
+    fn at_leaf<const L: usize, R: RayTests, S: Stats>(
+        _: &Packet<L, R>,
         _: &Tree,
         _: u32,
         ia: u32,

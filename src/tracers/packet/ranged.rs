@@ -8,6 +8,7 @@
 //! by ray `ia`).
 
 use crate::accel::BvhNode;
+use crate::geometry::RayTests;
 use crate::stats::Stats;
 
 use super::walk::RaySelection;
@@ -18,13 +19,13 @@ use super::workspace::{ActiveRays, Packet, Tree};
 /// rays after it are tested in order (Ranged's `getFirstHit`; IA's first-hit test with interval
 /// culling).
 #[inline(always)]
-pub fn first_hit<const L: usize, S: Stats>(
-    packet: &Packet<L>,
+pub fn first_hit<const L: usize, R: RayTests, S: Stats>(
+    packet: &Packet<L, R>,
     tree: &Tree,
     node: u32,
     ia: u32,
     stats: &mut S,
-    culls: impl FnOnce(&Packet<L>, &BvhNode, &mut S) -> bool,
+    culls: impl FnOnce(&Packet<L, R>, &BvhNode, &mut S) -> bool,
 ) -> Option<u32> {
     let (depth, cell) = (tree.depth::<S>(node), tree.node(node));
     let (lo, hi) = (cell.bounds.min.to_array(), cell.bounds.max.to_array());
@@ -33,14 +34,14 @@ pub fn first_hit<const L: usize, S: Stats>(
 
 /// `first_hit` for the box `[lo, hi]` at `depth`.
 #[inline(always)]
-pub fn first_hit_in<const L: usize, S: Stats>(
-    packet: &Packet<L>,
+pub fn first_hit_in<const L: usize, R: RayTests, S: Stats>(
+    packet: &Packet<L, R>,
     lo: [f32; 3],
     hi: [f32; 3],
     ia: u32,
     depth: usize,
     stats: &mut S,
-    culls: impl FnOnce(&Packet<L>, &mut S) -> bool,
+    culls: impl FnOnce(&Packet<L, R>, &mut S) -> bool,
 ) -> Option<u32> {
     let n = packet.groups.len() as u32;
     if packet.hits_bounds(ia, lo, hi, depth, stats) {
@@ -58,8 +59,8 @@ pub struct Ranged;
 impl RaySelection for Ranged {
     /// `getFirstHit`: the first SIMD ray from `ia` on that meets the box of `node` (§3.2).
     #[inline(always)]
-    fn enter<const L: usize, S: Stats>(
-        packet: &mut Packet<L>,
+    fn enter<const L: usize, R: RayTests, S: Stats>(
+        packet: &mut Packet<L, R>,
         tree: &Tree,
         node: u32,
         ia: u32,
@@ -72,8 +73,8 @@ impl RaySelection for Ranged {
 
     /// `getLastHit`: SIMD rays up to one past the last one after `ia` that meets the leaf's box.
     #[inline(always)]
-    fn at_leaf<const L: usize, S: Stats>(
-        packet: &Packet<L>,
+    fn at_leaf<const L: usize, R: RayTests, S: Stats>(
+        packet: &Packet<L, R>,
         tree: &Tree,
         node: u32,
         ia: u32,

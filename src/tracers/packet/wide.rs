@@ -33,6 +33,7 @@
 
 use crate::accel::{WideBvh, WideChild};
 use crate::geometry::ray::prefetch;
+use crate::geometry::RayTests;
 use crate::stats::{Event, Stats};
 
 use super::ranged::first_hit_in;
@@ -60,8 +61,8 @@ impl Default for WideStack {
 }
 
 /// Walks the packet through `wide` (module doc). `tree` holds the triangles the leaves index.
-pub fn traverse_wide<const W: usize, const L: usize, S: Stats, const ANY: bool>(
-    packet: &mut Packet<L>,
+pub fn traverse_wide<const W: usize, const L: usize, R: RayTests, S: Stats, const ANY: bool>(
+    packet: &mut Packet<L, R>,
     tree: &Tree,
     wide: &WideBvh<W>,
     stack: &mut WideStack,
@@ -97,7 +98,7 @@ pub fn traverse_wide<const W: usize, const L: usize, S: Stats, const ANY: bool>(
                 stats.node_shared(depth, packet.owners());
             }
             let (lo, hi) = cell.child_box(slot as usize);
-            let culls = |p: &Packet<L>, s: &mut S| p.frustum_culls_bounds(lo, hi, s);
+            let culls = |p: &Packet<L, R>, s: &mut S| p.frustum_culls_bounds(lo, hi, s);
             let Some(first) = first_hit_in(packet, lo, hi, at, depth, stats, culls) else {
                 continue;
             };
@@ -126,8 +127,8 @@ pub fn traverse_wide<const W: usize, const L: usize, S: Stats, const ANY: bool>(
 
 /// Steps 1–2 of the module doc at wide node `node`, entered with first active SIMD ray `ia`.
 #[inline(always)]
-fn expand<const W: usize, const L: usize, S: Stats>(
-    packet: &Packet<L>,
+fn expand<const W: usize, const L: usize, R: RayTests, S: Stats>(
+    packet: &Packet<L, R>,
     wide: &WideBvh<W>,
     node: u32,
     ia: u32,

@@ -4,8 +4,10 @@
 //! 21–27): every triangle not culled by the frustum against every active SIMD ray, a moving
 //! triangle (motion blur) at each lane's time.
 
+use std::marker::PhantomData;
+
 use crate::accel::{Bvh, BvhConfig, BvhNode};
-use crate::geometry::{Hit, Rays};
+use crate::geometry::{Hit, RayTests, Rays};
 use crate::stats::{Event, Owners, Stats};
 
 use super::frustum::Frustum;
@@ -46,7 +48,8 @@ pub struct Pending {
 /// Deep enough for any tree `Bvh::build` makes.
 pub type Stack = [Pending; BvhConfig::DEPTH_LIMIT + 2];
 
-pub struct Packet<const L: usize> {
+/// `R`: the tests every lane runs (`robust`).
+pub struct Packet<const L: usize, R: RayTests> {
     pub groups: Vec<SimdRay<L>>,
     /// Rays in the packet (the lanes in use over all SIMD rays).
     pub rays: usize,
@@ -71,9 +74,10 @@ pub struct Packet<const L: usize> {
     /// found once per packet, as it then holds for every SIMD ray a leaf tests — found per
     /// leaf over the leaf's SIMD rays it cost 4% of the wide traversal on camera rays.
     pub frame: Option<SharedFrame>,
+    tests: PhantomData<R>,
 }
 
-impl<const L: usize> Packet<L> {
+impl<const L: usize, R: RayTests> Packet<L, R> {
     pub fn with_capacity(rays: usize) -> Self {
         let groups = rays.div_ceil(L);
         Packet {
@@ -89,6 +93,7 @@ impl<const L: usize> Packet<L> {
             live: 0,
             max_t: f32::INFINITY,
             frame: None,
+            tests: PhantomData,
         }
     }
 
@@ -104,7 +109,7 @@ impl<const L: usize> Packet<L> {
         let mut well_formed = 0;
         for (g, group) in self.groups.iter_mut().enumerate() {
             let first = g * L;
-            well_formed += group.load(&rays, first, L.min(rays.len() - first));
+            well_formed += group.load::<R>(&rays, first, L.min(rays.len() - first));
         }
         // Summed lane-wise first (a sequential float sum is one long dependency chain); only
         // the signs are used.
@@ -127,7 +132,11 @@ impl<const L: usize> Packet<L> {
             None
         };
         self.interval = (interval && cull).then(|| IntervalPacket::from_lanes(&self.groups));
-        self.frame = SharedFrame::of(self.groups.iter());
+        // The shared frame is the watertight test's.
+        self.frame = match R::ROBUST {
+            true => SharedFrame::of(self.groups.iter()),
+            false => None,
+        };
     }
 
     /// The largest `tmax` over the packet's lanes (−∞ when none is live), folded lane-wise over
@@ -194,7 +203,7 @@ impl<const L: usize> Packet<L> {
         if S::ENABLED {
             stats.aabb_tests(depth, self.group_owners(g), L as u32);
         }
-        group.hits_box(lo, hi)
+        group.hits_box::<R>(lo, hi)
     }
 
     /// Masked's leaf step (Fig. 2) after SIMD ray `first`, which meets the box `[lo, hi]`:
@@ -303,8 +312,8 @@ impl<const L: usize> Packet<L> {
                 }
                 let hits = match (moving_end, &relative) {
                     (None, Some(rel)) => group.intersect_relative::<ANY>(rel, prim),
-                    (None, None) => group.intersect::<ANY>(tri, prim),
-                    (Some(close), _) => group.intersect_moving::<ANY>(tri, close, prim),
+                    (None, None) => group.intersect::<R, ANY>(tri, prim),
+                    (Some(close), _) => group.intersect_moving::<R, ANY>(tri, close, prim),
                 };
                 found += hits;
                 if ANY {

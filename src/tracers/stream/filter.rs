@@ -2,9 +2,10 @@
 //! rays are tested against a node's box `N` at a time, giving a mask per group, and the stream
 //! is partitioned in place by the masks (`lanes::stream::partition_by`) — the rays whose segment
 //! `[tmin, closest hit so far]` meets the box first, the others after. Each lane runs the
-//! reference tracer's conservative slab test bit for bit (`lanes::slab`).
+//! reference tracer's slab test of `R` bit for bit (`lanes::slab`: conservative, or plain with
+//! `robust = false`).
 
-use crate::geometry::Aabb;
+use crate::geometry::{Aabb, RayTests};
 use crate::lanes::stream::partition_by;
 use crate::lanes::LaneMask;
 use crate::stats::{Event, Owners, Stats};
@@ -17,7 +18,7 @@ use super::width::Width;
 /// the negative direction (the sub-stream's dominant direction, which orders the node's children
 /// front to back).
 #[inline(always)]
-pub fn filter<const L: usize, const N: usize, S: Stats>(
+pub fn filter<const L: usize, const N: usize, R: RayTests, S: Stats>(
     rays: &mut StreamRays<L>,
     len: usize,
     bounds: &Aabb,
@@ -36,7 +37,7 @@ pub fn filter<const L: usize, const N: usize, S: Stats>(
     let mut negative = [0u32; 3];
     let hit = partition_by::<L, _>(rays, len, group, |rays, base| {
         let lanes = rays.slab_lanes(base);
-        let pass = lanes.slabs().hits(lo, hi) & LaneMask::first((len - base).min(group));
+        let pass = lanes.slabs().hits::<R>(lo, hi) & LaneMask::first((len - base).min(group));
         for (a, n) in negative.iter_mut().enumerate() {
             *n += (pass & LaneMask::from_fn(|l| lanes.negative(a, l))).count();
         }

@@ -7,7 +7,7 @@
 use std::sync::Arc;
 
 use crate::accel::{Bvh, BvhOfWidth, WideNodes, WideTree};
-use crate::geometry::{Hit, Rays, Robust};
+use crate::geometry::{Hit, RayTests, Rays};
 use crate::stats::Stats;
 use crate::tracers::reference::trace_subtree;
 use crate::tracers::wide_single::trace_wide;
@@ -32,9 +32,9 @@ impl Handoff {
     /// The wide traversal reads the ray from the stream's own records (`StreamRays::wide_ray`),
     /// which lie in stream order where the filters left them, instead of gathering it from
     /// `input`'s eight columns at its index, scattered by the filters' reordering; the binary
-    /// one needs the direction, which only `input` keeps.
+    /// one needs the direction, which only `input` keeps. `R`: the box and triangle tests.
     #[inline(always)]
-    pub fn trace<S: Stats, const ANY: bool, const L: usize>(
+    pub fn trace<R: RayTests, S: Stats, const ANY: bool, const L: usize>(
         &self,
         bvh: &Bvh,
         node: u32,
@@ -45,15 +45,17 @@ impl Handoff {
             None => {
                 let mut ray = input.ray(rays.id(at));
                 ray.tmax = rays.tmax(at);
-                trace_subtree::<Robust, S, ANY>(bvh, node, &ray, stats)
+                trace_subtree::<R, S, ANY>(bvh, node, &ray, stats)
             }
             Some(WideNodes::Four(wide)) => {
                 let start = wide.entry[node as usize];
-                trace_wide::<4, Robust, S, ANY>(bvh, wide, start, &rays.wide_ray(at), stats)
+                let ray = rays.wide_ray::<R>(at, input);
+                trace_wide::<4, R, S, ANY>(bvh, wide, start, &ray, stats)
             }
             Some(WideNodes::Eight(wide)) => {
                 let start = wide.entry[node as usize];
-                trace_wide::<8, Robust, S, ANY>(bvh, wide, start, &rays.wide_ray(at), stats)
+                let ray = rays.wide_ray::<R>(at, input);
+                trace_wide::<8, R, S, ANY>(bvh, wide, start, &ray, stats)
             }
         }
     }

@@ -1,18 +1,18 @@
 //! The intersection stage (Gribble & Ramani 2008 §3.2 "Intersection"): a leaf's sub-stream is
 //! tested against each of the leaf's triangles `N` rays at a time, every lane running the
-//! reference tracer's watertight test bit for bit (`SimdRay::intersect`), and the hits are
+//! reference tracer's triangle test bit for bit (`SimdRay::intersect`), and the hits are
 //! scattered to the rays' slots. As in the paper's implementation, no filter stack splits the
 //! test into stages (its leaf streams are too short to pay for one). Occlusion rays that hit are
 //! dropped from the stream after the leaf; a group stops early once all its rays have hit.
 
 use crate::accel::BvhNode;
-use crate::geometry::Hit;
+use crate::geometry::{Hit, RayTests};
 use crate::stats::{Event, Owners, Stats};
 
 use super::traverse::{Answer, Walk};
 use super::width::Width;
 
-impl<const L: usize, const N: usize, A: Answer> Walk<'_, L, N, A> {
+impl<const L: usize, const N: usize, A: Answer, R: RayTests> Walk<'_, L, N, A, R> {
     /// Intersects the rays `0..len` with the triangles of `leaf` (at depth `depth`). Returns how
     /// many rays are still live, moved to the front.
     pub fn leaf<S: Stats>(
@@ -33,7 +33,8 @@ impl<const L: usize, const N: usize, A: Answer> Walk<'_, L, N, A> {
                 let at = base + g * group;
                 let used = len.saturating_sub(at).min(group);
                 if used > 0 {
-                    self.rays.load_triangle_lanes(at, used, simd);
+                    self.rays
+                        .load_triangle_lanes::<R>(at, used, &self.input, simd);
                 } else {
                     simd.used = 0;
                     simd.tmax = [f32::NEG_INFINITY; L];
@@ -52,7 +53,7 @@ impl<const L: usize, const N: usize, A: Answer> Walk<'_, L, N, A> {
                 let (tri, prim) = (&self.bvh.triangles[i], self.bvh.prim_ids[i]);
                 for simd in self.groups.iter_mut() {
                     if simd.live_lanes() > 0 {
-                        A::intersect(simd, tri, prim);
+                        A::intersect::<R, L>(simd, tri, prim);
                     }
                 }
             }

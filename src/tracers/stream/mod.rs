@@ -28,8 +28,9 @@
 //!   leaves; the lane counters count the filters only, so with T > 0 they describe the stream
 //!   part of the traversal.
 //! - **Exact hits**: every lane runs the reference tracer's slab and watertight tests bit for
-//!   bit, so each ray gets the reference's closest hit (up to the order in which triangles at
-//!   exactly equal distance are met). Occlusion rays end at their first hit and leave the stream.
+//!   bit (with `robust = false` its plain slabs and Möller–Trumbore), so each ray gets the
+//!   reference's closest hit (up to the order in which triangles at exactly equal distance are
+//!   met). Occlusion rays end at their first hit and leave the stream.
 //!   Rays that can hit nothing (NaN, zero direction, `tmin > tmax`) miss: `tmin > tmax` fails
 //!   the root's filter, and a NaN passes slabs as in the reference tracer but no triangle.
 //!
@@ -49,12 +50,14 @@ mod rays;
 mod traverse;
 mod width;
 
+use std::marker::PhantomData;
 use std::str::FromStr;
 use std::sync::Arc;
 
 use crate::accel::{Bvh, BvhOfWidth, WideNodes};
 use crate::error::{Error, Result};
-use crate::geometry::{Hit, Rays};
+use crate::geometry::robustness::robust_param;
+use crate::geometry::{Fast, Hit, RayTests, Rays, Robust};
 use crate::lanes::{with_width, SimdRay};
 use crate::stats::Stats;
 use crate::tracers::packet::{ChildOrder, PacketConfig, TreeWidth};
@@ -98,6 +101,9 @@ pub struct StreamConfig {
     /// Children per node of the tree the hand-off's single rays walk (2: the binary tree, by the
     /// reference's traversal; 4 or 8: a wide tree collapsed from it, by `wide_single`).
     pub single_tree: TreeWidth,
+    /// The tests every lane and hand-off ray runs (`robust`, set by the registry;
+    /// `geometry::robustness`).
+    pub robust: bool,
 }
 
 impl Default for StreamConfig {
@@ -107,6 +113,7 @@ impl Default for StreamConfig {
             width: 16,
             single: 0,
             single_tree: TreeWidth::Binary,
+            robust: true,
         }
     }
 }
@@ -132,6 +139,7 @@ impl StreamConfig {
                     PacketConfig::WIDTHS
                 ))
             })?,
+            robust: robust_param(p)?,
         };
         if !Self::WIDTHS.contains(&c.width) {
             return Err(Error::usage(format!(
@@ -187,8 +195,9 @@ impl StreamTracer {
         self.config
     }
 
-    /// Traces `rays` stream by stream with width `N` on `L` lanes, recording each ray's answer.
-    fn run<const L: usize, const N: usize, S: Stats, A: Answer>(
+    /// Traces `rays` stream by stream with width `N` on `L` lanes and the tests `R`, recording
+    /// each ray's answer.
+    fn run<const L: usize, const N: usize, R: RayTests, S: Stats, A: Answer>(
         &self,
         rays: Rays<'_>,
         answers: &mut [A],
@@ -209,7 +218,7 @@ impl StreamTracer {
         for first in (0..rays.len()).step_by(size) {
             let n = size.min(rays.len() - first);
             let len = stream.load(&rays, first, n);
-            let mut walk = Walk::<L, N, A> {
+            let mut walk = Walk::<L, N, A, R> {
                 bvh: &self.bvh,
                 order: &self.order,
                 input: rays,
@@ -218,6 +227,7 @@ impl StreamTracer {
                 rays: &mut stream,
                 groups: &mut groups,
                 answers,
+                tests: PhantomData,
             };
             walk.visit(Bvh::ROOT as u32, len, stats);
         }
@@ -225,7 +235,10 @@ impl StreamTracer {
 
     fn trace<S: Stats, A: Answer>(&self, rays: Rays<'_>, answers: &mut [A], stats: &mut S) {
         with_width!(self.config.width, N in [4, 8, 12, 16, 32, 64] => {
-            self.run::<{ width::lanes_for(N) }, N, S, A>(rays, answers, stats)
+            match self.config.robust {
+                true => self.run::<{ width::lanes_for(N) }, N, Robust, S, A>(rays, answers, stats),
+                false => self.run::<{ width::lanes_for(N) }, N, Fast, S, A>(rays, answers, stats),
+            }
         })
     }
 }

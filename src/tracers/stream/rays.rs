@@ -18,7 +18,7 @@
 
 use glam::Vec3;
 
-use crate::geometry::{Hit, Rays, WatertightRay};
+use crate::geometry::{Hit, RayTests, Rays, WatertightRay};
 use crate::lanes::slab::SlabRays;
 use crate::lanes::stream::SoaRays;
 use crate::lanes::watertight::common_axes;
@@ -160,10 +160,26 @@ impl<const L: usize> StreamRays<L> {
     }
 
     /// Loads the rays at stream positions `base .. base + used` (`used ≤ L`) into `simd`'s lanes
-    /// for the triangle test; the other lanes become padding that hits nothing.
+    /// for the triangle test `R`; the other lanes become padding that hits nothing. Without `robust`
+    /// the lanes run Möller–Trumbore, which reads the directions: those come from the chunk
+    /// `input` (the stream keeps only their reciprocals).
     #[inline(always)]
-    pub fn load_triangle_lanes(&self, base: usize, used: usize, simd: &mut SimdRay<L>) {
+    pub fn load_triangle_lanes<R: RayTests>(
+        &self,
+        base: usize,
+        used: usize,
+        input: &Rays<'_>,
+        simd: &mut SimdRay<L>,
+    ) {
         let slots = &self.stream[base..base + L];
+        if !R::ROBUST {
+            for l in 0..used {
+                let id = self.id(base + l);
+                simd.dir[0][l] = input.dx[id];
+                simd.dir[1][l] = input.dy[id];
+                simd.dir[2][l] = input.dz[id];
+            }
+        }
         for l in 0..L {
             let (r, f) = (&self.slab[base + l], &self.frame[slots[l] as usize]);
             for a in 0..3 {
@@ -181,15 +197,17 @@ impl<const L: usize> StreamRays<L> {
 
     /// The ray at stream position `at` as the wide single-ray traversal reads it, from its record
     /// and frame: the very tests `WideRay::new` makes of the input ray (the record's `1 / dir`
-    /// and the frame are what those compute from its direction).
+    /// and the frame are what those compute from its direction). Möller–Trumbore (`Fast`) reads
+    /// the direction from the chunk `input`.
     #[inline(always)]
-    pub fn wide_ray(&self, at: usize) -> WideRay {
+    pub fn wide_ray<R: RayTests>(&self, at: usize, input: &Rays<'_>) -> WideRay<R> {
         let (r, f) = (&self.slab[at], &self.frame[self.stream[at] as usize]);
         let k = [0, 1, 2].map(|a| f.axis(a) as usize);
+        let dir = || input.ray(self.id(at)).dir;
         WideRay {
             boxes: WideRayTest::from_inv(Vec3::from(r.origin), Vec3::from(r.inv_dir)),
             leaf: LeafRay {
-                tris: WatertightRay::from_parts(r.origin, k, f.shear),
+                tris: R::triangle_ray_in_frame(r.origin, (k, f.shear), dir),
                 tmin: r.tmin,
                 // Static geometry only (`StreamTracer::over_static` refuses a moving BVH).
                 time: 0.0,

@@ -9,7 +9,9 @@
 //! stream's live rays on the way back up, so no later filter tests it.
 
 use crate::accel::Bvh;
-use crate::geometry::{Hit, Rays, Triangle};
+use std::marker::PhantomData;
+
+use crate::geometry::{Hit, RayTests, Rays, Triangle};
 use crate::lanes::stream::{partition_by, SoaRays};
 use crate::lanes::LaneMask;
 use crate::lanes::SimdRay;
@@ -25,20 +27,21 @@ use super::width::Width;
 /// ends at its first hit).
 pub trait Answer {
     const ANY: bool;
-    /// The triangle test of every lane of `simd` for this query (`SimdRay::intersect::<ANY>`;
-    /// the branch is on a constant, so each answer compiles to one of the two).
+    /// The triangle test `R` of every lane of `simd` for this query
+    /// (`SimdRay::intersect::<R, ANY>`; the branch is on a constant, so each answer compiles to
+    /// one of the two).
     #[inline(always)]
-    fn intersect<const L: usize>(simd: &mut SimdRay<L>, tri: &Triangle, prim: u32) {
+    fn intersect<R: RayTests, const L: usize>(simd: &mut SimdRay<L>, tri: &Triangle, prim: u32) {
         if Self::ANY {
-            simd.intersect::<true>(tri, prim);
+            simd.intersect::<R, true>(tri, prim);
         } else {
-            simd.intersect::<false>(tri, prim);
+            simd.intersect::<R, false>(tri, prim);
         }
     }
     /// One ray's traversal of the subtree under `node` for this query (`Handoff::trace::<ANY>`;
     /// `ray`: the stream, the ray's position in it, the chunk).
     #[inline(always)]
-    fn trace_single<S: Stats, const L: usize>(
+    fn trace_single<R: RayTests, S: Stats, const L: usize>(
         handoff: &Handoff,
         bvh: &Bvh,
         node: u32,
@@ -46,9 +49,9 @@ pub trait Answer {
         stats: &mut S,
     ) -> Hit {
         if Self::ANY {
-            handoff.trace::<S, true, L>(bvh, node, ray, stats)
+            handoff.trace::<R, S, true, L>(bvh, node, ray, stats)
         } else {
-            handoff.trace::<S, false, L>(bvh, node, ray, stats)
+            handoff.trace::<R, S, false, L>(bvh, node, ray, stats)
         }
     }
     fn record(&mut self, hit: Hit);
@@ -71,8 +74,8 @@ impl Answer for bool {
 }
 
 /// One stream's walk through the tree: the tree, the chunk's rays, the stream, the leaf stage's
-/// lane groups, and the answers by ray index.
-pub struct Walk<'a, const L: usize, const N: usize, A: Answer> {
+/// lane groups, and the answers by ray index. `R`: the box and triangle tests (`robust`).
+pub struct Walk<'a, const L: usize, const N: usize, A: Answer, R: RayTests> {
     pub bvh: &'a Bvh,
     pub order: &'a ChildOrder,
     pub input: Rays<'a>,
@@ -85,9 +88,10 @@ pub struct Walk<'a, const L: usize, const N: usize, A: Answer> {
     /// One `SimdRay` per `L`-lane part of an `N`-wide group (`Width::GROUPS`).
     pub groups: &'a mut [SimdRay<L>],
     pub answers: &'a mut [A],
+    pub tests: PhantomData<R>,
 }
 
-impl<const L: usize, const N: usize, A: Answer> Walk<'_, L, N, A> {
+impl<const L: usize, const N: usize, A: Answer, R: RayTests> Walk<'_, L, N, A, R> {
     /// Fig. 3 `traverse(node, in_stream)` with the stream's rays `0..len` (`len > 0`). Returns
     /// how many of them are still live, moved to the front (all of them, but for occlusion).
     pub fn visit<S: Stats>(&mut self, node: u32, len: usize, stats: &mut S) -> usize {
@@ -100,7 +104,7 @@ impl<const L: usize, const N: usize, A: Answer> Walk<'_, L, N, A> {
         if S::ENABLED {
             stats.node_shared(depth, Owners::List(&self.rays.ids(len)));
         }
-        let (hit, negative) = filter::<L, N, S>(self.rays, len, &cell.bounds, depth, stats);
+        let (hit, negative) = filter::<L, N, R, S>(self.rays, len, &cell.bounds, depth, stats);
         if hit == 0 {
             return len;
         }
@@ -121,7 +125,7 @@ impl<const L: usize, const N: usize, A: Answer> Walk<'_, L, N, A> {
     }
 }
 
-impl<const L: usize, const N: usize, A: Answer> Walk<'_, L, N, A> {
+impl<const L: usize, const N: usize, A: Answer, R: RayTests> Walk<'_, L, N, A, R> {
     /// The rays `0..len`, which meet `node`'s box, each traverse its subtree alone, depth first
     /// (`handoff`: the reference tracer's traversal or the wide tree's, with the same hits). Returns how many are still
     /// live, moved to the front.
@@ -129,7 +133,7 @@ impl<const L: usize, const N: usize, A: Answer> Walk<'_, L, N, A> {
         for at in 0..len {
             stats.charge_ray(self.rays.id(at));
             let ray = (&*self.rays, at, &self.input);
-            let hit = A::trace_single(self.handoff, self.bvh, node, ray, stats);
+            let hit = A::trace_single::<R, S, L>(self.handoff, self.bvh, node, ray, stats);
             if hit.is_hit() {
                 self.answers[self.rays.id(at)].record(hit);
                 self.rays
