@@ -9,11 +9,10 @@
 mod common;
 
 use raylab::geometry::Fast;
-use raylab::test_util::same_or_tie_with;
 use raylab::tracers::chunked::{trace_hits, trace_occlusion};
 use raylab::tracers::{build_tracer, tracer_for_mesh, Params, TracerInfo};
 
-use common::{reference_rays, ReferenceRays};
+use common::{reference_rays, ties_against, ReferenceRays};
 
 fn agrees_with_the_fast_reference(name: &str, size: Option<u32>) {
     let ReferenceRays {
@@ -70,20 +69,9 @@ fn agrees_with_the_fast_reference(name: &str, size: Option<u32>) {
     let mut ties = 0;
     for (tracer_name, params) in &tracers {
         let tracer = tracer_for_mesh(tracer_name, params, &mesh).unwrap();
+        let what = format!("{name} {tracer_name} {params} against the fast reference:");
         for (batch, want) in [&primary, &diffuse].iter().zip(&want) {
-            let got = trace_hits(tracer.as_ref(), batch);
-            for i in 0..batch.len() {
-                if got[i] != want[i] {
-                    assert!(
-                        same_or_tie_with::<Fast>(&mesh.triangles, &batch.ray(i), &got[i], &want[i]),
-                        "{name} {tracer_name} {params} {:?} ray {i}: {:?} vs fast reference {:?}",
-                        batch.kind(),
-                        got[i],
-                        want[i]
-                    );
-                    ties += 1;
-                }
-            }
+            ties += ties_against::<Fast>(&mesh.triangles, tracer.as_ref(), batch, want, &what);
         }
         let occluded = trace_occlusion(tracer.as_ref(), &shadow);
         assert_eq!(

@@ -9,18 +9,17 @@ use std::sync::Arc;
 use glam::Vec3;
 use raylab::accel::child_pairs::child_pairs;
 use raylab::accel::{AccelKind, Bvh, BvhConfig, BvhNode, BvhOfWidth};
-use raylab::geometry::{Aabb, Hit, Ray, RayBatch, RayKind, Triangle};
+use raylab::geometry::{Aabb, Hit, Ray, RayBatch, RayKind, Robust, Triangle};
 use raylab::render::rays::primary_rays;
 use raylab::scene::library::load_scene;
 use raylab::stats::{Counters, Event};
-use raylab::test_util::same_or_tie;
 use raylab::tracers::chunked::{trace_hits, trace_occlusion};
 use raylab::tracers::packet::TreeWidth;
 use raylab::tracers::reference::ReferenceTracer;
 use raylab::tracers::stream::{StreamConfig, StreamSize, StreamTracer};
 use raylab::tracers::{build_tracer, Params, Tracer, TracerInfo};
 
-use common::{reference_rays, ReferenceRays};
+use common::{reference_rays, ties_against, ReferenceRays};
 
 /// Two leaves side by side along x under the root, one triangle each, flat at z = 0:
 ///
@@ -419,21 +418,10 @@ fn agrees_with_reference(name: &str, size: Option<u32>) {
                 .with("single", single)
                 .with("single_tree", tree);
             let tracer = build_tracer(info, &params, &accel).unwrap();
+            let what = format!("{name} {params} against the reference:");
             for (batch, expected) in [&primary, &diffuse].iter().zip(&expected_hits) {
-                let got = trace_hits(tracer.as_ref(), batch);
-                for i in 0..batch.len() {
-                    if got[i] != expected[i] {
-                        let ray = batch.ray(i);
-                        assert!(
-                            same_or_tie(&mesh.triangles, &ray, &got[i], &expected[i]),
-                            "{name} {:?} {params} ray {i}: {:?} vs reference {:?}",
-                            batch.kind(),
-                            got[i],
-                            expected[i]
-                        );
-                        ties += 1;
-                    }
-                }
+                let triangles = &mesh.triangles;
+                ties += ties_against::<Robust>(triangles, tracer.as_ref(), batch, expected, &what);
             }
             let occluded = trace_occlusion(tracer.as_ref(), &shadow);
             assert_eq!(occluded, expected_shadow, "{name} shadow {params}");

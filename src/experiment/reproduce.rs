@@ -97,10 +97,14 @@ fn run_at_scale(dir: &Path, scale: Scale) -> Option<Value> {
     (recorded_scale == scale.name()).then_some(meta)
 }
 
-/// Is the run (`meta`) from this source tree (commit, and the measured code's digests)?
-fn is_current(meta: &Value, hash: &str) -> bool {
+/// Is the run (`meta`) from this source tree (commit, and the measured code's digests)? At paper
+/// scale also from a clean tree: a committed run made from a dirty one is redone, as `report
+/// --check` calls it stale (a quick-scale smoke run is never committed).
+fn is_current(meta: &Value, hash: &str, scale: Scale) -> bool {
     let source = this_source().map(|s| serde_json::to_value(s).unwrap_or_default());
+    let clean = meta.pointer("/commit/dirty").and_then(Value::as_bool) == Some(false);
     meta.pointer("/commit/hash").and_then(Value::as_str) == Some(hash)
+        && (clean || scale == Scale::Quick)
         && source.is_some()
         && meta.get("measured_source") == source.as_ref()
 }
@@ -120,7 +124,7 @@ pub fn plan(paper_dir: &Path, experiments: &Path, scale: Scale) -> Result<Vec<St
             Ok(Step {
                 experiment: name.clone(),
                 rays: planned_rays(&exp),
-                done: last.as_ref().is_some_and(|m| is_current(m, &hash)),
+                done: last.as_ref().is_some_and(|m| is_current(m, &hash, scale)),
                 last_seconds: last.and_then(|m| m.get("wall_seconds")?.as_f64()),
                 file,
             })

@@ -9,13 +9,14 @@ use std::sync::Arc;
 
 use glam::Vec3;
 use raylab::accel::{Accel, AccelKind, Bvh, BvhConfig};
-use raylab::geometry::{Aabb, Hit, RayBatch, RayKind, Triangle};
+use raylab::geometry::{Aabb, Hit, RayBatch, RayKind, RayTests, Triangle};
 use raylab::render::rays::{diffuse_rays, primary_rays, shadow_rays};
 use raylab::scene::library::load_scene;
 use raylab::scene::Mesh;
+use raylab::test_util::same_or_tie_with;
 use raylab::tracers::chunked::{trace_hits, trace_occlusion};
 use raylab::tracers::reference::ReferenceTracer;
-use raylab::tracers::Params;
+use raylab::tracers::{Params, Tracer};
 use raylab::verify::stability::Sweep;
 
 /// A scene's SAH BVH and three batches traced by the reference tracer over it: 128² camera rays,
@@ -60,6 +61,33 @@ pub fn reference_rays(name: &str, size: Option<u32>) -> ReferenceRays {
         expected_hits,
         expected_shadow,
     }
+}
+
+/// `tracer`'s closest hits on `batch` against `want`: each equal, or a tie by the triangle test
+/// `R` (`same_or_tie_with`: another triangle hit at exactly the same distance). Returns how many
+/// were ties; `what` names the case in a failure.
+pub fn ties_against<R: RayTests>(
+    triangles: &[Triangle],
+    tracer: &dyn Tracer,
+    batch: &RayBatch,
+    want: &[Hit],
+    what: &str,
+) -> usize {
+    let got = trace_hits(tracer, batch);
+    let mut ties = 0;
+    for i in 0..batch.len() {
+        if got[i] != want[i] {
+            assert!(
+                same_or_tie_with::<R>(triangles, &batch.ray(i), &got[i], &want[i]),
+                "{what} {:?} ray {i}: {:?} vs {:?}",
+                batch.kind(),
+                got[i],
+                want[i]
+            );
+            ties += 1;
+        }
+    }
+    ties
 }
 
 /// The room moving by a translation over the shutter: the moving binary tree over its triangles
