@@ -95,8 +95,8 @@ enum Command {
     },
     /// Run every experiment file of a paper (results/<paper>/claims.toml lists them) into
     /// results/<paper>/<experiment>/, then regenerate its REPORT.md and results/VERDICTS.md. Prints
-    /// the plan with an estimated time per file first; keeps runs already made from this source
-    /// at this scale, so a killed reproduction resumes where it stopped.
+    /// the plan with an estimated time per file first; keeps the runs at this scale that `report
+    /// --check` calls current, so a killed reproduction resumes where it stopped.
     Reproduce {
         /// A paper's directory name under results/ (overbeck2008, boulos2007, wald2006,
         /// gribble2008, benthin2009, ...), one experiment file a paper's claims list (its name,

@@ -139,6 +139,12 @@ fn a_quick_reproduction_runs_reports_and_resumes() {
     assert!(!plan(&paper, &experiments, Scale::Paper).unwrap()[0].done);
     quick("toy2026").unwrap();
     assert_eq!(meta()["run_id"], run_id);
+    // A run of an older version of the file is not current (`report --check`'s rule).
+    let edited = format!("{EXPERIMENT}\n# edited\n");
+    fs::write(experiments.join("tiny.toml"), &edited).unwrap();
+    assert!(!plan(&paper, &experiments, Scale::Quick).unwrap()[0].done);
+    fs::write(experiments.join("tiny.toml"), EXPERIMENT).unwrap();
+    assert!(plan(&paper, &experiments, Scale::Quick).unwrap()[0].done);
 
     // One experiment file named: only it runs, in its paper; the other run is kept.
     fs::write(

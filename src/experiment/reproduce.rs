@@ -1,11 +1,14 @@
 //! `raylab reproduce <paper>|<experiment>|all [--scale paper|quick]`: every experiment file a
 //! paper's claims list (`results/<paper>/claims.toml`; or the one file named), run in turn into
-//! `results/<paper>/<experiment>/`, then the paper's REPORT.md and the index of verdicts regenerated. The plan comes first, with an
-//! estimated time per file; a run already made from this source at this scale is kept, so a
-//! killed reproduction resumes where it stopped (a run is moved into place only once complete).
+//! `results/<paper>/<experiment>/`, then the paper's REPORT.md and the index of verdicts
+//! regenerated. The plan comes first, with an estimated time per file; a run at this scale that
+//! `report --check` calls current (the same measured source and experiment file, from a clean
+//! tree) is kept, so a killed reproduction resumes where it stopped (a run is moved into place
+//! only once complete).
 //! A quick (smoke-test) reproduction works in `results/.quick/<paper>/` with a copy of the
 //! claims, never over the committed runs.
 
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -17,7 +20,7 @@ use crate::experiment::record::provenance::this_source;
 use crate::experiment::results::report::claims::{Claims, CLAIMS_TOML};
 use crate::experiment::results::report::paper::papers_under;
 use crate::experiment::results::report::write;
-use crate::experiment::run::meta::commit;
+use crate::experiment::results::staleness;
 use crate::experiment::spec::overrides::Scale;
 use crate::experiment::{run_experiment, Chatter, Experiment, RunOverrides};
 
@@ -97,22 +100,27 @@ fn run_at_scale(dir: &Path, scale: Scale) -> Option<Value> {
     (recorded_scale == scale.name()).then_some(meta)
 }
 
-/// Is the run (`meta`) from this source tree (commit, and the measured code's digests)? At paper
-/// scale also from a clean tree: a committed run made from a dirty one is redone, as `report
-/// --check` calls it stale (a quick-scale smoke run is never committed).
-fn is_current(meta: &Value, hash: &str, scale: Scale) -> bool {
-    let source = this_source().map(|s| serde_json::to_value(s).unwrap_or_default());
-    let clean = meta.pointer("/commit/dirty").and_then(Value::as_bool) == Some(false);
-    meta.pointer("/commit/hash").and_then(Value::as_str) == Some(hash)
-        && (clean || scale == Scale::Quick)
-        && source.is_some()
-        && meta.get("measured_source") == source.as_ref()
+/// Is the run (`meta`) current: not stale by `report --check`'s rule against the source now
+/// (`today`) and the file it would run (`experiment`)? At quick scale a dirty tree is allowed (a
+/// smoke run is never committed).
+fn is_current(
+    meta: &Value,
+    today: &BTreeMap<String, String>,
+    experiment: &str,
+    scale: Scale,
+) -> bool {
+    let reasons = match scale {
+        Scale::Quick => staleness::source_reasons(meta, today, Some(experiment)),
+        Scale::Paper => staleness::reasons(meta, today, Some(experiment)),
+    };
+    reasons.is_empty()
 }
 
 /// The plan of the paper in `paper_dir`, its experiment files read from `experiments`.
 pub fn plan(paper_dir: &Path, experiments: &Path, scale: Scale) -> Result<Vec<Step>> {
     let (claims, _) = Claims::read(&paper_dir.join(CLAIMS_TOML))?;
-    let hash = commit().hash;
+    // Without the source to compare with, no run counts as current.
+    let today = this_source();
     claims
         .experiments
         .iter()
@@ -120,11 +128,15 @@ pub fn plan(paper_dir: &Path, experiments: &Path, scale: Scale) -> Result<Vec<St
             let file = experiments.join(format!("{name}.toml"));
             let mut exp = Experiment::load(&file)?;
             overrides(scale, paper_dir).apply(&mut exp)?;
+            let text = std::fs::read_to_string(&file).map_err(|e| Error::io(&file, e))?;
             let last = run_at_scale(&paper_dir.join(name), scale);
             Ok(Step {
                 experiment: name.clone(),
                 rays: planned_rays(&exp),
-                done: last.as_ref().is_some_and(|m| is_current(m, &hash, scale)),
+                done: match (&last, &today) {
+                    (Some(meta), Some(today)) => is_current(meta, today, &text, scale),
+                    _ => false,
+                },
                 last_seconds: last.and_then(|m| m.get("wall_seconds")?.as_f64()),
                 file,
             })

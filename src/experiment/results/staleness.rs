@@ -1,8 +1,9 @@
 //! `raylab report --check PATH…`: which results directories under the paths are no longer
 //! evidence. A run is stale when it was made from a dirty tree (or one whose state is unknown),
-//! when it has no record of the source it measured, or when that source — the tracers,
-//! acceleration structures, lanes and geometry (`record::provenance`) — has changed since. The
-//! rule, not a person, says which runs must be re-run before their numbers are quoted.
+//! when it has no record of the source it measured, when that source — the tracers,
+//! acceleration structures, lanes and geometry (`record::provenance`) — has changed since, or when
+//! its experiment file now asks for something else. The rule, not a person, says which runs must
+//! be re-run before their numbers are quoted; `reproduce` redoes exactly those.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -35,18 +36,34 @@ fn runs_under(path: &Path, out: &mut Vec<PathBuf>) -> Result<()> {
     entries.iter().try_for_each(|p| runs_under(p, out))
 }
 
-/// Why the run whose meta.json is `meta` is stale against the source digests `today`.
-pub fn reasons(meta: &Value, today: &BTreeMap<String, String>) -> Vec<String> {
-    let mut reasons = Vec::new();
+/// Why the run whose meta.json is `meta` is stale against the source digests `today` and the
+/// experiment file's contents now (`experiment_now`; `None`: not known, not compared).
+pub fn reasons(
+    meta: &Value,
+    today: &BTreeMap<String, String>,
+    experiment_now: Option<&str>,
+) -> Vec<String> {
     let commit = meta.pointer("/commit/hash").and_then(Value::as_str);
-    match meta.pointer("/commit/dirty").and_then(Value::as_bool) {
-        Some(false) => {}
-        Some(true) => reasons.push(format!(
+    let mut reasons = match meta.pointer("/commit/dirty").and_then(Value::as_bool) {
+        Some(false) => Vec::new(),
+        Some(true) => vec![format!(
             "made from a dirty tree (commit {})",
             commit.unwrap_or("unknown")
-        )),
-        None => reasons.push("made from a tree whose state is unknown".to_string()),
-    }
+        )],
+        None => vec!["made from a tree whose state is unknown".to_string()],
+    };
+    reasons.extend(source_reasons(meta, today, experiment_now));
+    reasons
+}
+
+/// Why the run measured something other than what its experiment file and the source would
+/// measure now (`reasons` without the tree's state).
+pub fn source_reasons(
+    meta: &Value,
+    today: &BTreeMap<String, String>,
+    experiment_now: Option<&str>,
+) -> Vec<String> {
+    let mut reasons = Vec::new();
     match meta.get("measured_source").and_then(Value::as_object) {
         None => reasons.push("no record of the source it measured".to_string()),
         Some(then) => {
@@ -65,7 +82,24 @@ pub fn reasons(meta: &Value, today: &BTreeMap<String, String>) -> Vec<String> {
             }
         }
     }
+    let then = meta
+        .pointer("/experiment_file/contents")
+        .and_then(Value::as_str);
+    if let (Some(then), Some(now)) = (then, experiment_now) {
+        if then != now {
+            reasons.push("its experiment file changed since".to_string());
+        }
+    }
     reasons
+}
+
+/// The experiment file the run (`meta`) recorded, as it reads now (from the working directory the
+/// run was made in: `None` when it cannot be read from here).
+fn experiment_now(meta: &Value) -> Option<String> {
+    let path = meta
+        .pointer("/experiment_file/path")
+        .and_then(Value::as_str)?;
+    std::fs::read_to_string(path).ok()
 }
 
 /// The verdict on every results directory under `paths`; a path with none is a usage error.
@@ -92,7 +126,7 @@ pub fn check(paths: &[PathBuf]) -> Result<Vec<Verdict>> {
             let meta: Value = serde_json::from_str(&text)
                 .map_err(|e| Error::input(&file, Some(e.line()), e.to_string()))?;
             verdicts.push(Verdict {
-                reasons: reasons(&meta, &today),
+                reasons: reasons(&meta, &today, experiment_now(&meta).as_deref()),
                 dir,
             });
         }
@@ -122,32 +156,48 @@ mod tests {
             "commit": { "hash": "abc", "dirty": false },
             "measured_source": current,
         });
-        assert!(reasons(&clean, &now).is_empty());
+        assert!(reasons(&clean, &now, None).is_empty());
 
         let mut dirty = clean.clone();
         dirty["commit"]["dirty"] = Value::Bool(true);
         assert_eq!(
-            reasons(&dirty, &now),
+            reasons(&dirty, &now, None),
             ["made from a dirty tree (commit abc)"]
         );
 
         let mut unknown = clean.clone();
         unknown["commit"] = serde_json::json!({ "hash": "unknown", "dirty": null });
         assert_eq!(
-            reasons(&unknown, &now),
+            reasons(&unknown, &now, None),
             ["made from a tree whose state is unknown"]
         );
 
         let mut old = clean.clone();
         old.as_object_mut().unwrap().remove("measured_source");
-        assert_eq!(reasons(&old, &now), ["no record of the source it measured"]);
+        assert_eq!(
+            reasons(&old, &now, None),
+            ["no record of the source it measured"]
+        );
 
         let mut changed = clean.clone();
         changed["measured_source"]["lanes"] = Value::from("lanes-then");
         changed["measured_source"]["tracers"] = Value::from("tracers-then");
         assert_eq!(
-            reasons(&changed, &now),
+            reasons(&changed, &now, None),
             ["the code it measured changed since: tracers, lanes"]
+        );
+
+        let mut recorded = clean.clone();
+        recorded["experiment_file"] = serde_json::json!({ "path": "e.toml", "contents": "a = 1" });
+        assert!(reasons(&recorded, &now, Some("a = 1")).is_empty());
+        assert_eq!(
+            reasons(&recorded, &now, Some("a = 2")),
+            ["its experiment file changed since"]
+        );
+        assert_eq!(
+            source_reasons(&dirty, &now, None),
+            Vec::<String>::new(),
+            "the tree's state is not the source's"
         );
     }
 
