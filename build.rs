@@ -9,9 +9,10 @@
 //!
 //! With the feature `tinybvh` (on by default) it compiles raylab's C++ shim over tinybvh
 //! (`src/accel/tinybvh/shim.cpp`) against the `tiny_bvh.h` of the cache `.ci/fetch-tinybvh` fills
-//! ($RAYLAB_TINYBVH_DIR or ~/.cache/raylab/tinybvh), with `-march=native` (its 8-wide layout
-//! needs AVX2 + FMA; results are per machine anyway), and sets the cfg `tinybvh`. Without the
-//! cache or a C++ compiler the build goes on without the tinybvh tracers, saying so in one warning.
+//! ($RAYLAB_TINYBVH_DIR or ~/.cache/raylab/tinybvh), for the CPU the crate is compiled for
+//! (`-march` = rustc's `target-cpu`, `native` by `.cargo/config.toml`; its 8-wide layout needs
+//! AVX2 + FMA; results are per machine anyway), and sets the cfg `tinybvh`. Without the cache or
+//! a C++ compiler the build goes on without the tinybvh tracers, saying so in one warning.
 
 use std::env;
 use std::fs;
@@ -80,14 +81,36 @@ fn tinybvh() -> Result<(), String> {
         .std("c++20")
         .file(SHIM)
         .include(dir.join("include"))
-        .flag("-march=native")
+        .flag(format!("-march={}", target_cpu()))
         // tiny_bvh.h's own notes (e.g. on SIMD it falls back from) are not raylab's warnings.
         .warnings(false)
         .cargo_warnings(false)
         .try_compile("raylab_tinybvh")
         .map_err(|e| format!("cannot compile {SHIM}: {e}"))?;
+    println!("cargo:rerun-if-env-changed=CARGO_ENCODED_RUSTFLAGS");
     println!("cargo:rustc-env=RAYLAB_TINYBVH_SOURCE={}", source.trim());
+    println!("cargo:rustc-env=RAYLAB_TINYBVH_MARCH={}", target_cpu());
     Ok(())
+}
+
+/// rustc's `-C target-cpu` of this build (`native` unless the flags say otherwise), so the shim
+/// is compiled for the same CPU as the crate: `native` for a benchmark, `x86-64-v3` (AVX2) for a
+/// run under valgrind, which has no AVX-512.
+fn target_cpu() -> String {
+    let flags = env::var("CARGO_ENCODED_RUSTFLAGS").unwrap_or_default();
+    let flags: Vec<&str> = flags.split('\x1f').collect();
+    let mut cpu = "native".to_string();
+    for (i, flag) in flags.iter().enumerate() {
+        let value = match flag.strip_prefix("-C") {
+            Some("") => flags.get(i + 1).copied().unwrap_or(""),
+            Some(rest) => rest,
+            None => continue,
+        };
+        if let Some(name) = value.strip_prefix("target-cpu=") {
+            cpu = name.to_string();
+        }
+    }
+    cpu
 }
 
 /// Bindings for the Embree 4 headers of the cache, loaded at run time from its library.

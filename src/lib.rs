@@ -7,6 +7,8 @@ pub mod accel;
 pub mod error;
 pub mod experiment;
 pub mod geometry;
+#[cfg(test)]
+mod guard_page;
 pub mod lanes;
 pub mod memory;
 pub mod params;

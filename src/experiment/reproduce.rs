@@ -8,7 +8,6 @@
 //! A quick (smoke-test) reproduction works in `results/.quick/<paper>/` with a copy of the
 //! claims, never over the committed runs.
 
-use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -16,7 +15,7 @@ use serde_json::Value;
 
 use crate::error::{Error, Result};
 use crate::experiment::record::files::META_JSON;
-use crate::experiment::record::provenance::this_source;
+use crate::experiment::record::provenance::SourceTree;
 use crate::experiment::results::report::claims::{Claims, CLAIMS_TOML};
 use crate::experiment::results::report::paper::papers_under;
 use crate::experiment::results::report::write;
@@ -103,12 +102,7 @@ fn run_at_scale(dir: &Path, scale: Scale) -> Option<Value> {
 /// Is the run (`meta`) current: not stale by `report --check`'s rule against the source now
 /// (`today`) and the file it would run (`experiment`)? At quick scale a dirty tree is allowed (a
 /// smoke run is never committed).
-fn is_current(
-    meta: &Value,
-    today: &BTreeMap<String, String>,
-    experiment: &str,
-    scale: Scale,
-) -> bool {
+fn is_current(meta: &Value, today: &SourceTree, experiment: &str, scale: Scale) -> bool {
     let reasons = match scale {
         Scale::Quick => staleness::source_reasons(meta, today, Some(experiment)),
         Scale::Paper => staleness::reasons(meta, today, Some(experiment)),
@@ -120,7 +114,8 @@ fn is_current(
 pub fn plan(paper_dir: &Path, experiments: &Path, scale: Scale) -> Result<Vec<Step>> {
     let (claims, _) = Claims::read(&paper_dir.join(CLAIMS_TOML))?;
     // Without the source to compare with, no run counts as current.
-    let today = this_source();
+    let today = SourceTree::this();
+    let today = today.is_readable().then_some(today);
     claims
         .experiments
         .iter()

@@ -112,7 +112,37 @@ pub struct TracerInfo {
     /// camera rays (n ≤ 32) straddles two chunks. A stream tracer wants far more than a packet
     /// tracer.
     pub chunk_rays: usize,
+    /// Its family's source, paths under `src/` (a folder or a file), with the families it builds
+    /// on: what a run that measured it depends on besides the shared core
+    /// (`experiment::record::provenance`), so only a change here makes that run stale.
+    pub source: &'static [&'static str],
 }
+
+/// The families' source (`TracerInfo::source`): each family's own folder or file, then those of
+/// the families it imports.
+const REFERENCE_SOURCE: &[&str] = &["tracers/reference.rs"];
+const WIDE_SINGLE_SOURCE: &[&str] = &["tracers/wide_single", "tracers/reference.rs"];
+const EMBREE_SOURCE: &[&str] = &["tracers/embree"];
+const OBVHS_SOURCE: &[&str] = &["tracers/obvhs.rs", "tracers/reference.rs"];
+const TINYBVH_SOURCE: &[&str] = &["tracers/tinybvh"];
+const GRID_DDA_SOURCE: &[&str] = &["tracers/grid_dda.rs", "tracers/reference.rs"];
+const CGT_SOURCE: &[&str] = &[
+    "tracers/coherent_grid",
+    "tracers/grid_dda.rs",
+    "tracers/reference.rs",
+];
+const PACKET_SOURCE: &[&str] = &["tracers/packet"];
+const MFT_SOURCE: &[&str] = &[
+    "tracers/multi_frusta",
+    "tracers/packet",
+    "tracers/reference.rs",
+];
+const STREAM_SOURCE: &[&str] = &[
+    "tracers/stream",
+    "tracers/packet",
+    "tracers/reference.rs",
+    "tracers/wide_single",
+];
 
 /// The error of a `make` handed another family's configuration (a bug, not the user's input).
 fn other_family(config: &TracerConfig) -> Error {
@@ -176,6 +206,7 @@ const fn embree_entry(
         counts_internals: false,
         motion_blur: true,
         chunk_rays: CHUNK_RAYS,
+        source: EMBREE_SOURCE,
     }
 }
 
@@ -199,6 +230,7 @@ const fn tinybvh_entry(
         counts_internals: false,
         motion_blur: false,
         chunk_rays: CHUNK_RAYS,
+        source: TINYBVH_SOURCE,
     }
 }
 
@@ -317,6 +349,7 @@ pub const TRACERS: &[TracerInfo] = &[
         counts_internals: true,
         motion_blur: true,
         chunk_rays: CHUNK_RAYS,
+        source: REFERENCE_SOURCE,
     },
     TracerInfo {
         name: "wide-single",
@@ -345,6 +378,7 @@ pub const TRACERS: &[TracerInfo] = &[
         counts_internals: true,
         motion_blur: true,
         chunk_rays: CHUNK_RAYS,
+        source: WIDE_SINGLE_SOURCE,
     },
     embree_entry(
         "embree3-1",
@@ -415,6 +449,7 @@ pub const TRACERS: &[TracerInfo] = &[
         counts_internals: true,
         motion_blur: false,
         chunk_rays: CHUNK_RAYS,
+        source: OBVHS_SOURCE,
     },
     #[cfg(tinybvh)]
     tinybvh_entry(
@@ -455,6 +490,7 @@ pub const TRACERS: &[TracerInfo] = &[
         counts_internals: false,
         motion_blur: false,
         chunk_rays: CHUNK_RAYS,
+        source: TINYBVH_SOURCE,
     },
     TracerInfo {
         name: "grid-dda",
@@ -478,6 +514,7 @@ pub const TRACERS: &[TracerInfo] = &[
         counts_internals: true,
         motion_blur: false,
         chunk_rays: CHUNK_RAYS,
+        source: GRID_DDA_SOURCE,
     },
     TracerInfo {
         name: "cgt",
@@ -493,6 +530,7 @@ pub const TRACERS: &[TracerInfo] = &[
         counts_internals: true,
         motion_blur: false,
         chunk_rays: CHUNK_RAYS,
+        source: CGT_SOURCE,
     },
     TracerInfo {
         name: "packet",
@@ -514,6 +552,7 @@ pub const TRACERS: &[TracerInfo] = &[
         counts_internals: true,
         motion_blur: true,
         chunk_rays: CHUNK_RAYS,
+        source: PACKET_SOURCE,
     },
     TracerInfo {
         name: "mft",
@@ -529,6 +568,7 @@ pub const TRACERS: &[TracerInfo] = &[
         counts_internals: true,
         motion_blur: false,
         chunk_rays: CHUNK_RAYS,
+        source: MFT_SOURCE,
     },
     TracerInfo {
         name: "stream",
@@ -546,6 +586,7 @@ pub const TRACERS: &[TracerInfo] = &[
         counts_internals: true,
         motion_blur: false,
         chunk_rays: 16 * CHUNK_RAYS,
+        source: STREAM_SOURCE,
     },
 ];
 

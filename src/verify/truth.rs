@@ -140,6 +140,18 @@ impl Truth {
     }
 }
 
+/// The exact distance (ray parameter) at which `ray` meets the plane of `tri` inside it or
+/// within rounding of its edges, in f64; `None` where it passes farther from it.
+pub fn distance(tri: &Triangle, ray: &Ray) -> Option<f64> {
+    let hit = exact_hit(
+        tri,
+        ray.origin.as_dvec3(),
+        ray.dir.as_dvec3(),
+        rounding(tri, ray),
+    )?;
+    Some(hit.t)
+}
+
 /// The rounding bound of an f32 intersection of `ray` with `tri`: `EDGE_GRAZE_ULPS` ULPs of the
 /// largest coordinate magnitude involved (its vertices and the ray origin: a watertight test works
 /// on the vertices relative to the origin).

@@ -77,7 +77,7 @@ pub trait EmbreeApi: Sized + 'static {
     unsafe fn attach_geometry(scene: RTCScene, geometry: RTCGeometry) -> c_uint;
     unsafe fn release_geometry(geometry: RTCGeometry);
 
-    /// The record pointers may write past the struct into a `Padded` tail (Embree ≥ 4.3).
+    /// The library may write past the Embree 3 record into its `Padded` tail (Embree ≥ 4.3).
     unsafe fn intersect1(scene: RTCScene, args: &mut Self::Arguments, rayhit: *mut RTCRayHit);
     unsafe fn occluded1(scene: RTCScene, args: &mut Self::Arguments, ray: *mut RTCRay);
     unsafe fn intersect4(
@@ -118,11 +118,14 @@ pub trait EmbreeApi: Sized + 'static {
     );
 }
 
-/// A ray record followed by room for what newer libraries append to the hit: Embree 4.3 added
-/// `instPrimID[RTC_MAX_INSTANCE_LEVEL_COUNT]` after `instID` (instance arrays), which the 4.2
-/// headers we compile against lack, and the 4.4 library writes it on every rtcIntersect1. 16
-/// words hold it for packets of up to 16 lanes; Embree 3 never touches them. Pointers handed to
-/// Embree must come from `as_mut_ptr`, whose provenance covers the tail.
+/// A ray record of the Embree 3 layout, which the tracers fill for both versions, followed by
+/// room for what Embree 4 appends to the hit: since 4.3 its hits end with
+/// `instPrimID[RTC_MAX_INSTANCE_LEVEL_COUNT]` after `instID` (instance arrays), which the 4.4
+/// library writes on every intersect (and, on ISAs without native N-wide packets, on every
+/// occlusion of a packet: `tracers::embree::packet`). 16 words hold it for packets of up to 16
+/// lanes (`v4`'s tests check each padded record covers its Embree 4 binding); Embree 3 never
+/// touches them. Pointers handed to Embree must come from `as_mut_ptr`, whose provenance covers
+/// the tail.
 #[repr(C)]
 pub struct Padded<T> {
     pub record: T,

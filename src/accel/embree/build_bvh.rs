@@ -225,9 +225,28 @@ pub fn build_bvh(triangles: &[Triangle], config: BvhConfig) -> Result<Bvh> {
             u32::MAX
         )));
     }
-    let device = Device::<Embree3>::shared()?;
     let capacity = ((n as f64 * SPLIT_REPLICATIONS).ceil() as usize).max(n + 1);
     let mut primitives = vec![RTCBuildPrimitive::default(); capacity];
+    build_in(
+        &*Device::<Embree3>::shared()?,
+        triangles,
+        config,
+        &mut primitives,
+        start,
+    )
+}
+
+/// `build_bvh` on `device`, with `primitives` as Embree's primitive array: its length is the
+/// capacity Embree may fill with split references (more than the triangles).
+fn build_in(
+    device: &Device<Embree3>,
+    triangles: &[Triangle],
+    config: BvhConfig,
+    primitives: &mut [RTCBuildPrimitive],
+    start: Instant,
+) -> Result<Bvh> {
+    let n = triangles.len();
+    let capacity = primitives.len();
     let mut root_bounds = Aabb::EMPTY;
     for (i, (p, tri)) in primitives.iter_mut().zip(triangles).enumerate() {
         let b = tri.bounds();
@@ -462,6 +481,47 @@ mod tests {
         // The wide collapse takes it as it takes ours.
         let wide = WideBvh::<8>::collapse(&bvh);
         assert!(!wide.is_empty());
+    }
+
+    /// rtcBuildBVH fills the primitive array up to its capacity with split references: given an
+    /// array flush against a protected page (ending at it, and starting after one), on the
+    /// machine's ISA and on lower ones, it reads and writes only inside, and makes the same tree.
+    #[test]
+    fn the_builder_keeps_to_its_primitive_array_on_every_isa() {
+        use crate::guard_page::{self, Guarded, Placement};
+        let tris = slivers_over_small_triangles(3);
+        let unguarded = build_bvh(&tris, embree(4)).unwrap();
+        let capacity =
+            ((tris.len() as f64 * SPLIT_REPLICATIONS).ceil() as usize).max(tris.len() + 1);
+        let mut isas = vec![None];
+        if is_x86_feature_detected!("avx512f") && is_x86_feature_detected!("avx2") {
+            isas.push(Some("isa=avx2"));
+        }
+        isas.push(Some("isa=sse4.2"));
+        for isa in isas {
+            let device = Device::<Embree3>::with_config(isa).unwrap();
+            for placement in Placement::BOTH {
+                let what = format!("rtcBuildBVH at {isa:?}, {placement:?}");
+                let mut primitives =
+                    Guarded::new(vec![RTCBuildPrimitive::default(); capacity], placement);
+                let bvh = guard_page::call(&what, || {
+                    build_in(
+                        &device,
+                        &tris,
+                        embree(4),
+                        primitives.as_mut_slice(),
+                        Instant::now(),
+                    )
+                })
+                .unwrap();
+                check_tree(&tris, &bvh);
+                assert!(
+                    bvh.triangles.len() > tris.len(),
+                    "{what}: no split references"
+                );
+                assert_eq!(bvh.nodes.len(), unguarded.nodes.len(), "{what}");
+            }
+        }
     }
 
     #[test]

@@ -2,7 +2,7 @@
 //! version serves the whole process (`Device::shared`), since creating one starts a thread pool;
 //! scenes keep it alive.
 
-use std::ffi::{c_char, c_void, CStr};
+use std::ffi::{c_char, c_void, CStr, CString};
 use std::marker::PhantomData;
 use std::ptr;
 use std::sync::{Arc, Mutex, PoisonError};
@@ -18,6 +18,9 @@ pub struct Device<A: EmbreeApi = Embree3> {
     raw: ffi::RTCDevice,
     // Boxed so the address handed to Embree as the callback's user pointer never moves.
     errors: Box<ErrorLog>,
+    /// Whether the device's ISA runs packets of 4, 8 and 16 rays natively
+    /// (`RTC_DEVICE_PROPERTY_NATIVE_RAY{4,8,16}_SUPPORTED`): 16 needs AVX-512, 8 AVX.
+    native_packets: [bool; 3],
     api: PhantomData<A>,
 }
 
@@ -26,12 +29,21 @@ unsafe impl<A: EmbreeApi> Send for Device<A> {}
 unsafe impl<A: EmbreeApi> Sync for Device<A> {}
 
 impl<A: EmbreeApi> Device<A> {
-    /// A new device with Embree's default configuration (all hardware threads for builds), once
-    /// the library is checked to be the major version of our headers and at least as new.
+    /// A new device with Embree's default configuration (all hardware threads for builds, the
+    /// best ISA of this CPU), once the library is checked to be the release of our headers.
     pub fn new() -> Result<Self> {
+        Self::with_config(None)
+    }
+
+    /// A new device with Embree's configuration string (`rtcNewDevice`), e.g. `"isa=avx2"` to
+    /// run Embree's AVX2 kernels on an AVX-512 machine, or `None` for the defaults.
+    pub fn with_config(config: Option<&str>) -> Result<Self> {
         A::load()?;
-        // SAFETY: a null config string selects the defaults.
-        let raw = unsafe { A::new_device(ptr::null()) };
+        let config = config
+            .map(|c| CString::new(c).map_err(|_| Error::usage("an Embree config has no NUL")))
+            .transpose()?;
+        // SAFETY: a NUL-terminated config string, or null for the defaults.
+        let raw = unsafe { A::new_device(config.as_ref().map_or(ptr::null(), |c| c.as_ptr())) };
         if raw.is_null() {
             // SAFETY: with a null device Embree reports the error of device creation.
             let code = unsafe { A::device_error(ptr::null_mut()) };
@@ -41,18 +53,28 @@ impl<A: EmbreeApi> Device<A> {
                 error_name(code)
             )));
         }
-        let device = Device {
+        let mut device = Device {
             raw,
             errors: Box::default(),
+            native_packets: [false; 3],
             api: PhantomData,
         };
         let log: *const ErrorLog = &*device.errors;
         // SAFETY: the log outlives the device: it is dropped after rtcReleaseDevice in Drop.
         unsafe { A::set_device_error_function(raw, Some(record_error), log as *mut c_void) };
-        let library = device.property(ffi::RTCDeviceProperty::RTC_DEVICE_PROPERTY_VERSION);
-        if !version_fits(library, A::HEADER_VERSION) {
-            return Err(Error::runtime(format!(
-                "{} library {} does not fit the headers raylab was built with ({})",
+        use ffi::RTCDeviceProperty::*;
+        device.native_packets = [
+            RTC_DEVICE_PROPERTY_NATIVE_RAY4_SUPPORTED,
+            RTC_DEVICE_PROPERTY_NATIVE_RAY8_SUPPORTED,
+            RTC_DEVICE_PROPERTY_NATIVE_RAY16_SUPPORTED,
+        ]
+        .map(|p| device.property(p) == 1);
+        let library = device.property(RTC_DEVICE_PROPERTY_VERSION);
+        if !same_release(library, A::HEADER_VERSION) {
+            return Err(Error::usage(format!(
+                "{} library {} is not the release of the headers raylab was built with ({}): \
+                 its records may have another layout; fetch both of one release \
+                 (`bash .ci/fetch-embree4`) and rebuild",
                 A::NAME,
                 device.version(),
                 dotted(A::HEADER_VERSION)
@@ -61,7 +83,8 @@ impl<A: EmbreeApi> Device<A> {
         Ok(device)
     }
 
-    /// The process-wide device of this version, created on first use.
+    /// The process-wide device of this version, created on first use with the configuration
+    /// `RAYLAB_EMBREE_CONFIG` gives, if any (`shared_config`).
     pub fn shared() -> Result<Arc<Self>> {
         let mut slot = A::shared_device()
             .lock()
@@ -69,9 +92,20 @@ impl<A: EmbreeApi> Device<A> {
         if let Some(device) = &*slot {
             return Ok(device.clone());
         }
-        let device = Arc::new(Device::new()?);
+        let device = Arc::new(Device::with_config(shared_config().as_deref())?);
         *slot = Some(device.clone());
         Ok(device)
+    }
+
+    /// Whether packets of `width` (4, 8 or 16) rays run natively on this device's ISA; where not,
+    /// Embree traces their lanes one by one through the packet taken as a ray-and-hit packet.
+    pub fn native_packets(&self, width: usize) -> bool {
+        match width {
+            4 => self.native_packets[0],
+            8 => self.native_packets[1],
+            16 => self.native_packets[2],
+            _ => false,
+        }
     }
 
     pub(crate) fn raw(&self) -> ffi::RTCDevice {
@@ -109,16 +143,28 @@ impl<A: EmbreeApi> Drop for Device<A> {
     }
 }
 
+/// The environment variable whose value configures the shared devices of both versions, e.g.
+/// `isa=avx2` to measure and check Embree's AVX2 kernels on an AVX-512 machine (meta.json records
+/// it): Embree's `rtcNewDevice` configuration string.
+pub const CONFIG_VARIABLE: &str = "RAYLAB_EMBREE_CONFIG";
+
+/// The configuration of the shared devices: `RAYLAB_EMBREE_CONFIG`, when set and not empty.
+pub fn shared_config() -> Option<String> {
+    std::env::var(CONFIG_VARIABLE)
+        .ok()
+        .filter(|c| !c.is_empty())
+}
+
 /// The Embree library version, via the shared device.
 pub fn version<A: EmbreeApi>() -> Result<String> {
     Ok(Device::<A>::shared()?.version())
 }
 
-/// Whether a library of `RTC_VERSION` `library` serves code built against headers of `header`:
-/// the same major version, and not older (a newer minor version keeps the API; what it appends
-/// to the records is what `api::Padded` makes room for).
-fn version_fits(library: isize, header: isize) -> bool {
-    library / 10000 == header / 10000 && library >= header
+/// Whether a library of `RTC_VERSION` `library` is of the release (major.minor) of headers of
+/// `header`: Embree changes records and signatures only between minor versions (4.3 appended
+/// `instPrimID` to every hit), never in a patch release, so only a patch may differ.
+fn same_release(library: isize, header: isize) -> bool {
+    library / 100 == header / 100
 }
 
 /// `RTC_VERSION` 31305 as "3.13.5".
@@ -172,12 +218,16 @@ mod tests {
     use ffi::RTCDeviceProperty::*;
 
     #[test]
-    fn versions_fit_same_major_not_older() {
-        assert!(version_fits(31305, 31305));
-        assert!(version_fits(40400, 40200));
-        assert!(!version_fits(40100, 40200), "older than the headers");
-        assert!(!version_fits(31305, 40200), "another major version");
-        assert!(!version_fits(50000, 40200));
+    fn only_a_patch_release_may_differ_from_the_headers() {
+        assert!(same_release(31305, 31305));
+        assert!(same_release(40400, 40401), "4.4.0 library, 4.4.1 headers");
+        assert!(
+            !same_release(40400, 40200),
+            "4.3 appended instPrimID to the hit"
+        );
+        assert!(!same_release(40100, 40200), "older than the headers");
+        assert!(!same_release(31305, 40200), "another major version");
+        assert!(!same_release(50000, 40200));
         assert_eq!(dotted(31305), "3.13.5");
         assert_eq!(dotted(40400), "4.4.0");
     }

@@ -15,7 +15,7 @@ pub mod v4;
 pub use api::{Embree3, EmbreeApi, Padded};
 pub use build_bvh::build_bvh;
 pub use config::{BuildQuality, EmbreeConfig};
-pub use device::{version, Device};
+pub use device::{shared_config, version, Device, CONFIG_VARIABLE};
 pub use scene::EmbreeScene;
 #[cfg(embree4)]
 pub use v4::Embree4;

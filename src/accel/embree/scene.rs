@@ -220,6 +220,12 @@ impl<A: EmbreeApi> EmbreeScene<A> {
     }
 
     /// The committed scene handle, for the tracers.
+    /// Whether packets of `width` rays run natively on the scene's device (`Device::native_packets`).
+    #[inline(always)]
+    pub fn native_packets(&self, width: usize) -> bool {
+        self.device.native_packets(width)
+    }
+
     pub(crate) fn raw(&self) -> ffi::RTCScene {
         self.raw
     }

@@ -163,6 +163,22 @@ impl TinyBvh {
         config: TinyBvhConfig,
     ) -> Result<TinyBvh> {
         let start = Instant::now();
+        let scale = scale_for(triangles);
+        let vertices: Vec<[f32; 4]> = triangles
+            .iter()
+            .flat_map(|t| t.v.map(|p| [p.x * scale, p.y * scale, p.z * scale, 0.0]))
+            .collect();
+        Self::build_from(&vertices, layout, config, scale, start)
+    }
+
+    /// The structure over `vertices`, three (x, y, z, 0) a triangle, already scaled by `scale`.
+    pub(crate) fn build_from(
+        vertices: &[[f32; 4]],
+        layout: TinyLayout,
+        config: TinyBvhConfig,
+        scale: f32,
+        start: Instant,
+    ) -> Result<TinyBvh> {
         // SAFETY: plain queries of the linked shim.
         let (ray_size, simd) = unsafe {
             (
@@ -182,16 +198,12 @@ impl TinyBvh {
                 layout.class()
             )));
         }
-        let count = u32::try_from(triangles.len())
+        let triangles = vertices.len() / 3;
+        let count = u32::try_from(triangles)
             .map_err(|_| Error::runtime("tinybvh indexes triangles with 32 bits"))?;
-        let scale = scale_for(triangles);
-        let handle = if triangles.is_empty() {
+        let handle = if triangles == 0 {
             None
         } else {
-            let vertices: Vec<[f32; 4]> = triangles
-                .iter()
-                .flat_map(|t| t.v.map(|p| [p.x * scale, p.y * scale, p.z * scale, 0.0]))
-                .collect();
             // SAFETY: `vertices` holds 3 × count float4; the shim copies them.
             let raw = unsafe {
                 ffi::raylab_tinybvh_build(
@@ -213,7 +225,7 @@ impl TinyBvh {
             handle,
             layout,
             config,
-            triangles: triangles.len(),
+            triangles,
             scale,
             build_seconds: start.elapsed().as_secs_f64(),
         })

@@ -1,18 +1,17 @@
 //! `raylab report --check PATH…`: which results directories under the paths are no longer
 //! evidence. A run is stale when it was made from a dirty tree (or one whose state is unknown),
-//! when it has no record of the source it measured, when that source — the tracers,
-//! acceleration structures, lanes and geometry (`record::provenance`) — has changed since, or when
-//! its experiment file now asks for something else. The rule, not a person, says which runs must
+//! when it has no record of the source it measured, when that source — the shared measured core
+//! and the families of the tracers it ran (`record::provenance`), each area as the run recorded
+//! it — has changed since, or when its experiment file now asks for something else. The rule, not a person, says which runs must
 //! be re-run before their numbers are quoted; `reproduce` redoes exactly those.
 
-use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use serde_json::Value;
 
 use crate::error::{Error, Result};
 use crate::experiment::record::files::META_JSON;
-use crate::experiment::record::provenance::{this_source, MEASURED};
+use crate::experiment::record::provenance::SourceTree;
 
 /// A results directory and why it is stale (empty: it is not).
 #[derive(Clone, Debug, PartialEq)]
@@ -36,13 +35,9 @@ fn runs_under(path: &Path, out: &mut Vec<PathBuf>) -> Result<()> {
     entries.iter().try_for_each(|p| runs_under(p, out))
 }
 
-/// Why the run whose meta.json is `meta` is stale against the source digests `today` and the
+/// Why the run whose meta.json is `meta` is stale against the source tree `today` and the
 /// experiment file's contents now (`experiment_now`; `None`: not known, not compared).
-pub fn reasons(
-    meta: &Value,
-    today: &BTreeMap<String, String>,
-    experiment_now: Option<&str>,
-) -> Vec<String> {
+pub fn reasons(meta: &Value, today: &SourceTree, experiment_now: Option<&str>) -> Vec<String> {
     let commit = meta.pointer("/commit/hash").and_then(Value::as_str);
     let mut reasons = match meta.pointer("/commit/dirty").and_then(Value::as_bool) {
         Some(false) => Vec::new(),
@@ -60,19 +55,19 @@ pub fn reasons(
 /// measure now (`reasons` without the tree's state).
 pub fn source_reasons(
     meta: &Value,
-    today: &BTreeMap<String, String>,
+    today: &SourceTree,
     experiment_now: Option<&str>,
 ) -> Vec<String> {
     let mut reasons = Vec::new();
     match meta.get("measured_source").and_then(Value::as_object) {
         None => reasons.push("no record of the source it measured".to_string()),
         Some(then) => {
-            let changed: Vec<&str> = MEASURED
+            // Each area the run recorded (older runs recorded whole folders: `tracers`), in
+            // meta.json's order.
+            let changed: Vec<&str> = then
                 .iter()
-                .copied()
-                .filter(|area| {
-                    then.get(*area).and_then(Value::as_str) != today.get(*area).map(String::as_str)
-                })
+                .filter(|(area, digest)| digest.as_str() != today.digest(area).as_deref())
+                .map(|(area, _)| area.as_str())
                 .collect();
             if !changed.is_empty() {
                 reasons.push(format!(
@@ -104,12 +99,13 @@ fn experiment_now(meta: &Value) -> Option<String> {
 
 /// The verdict on every results directory under `paths`; a path with none is a usage error.
 pub fn check(paths: &[PathBuf]) -> Result<Vec<Verdict>> {
-    let today = this_source().ok_or_else(|| {
-        Error::runtime(format!(
+    let today = SourceTree::this();
+    if !today.is_readable() {
+        return Err(Error::runtime(format!(
             "cannot read the source tree at {} to compare with",
-            env!("CARGO_MANIFEST_DIR")
-        ))
-    })?;
+            today.path().display()
+        )));
+    }
     let mut verdicts = Vec::new();
     for path in paths {
         let mut runs = Vec::new();
@@ -137,25 +133,37 @@ pub fn check(paths: &[PathBuf]) -> Result<Vec<Verdict>> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::experiment::record::provenance::measured_areas;
 
-    fn today() -> BTreeMap<String, String> {
-        MEASURED
-            .iter()
-            .map(|a| (a.to_string(), format!("{a}-now")))
-            .collect()
+    /// A scratch source tree holding every area a run of packets, Embree or mft measures.
+    fn scratch_tree(name: &str) -> (PathBuf, SourceTree) {
+        let src = std::env::temp_dir().join(format!("raylab-stale-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&src);
+        for area in measured_areas(["packet", "embree3-16", "mft"]) {
+            let file = if area.ends_with(".rs") {
+                src.join(area)
+            } else {
+                src.join(area).join("mod.rs")
+            };
+            std::fs::create_dir_all(file.parent().unwrap()).unwrap();
+            std::fs::write(&file, format!("// {area}")).unwrap();
+        }
+        let tree = SourceTree::at(&src);
+        (src, tree)
+    }
+
+    /// A clean run's meta.json that measured `tracers`, recorded against `tree`.
+    fn run_of(tracers: &[&str], tree: &SourceTree) -> Value {
+        serde_json::json!({
+            "commit": { "hash": "abc", "dirty": false },
+            "measured_source": tree.digests(&measured_areas(tracers.iter().copied())).unwrap(),
+        })
     }
 
     #[test]
     fn dirty_unknown_unrecorded_and_changed_runs_are_stale_a_clean_current_one_is_not() {
-        let now = today();
-        let current: serde_json::Map<String, Value> = now
-            .iter()
-            .map(|(k, v)| (k.clone(), Value::from(v.as_str())))
-            .collect();
-        let clean = serde_json::json!({
-            "commit": { "hash": "abc", "dirty": false },
-            "measured_source": current,
-        });
+        let (src, now) = scratch_tree("reasons");
+        let clean = run_of(&["packet"], &now);
         assert!(reasons(&clean, &now, None).is_empty());
 
         let mut dirty = clean.clone();
@@ -181,10 +189,10 @@ mod tests {
 
         let mut changed = clean.clone();
         changed["measured_source"]["lanes"] = Value::from("lanes-then");
-        changed["measured_source"]["tracers"] = Value::from("tracers-then");
+        changed["measured_source"]["tracers/packet"] = Value::from("packet-then");
         assert_eq!(
             reasons(&changed, &now, None),
-            ["the code it measured changed since: tracers, lanes"]
+            ["the code it measured changed since: lanes, tracers/packet"]
         );
 
         let mut recorded = clean.clone();
@@ -199,6 +207,44 @@ mod tests {
             Vec::<String>::new(),
             "the tree's state is not the source's"
         );
+        std::fs::remove_dir_all(&src).unwrap();
+    }
+
+    /// Staleness per family (issue 46): on a scratch tree, a change to `tracers/multi_frusta`
+    /// makes the run that measured mft stale and leaves the one of packets alone; a change to the
+    /// shared core (the lanes) makes both stale.
+    #[test]
+    fn a_change_to_one_family_makes_only_the_runs_that_measured_it_stale() {
+        let (src, before) = scratch_tree("family");
+        let packets = run_of(&["packet", "embree3-16"], &before);
+        let mft = run_of(&["mft"], &before);
+        // A run recorded before staleness per family (whole folders) is compared by folder.
+        let whole = serde_json::json!({
+            "commit": { "hash": "abc", "dirty": false },
+            "measured_source": before.digests(&["tracers"]).unwrap(),
+        });
+        std::fs::write(src.join("tracers/multi_frusta/mod.rs"), "// changed").unwrap();
+        let after = SourceTree::at(&src);
+        assert!(reasons(&packets, &after, None).is_empty());
+        assert_eq!(
+            reasons(&mft, &after, None),
+            ["the code it measured changed since: tracers/multi_frusta"]
+        );
+        std::fs::write(src.join("lanes/mod.rs"), "// changed").unwrap();
+        let core = SourceTree::at(&src);
+        assert_eq!(
+            reasons(&packets, &core, None),
+            ["the code it measured changed since: lanes"]
+        );
+        assert_eq!(
+            reasons(&mft, &core, None),
+            ["the code it measured changed since: lanes, tracers/multi_frusta"]
+        );
+        assert_eq!(
+            reasons(&whole, &core, None),
+            ["the code it measured changed since: tracers"]
+        );
+        std::fs::remove_dir_all(&src).unwrap();
     }
 
     #[test]
@@ -206,10 +252,7 @@ mod tests {
         let root = std::env::temp_dir().join(format!("raylab-staleness-{}", std::process::id()));
         let run = root.join("paper/exp/20260101T000000Z");
         std::fs::create_dir_all(run.join("rays")).unwrap();
-        let meta = serde_json::json!({
-            "commit": { "hash": "abc", "dirty": false },
-            "measured_source": this_source().unwrap(),
-        });
+        let meta = run_of(&["reference"], &SourceTree::this());
         std::fs::write(run.join(META_JSON), meta.to_string()).unwrap();
         let verdicts = check(std::slice::from_ref(&root)).unwrap();
         assert_eq!(

@@ -8,7 +8,7 @@ use std::process::Command;
 use serde::Serialize;
 
 use crate::experiment::record::files::META_JSON;
-use crate::experiment::record::provenance::this_source;
+use crate::experiment::record::provenance::{every_area, measured_areas, SourceTree};
 use crate::experiment::record::utc::UtcTime;
 use crate::experiment::spec::overrides::RunOverrides;
 use crate::experiment::spec::plan::Plan;
@@ -98,7 +98,13 @@ pub fn gather<'a>(
         run_id,
         date: started.iso8601(),
         commit: commit(),
-        measured_source: this_source(),
+        measured_source: {
+            // The core and the families of the tracers planned (all of them without a plan).
+            let areas = plan.map_or_else(every_area, |p| {
+                measured_areas(p.instances.iter().map(|i| i.tracer.as_str()))
+            });
+            SourceTree::this().digests(&areas)
+        },
         hostname: hostname(),
         cpu: Cpu {
             model: cpu_model(),
@@ -245,6 +251,9 @@ fn versions() -> BTreeMap<&'static str, String> {
     use crate::accel::embree::{version, Embree3};
     let embree = version::<Embree3>().unwrap_or_else(|e| format!("unavailable: {e}"));
     v.insert("embree", embree);
+    // The devices' configuration (`RAYLAB_EMBREE_CONFIG`, e.g. a lower ISA), or Embree's default.
+    let config = crate::accel::embree::shared_config();
+    v.insert("embree_config", config.unwrap_or_else(|| "default".into()));
     v.insert("embree4", embree4_version());
     v.insert("tinybvh", tinybvh_version());
     v.insert("raylab", env!("CARGO_PKG_VERSION").to_string());
@@ -265,7 +274,8 @@ fn embree4_version() -> String {
         .and_then(|c| c.to_str().ok())
         .unwrap_or("?");
     match version::<Embree4>() {
-        Ok(library) => format!("{library} (headers {headers}; {})", v4::SOURCE),
+        // `Device::new` refuses a library of another release than the headers.
+        Ok(library) => format!("{library} (headers {headers}, its release; {})", v4::SOURCE),
         Err(e) => format!("unavailable: {e} ({} headers {headers})", Embree4::NAME),
     }
 }
@@ -274,9 +284,10 @@ fn embree4_version() -> String {
 fn tinybvh_version() -> String {
     #[cfg(tinybvh)]
     return format!(
-        "{} ({}, compiled -march=native)",
+        "{} ({}, compiled -march={})",
         crate::accel::tinybvh::version(),
-        crate::accel::tinybvh::SOURCE
+        crate::accel::tinybvh::SOURCE,
+        env!("RAYLAB_TINYBVH_MARCH")
     );
     #[cfg(not(tinybvh))]
     format!("not built: {}", crate::tracers::registry::TINYBVH_HINT)

@@ -1,4 +1,4 @@
-//! Tiny scenes for the experiment tests (unit and end-to-end, `tests/experiment_runs.rs`): a unit
+//! Tiny scenes for the experiment tests (unit and end-to-end, `tests/suite/experiment_runs.rs`): a unit
 //! quad lit by a point light, unlit, sliding away (animated), under a quad light, or made of
 //! glass, and a parser for test experiment bodies. Hidden from the docs; not part of the
 //! testbed's interface.

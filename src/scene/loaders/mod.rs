@@ -3,7 +3,7 @@
 //! transform hierarchies and keyframe animation).
 //!
 //! Every loader returns one `Error` naming the file and, where known, the line for bad input;
-//! none panics, hangs or allocates for counts the data does not back (`tests/fuzz_loaders.rs`
+//! none panics, hangs or allocates for counts the data does not back (`tests/suite/fuzz_loaders.rs`
 //! and the cargo-fuzz targets in `fuzz/` check it). Degenerate (zero-area) triangles are kept: real scenes have them (conference has
 //! 52,670) and tracers must cope.
 

@@ -11,6 +11,9 @@ mod single;
 mod stream;
 mod tracer;
 
+#[cfg(test)]
+mod guard_tests;
+
 pub use packet::{Packets, Packets16, Packets4, Packets8, RayHitPacket, RayPacket};
 pub use single::Single;
 pub use stream::{Stream, STREAM_LENGTH};

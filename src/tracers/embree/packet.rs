@@ -1,7 +1,20 @@
 //! `embree3-4/8/16`, `embree4-4/8/16`: `rtcIntersectN` / `rtcOccludedN` on consecutive groups of
 //! N rays of the chunk (never across an explicit packet boundary, `Rays::packets`), each staged
-//! in its own `RTCRayHitN` / `RTCRayN`; a partial group masks its missing lanes off. One implementation over the packet type and the Embree
-//! version; the three bindgen structs only supply their lanes and their calls.
+//! in its own `RTCRayHitN`; a partial group masks its missing lanes off. One implementation over
+//! the packet type and the Embree version; the three bindgen structs only supply their lanes and
+//! their calls.
+//!
+//! **Occlusion where packets are not native.** `rtcOccludedN` takes an `RTCRayN`, but where the
+//! device's ISA has no native N-wide packets (16 below AVX-512, 8 below AVX) Embree 4 traces the
+//! lanes one by one through the packet cast to a `RayHitN`, reading and writing every hit field of
+//! each lane: up to 1,344 − 768 bytes past a bare `RTCRay16` (Embree 4.4's `rtcOccluded16` on an
+//! AVX2 machine, which crashed the default run). There the call is given a copy of the rays in a
+//! padded `RTCRayHitN` (a copy inside the clock, beside a fallback that traces 16 single rays).
+//! Where the packets are native the staged `RTCRayN` is handed over as it is: staging every
+//! occlusion packet as a ray-and-hit record was tried, and made `embree3-16`'s shadow rays 1.4–1.5×
+//! slower on AVX-512 (conference and Šibenik, 1024², 1 thread), a weaker baseline. `guard_tests`
+//! calls every entry point with its record flush against a protected page, at the machine's ISA
+//! and lower ones.
 
 use std::marker::PhantomData;
 use std::ops::Range;
@@ -11,17 +24,20 @@ use crate::accel::embree::ffi::{self, RTCRay, RTCScene, RTC_INVALID_GEOMETRY_ID}
 use crate::accel::embree::{EmbreeApi, EmbreeScene, Padded};
 use crate::geometry::{Hit, Rays};
 
-/// An Embree ray packet (`RTCRayN`): N lanes of rays, traced by `rtcOccludedN`.
-pub trait RayPacket: Sized {
+/// An Embree ray packet (`RTCRayN`): N lanes of rays, traced by `rtcOccludedN` (as the ray part
+/// of an `RTCRayHitN`).
+pub trait RayPacket: Sized + Copy {
     const WIDTH: usize;
     /// All lanes zero (a valid value: the struct is only floats and integers).
     fn zeroed() -> Self;
     fn set_ray(&mut self, lane: usize, ray: &RTCRay);
     fn tfar(&self, lane: usize) -> f32;
     /// # Safety
-    /// `valid` points to `WIDTH` ints, `scene` is committed, `self` is aligned as Embree requires.
+    /// `valid` points to `WIDTH` ints, `scene` is committed, `packet` is aligned as Embree
+    /// requires, and is the start of a `Padded` ray-and-hit packet unless the scene's device runs
+    /// packets of `WIDTH` natively (see the module's notes).
     unsafe fn occluded<A: EmbreeApi>(
-        &mut self,
+        packet: *mut Self,
         valid: *const i32,
         scene: RTCScene,
         args: &mut A::Arguments,
@@ -31,6 +47,7 @@ pub trait RayPacket: Sized {
 /// An Embree ray-and-hit packet (`RTCRayHitN`), traced by `rtcIntersectN`.
 pub trait RayHitPacket: Sized {
     type Rays: RayPacket;
+    /// All lanes zero (a valid value: the struct is only floats and integers).
     fn zeroed() -> Self;
     fn rays(&mut self) -> &mut Self::Rays;
     /// Marks lane `lane` as not yet hit, as rtcIntersectN requires.
@@ -75,20 +92,20 @@ macro_rules! embree_packet {
             }
             #[inline(always)]
             unsafe fn occluded<A: EmbreeApi>(
-                &mut self,
+                packet: *mut Self,
                 valid: *const i32,
                 scene: RTCScene,
                 args: &mut A::Arguments,
             ) {
                 // SAFETY: the caller's contract.
-                unsafe { A::$occluded(valid, scene, args, self) }
+                unsafe { A::$occluded(valid, scene, args, packet) }
             }
         }
 
         impl RayHitPacket for ffi::$ray_hit {
             type Rays = ffi::$ray;
             fn zeroed() -> Self {
-                // SAFETY: as for the ray packet.
+                // SAFETY: a C struct of f32 and u32 arrays: all zero bits is a valid value.
                 unsafe { std::mem::zeroed() }
             }
             #[inline(always)]
@@ -200,8 +217,25 @@ where
         occluded: &mut [bool],
     ) {
         let valid = ValidMask::first(occluded.len());
-        // SAFETY: as above.
-        unsafe { packet.occluded::<A>(valid.0.as_ptr(), scene.raw(), args) };
+        if scene.native_packets(P::Rays::WIDTH) {
+            // SAFETY: WIDTH valid ints, a committed scene, a packet aligned by its type, traced
+            // natively (the module's notes).
+            unsafe { P::Rays::occluded::<A>(packet, valid.0.as_ptr(), scene.raw(), args) };
+        } else {
+            let mut padded = Padded::new(P::zeroed());
+            *padded.record.rays() = *packet;
+            // SAFETY: as above, the rays being the first field of the padded ray-and-hit packet
+            // (`repr(C)`), whose pointer carries the whole record's provenance.
+            unsafe {
+                P::Rays::occluded::<A>(
+                    padded.as_mut_ptr().cast(),
+                    valid.0.as_ptr(),
+                    scene.raw(),
+                    args,
+                )
+            };
+            *packet = *padded.record.rays();
+        }
         for (lane, o) in occluded.iter_mut().enumerate() {
             *o = convert::is_occluded(packet.tfar(lane));
         }

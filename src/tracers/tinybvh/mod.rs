@@ -23,6 +23,9 @@
 pub mod tile;
 mod tiny_rays;
 
+#[cfg(test)]
+mod guard_tests;
+
 use std::ops::Range;
 use std::sync::Arc;
 

@@ -145,11 +145,11 @@ pub fn index(root: &Path, papers: &[Paper]) -> String {
     }
     out.push_str("\n|---|---:|---:|---:|---:|---:|\n");
     for paper in papers {
+        // Relative to VERDICTS.md, which lies in `root` (the README rebases them to its place).
         let _ = write!(
             out,
-            "| [{}]({}/{}/REPORT.md) | {} |",
+            "| [{}]({}/REPORT.md) | {} |",
             paper.claims.title,
-            root.display(),
             paper.name(),
             paper.judged.len()
         );

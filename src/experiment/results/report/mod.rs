@@ -421,7 +421,7 @@ mod tests {
             "{text}"
         );
         assert!(
-            text.contains("/toy2026/REPORT.md) | 2 | 0 | 1 | 0 | 1 |\n"),
+            text.contains("](toy2026/REPORT.md) | 2 | 0 | 1 | 0 | 1 |\n"),
             "{text}"
         );
         // A run the claims file does not list is an error.

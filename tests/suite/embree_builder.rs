@@ -2,7 +2,7 @@
 //! a valid tree in our layout (`accel::bvh_validity`: every triangle referenced, boxes nesting,
 //! leaves' boxes covering their triangles' parts), no larger than `leaf_size` and `max_depth`
 //! allow, with an SAH cost near our best tree's (both builders use the same cost constants; the
-//! costs are printed). Hits over it are checked in tests/embree_agreement.rs.
+//! costs are printed). Hits over it are checked in tests/suite/embree_agreement.rs.
 
 use raylab::accel::bvh_validity;
 use raylab::accel::{Accel, AccelKind, Bvh};

@@ -15,8 +15,9 @@ const LAYERS: &[&[&str]] = &[
     &["lanes", "geometry", "stats", "test_util"],
 ];
 
-/// Modules every layer may use: errors, seeded randomness, the parameter map, the memory budget.
-const UTILITIES: &[&str] = &["error", "memory", "random", "params"];
+/// Modules every layer may use: errors, seeded randomness, the parameter map, the memory budget,
+/// and (in unit tests) buffers against a guard page.
+const UTILITIES: &[&str] = &["error", "memory", "random", "params", "guard_page"];
 
 fn layer(module: &str) -> Option<usize> {
     LAYERS.iter().position(|peers| peers.contains(&module))

@@ -6,7 +6,7 @@
 //! (`fast_tests_agree_with_embree_without_robust_mode` in `embree_agreement.rs` compares the fast
 //! tests with Embree's non-robust build; `visibility.rs` the soft-shadow query.)
 
-mod common;
+use crate::common;
 
 use raylab::geometry::Fast;
 use raylab::tracers::chunked::{trace_hits, trace_occlusion};

@@ -2,7 +2,7 @@
 //! tree, and agreement with the reference tracer — every traversal × packet size × SIMD width ×
 //! frustum on/off, on primary, shadow and diffuse rays of the built-in room and balls scenes.
 
-mod common;
+use crate::common;
 
 use std::sync::Arc;
 

@@ -2,7 +2,7 @@
 //! with the reference tracer — every SIMD width × several stream sizes, with and without the
 //! single-ray hand-off of short sub-streams, closest hit and occlusion, on primary, shadow and diffuse rays of the built-in room, rings and balls scenes.
 
-mod common;
+use crate::common;
 
 use std::sync::Arc;
 

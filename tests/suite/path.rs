@@ -119,7 +119,7 @@ fn mean(image: &Image) -> f64 {
 /// The room lit by its quad light, with all three materials of the paper: a coupled glossy
 /// (Ashikhmin–Shirley) floor with its mirror coat, a glass box floating above the red box, the
 /// rest Lambertian. The glass touches nothing: a glass box standing on the floor meets it in a
-/// coplanar tie, which tracers break differently (tests/whitted.rs), sending paths apart.
+/// coplanar tie, which tracers break differently (tests/suite/whitted.rs), sending paths apart.
 fn three_material_room() -> Scene {
     let mut scene = load_scene("room-area-light", None).unwrap();
     for m in &mut scene.materials {
@@ -160,7 +160,7 @@ fn every_tracer_renders_the_same_image() {
             .collect()
     };
     // The same camera rays and first bounce for everyone, and the same image up to a path or
-    // two that a last-bit difference in a hit point (tests/whitted.rs) sends elsewhere, e.g.
+    // two that a last-bit difference in a hit point (tests/suite/whitted.rs) sends elsewhere, e.g.
     // through an edge of the glass box or past a Russian roulette threshold.
     let mean_value = mean(&reference.image);
     for tracer in ["packet", "stream", "obvhs", "embree16"] {

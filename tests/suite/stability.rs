@@ -10,7 +10,7 @@ use std::time::Duration;
 use raylab::tracers::Params;
 use raylab::verify::stability::{generate, run, CaseKind, Contender, Status};
 
-mod common;
+use crate::common;
 use common::smaller_sweep;
 
 fn contender(name: &'static str, params: &[(&str, &str)]) -> Contender {

@@ -1,4 +1,4 @@
-//! The tinybvh baseline beyond agreement with Embree (tests/embree_agreement.rs): its packet tracer
+//! The tinybvh baseline beyond agreement with Embree (tests/suite/embree_agreement.rs): its packet tracer
 //! really gets the camera rays' 16×16 blocks (not single rays behind its name), and every case of
 //! the stability suite is answered without a crash, a hang or an ill-formed ray hit — tinybvh
 //! exits the process on a NaN ray, and raylab must never hand it one. Whether tinybvh is
@@ -16,7 +16,7 @@ use raylab::tracers::{tracer_for_frame, Params};
 use raylab::verify::stability::cases::Case;
 use raylab::verify::stability::{generate, run, CaseKind, Contender, Status};
 
-mod common;
+use crate::common;
 use common::smaller_sweep;
 
 /// A camera batch of full 32×32 tiles: every aligned run of 256 rays is a 16×16 block, in the

@@ -3,7 +3,7 @@
 //! primary and diffuse rays, occlusion on shadow rays, of the built-in room, rings and balls
 //! scenes, and on moving geometry — for 4 and 8 children per node, robust and not.
 
-mod common;
+use crate::common;
 
 use std::sync::Arc;
 

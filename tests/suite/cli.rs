@@ -587,3 +587,35 @@ fn shards_merge_and_reports_refuse_bad_input() {
         "claims.toml:3",
     );
 }
+
+/// `report --check` exits 1 on a stale run (here: one with no record of its source), and 0 with
+/// `--stale-ok`, naming it both times; `--stale-ok` alone is a usage error.
+#[test]
+fn report_check_exits_1_on_a_stale_run_and_0_when_stale_is_ok() {
+    let dir = scratch("stale-ok");
+    let run = dir.join("results/exp/20260101T000000Z");
+    std::fs::create_dir_all(&run).unwrap();
+    std::fs::write(
+        run.join("meta.json"),
+        r#"{ "commit": { "hash": "abc", "dirty": false } }"#,
+    )
+    .unwrap();
+    for (args, code) in [
+        (&["report", "--check", "results"][..], 1),
+        (&["report", "--check", "--stale-ok", "results"][..], 0),
+    ] {
+        let out = Command::new(env!("CARGO_BIN_EXE_raylab"))
+            .args(args)
+            .current_dir(&dir)
+            .output()
+            .unwrap();
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert_eq!(out.status.code(), Some(code), "{args:?}: {stdout}");
+        assert!(
+            stdout.contains("no record of the source it measured"),
+            "{args:?}: {stdout}"
+        );
+    }
+    let (code, _) = raylab(&dir, &["report", "--stale-ok", "results"]);
+    assert_eq!(code, 2, "--stale-ok needs --check");
+}

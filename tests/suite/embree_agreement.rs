@@ -239,7 +239,7 @@ fn tracers_agree_with_embree_on_reflection_and_refraction() {
 
 /// One configuration per traversal, covering every SIMD width and both frustum settings, and
 /// ranged over the 4- and 8-wide trees; the exhaustive grid of configurations is checked against
-/// the reference tracer in tests/packet.rs.
+/// the reference tracer in tests/suite/packet.rs.
 #[test]
 fn packet_agrees_with_embree() {
     for (traversal, packet, lanes, frustum, width) in [
@@ -262,7 +262,7 @@ fn packet_agrees_with_embree() {
 
 /// Three widths — one lane group (16), 12 of 16 lanes, four groups as one (64) — with streams of
 /// a 32×32 tile and of the whole chunk; every width × stream size is checked against the
-/// reference tracer in tests/stream.rs.
+/// reference tracer in tests/suite/stream.rs.
 #[test]
 fn stream_agrees_with_embree() {
     for (width, stream) in [(16, "4096"), (12, "1024"), (64, "frame")] {
@@ -359,7 +359,7 @@ fn tracers_agree_with_embree_over_trees_built_by_embree() {
 }
 
 /// The multi-frusta tracer on ordinary ray batches (4×4 packets; its native light-visibility
-/// answer is checked against Embree in tests/visibility.rs).
+/// answer is checked against Embree in tests/suite/visibility.rs).
 #[test]
 fn mft_agrees_with_embree() {
     agrees_with_embree("mft");

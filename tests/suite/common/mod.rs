@@ -2,9 +2,6 @@
 //! a scene's ray batches with the reference tracer's answers, the moving room, and the stability
 //! sweep the stability tests run (`stability.rs`, `tinybvh.rs`).
 
-// Each test crate uses the part of these fixtures it needs.
-#![allow(dead_code)]
-
 use std::sync::Arc;
 
 use glam::Vec3;
