@@ -4,6 +4,8 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+use crate::common::only_run;
+
 fn scratch(name: &str) -> PathBuf {
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
         .join("cli")
@@ -315,17 +317,6 @@ fn bad_stability_experiments_name_file_and_line() {
     );
     fails_with(&dir, &["run", &nan], "offsets");
     no_results(&dir);
-}
-
-/// The one results directory of experiment `name` under `root`.
-fn only_run(root: &Path, name: &str) -> PathBuf {
-    let runs: Vec<PathBuf> = std::fs::read_dir(root.join(name))
-        .unwrap()
-        .flatten()
-        .map(|e| e.path())
-        .collect();
-    assert_eq!(runs.len(), 1, "{runs:?}");
-    runs[0].clone()
 }
 
 #[test]

@@ -5,6 +5,8 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+use crate::common::only_run;
+
 fn scratch(name: &str) -> PathBuf {
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
         .join("summary")
@@ -37,15 +39,6 @@ const EXPERIMENT: &str = "name = \"small\"\nscenes = [{ name = \"room\", size = 
     frames = 1\nthreads = [1]\nwarmup = 0\nrepeats = 1\n";
 
 /// The one results directory under `root`.
-fn only_run(root: &Path) -> PathBuf {
-    let runs: Vec<PathBuf> = std::fs::read_dir(root.join("small"))
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .collect();
-    assert_eq!(runs.len(), 1, "{runs:?}");
-    runs[0].clone()
-}
-
 #[test]
 fn a_run_prints_and_saves_its_summary_and_summary_prints_it_again() {
     let dir = scratch("run");
@@ -57,7 +50,7 @@ fn a_run_prints_and_saves_its_summary_and_summary_prints_it_again() {
         String::from_utf8_lossy(&out.stderr)
     );
     let printed = stdout(&out);
-    let results = only_run(&dir.join("res"));
+    let results = only_run(&dir.join("res"), "small");
     let saved = std::fs::read_to_string(results.join("summary.md")).unwrap();
     // The plan, then the summary, then the results directory.
     assert!(printed.contains(&saved), "{printed}");
@@ -113,7 +106,7 @@ fn quiet_and_json_runs_are_for_scripts() {
     std::fs::write(dir.join("small.toml"), EXPERIMENT).unwrap();
     let quiet = raylab(&dir, &["run", "small.toml", "--out", "quiet", "--quiet"]);
     assert!(quiet.status.success());
-    let results = only_run(&dir.join("quiet"));
+    let results = only_run(&dir.join("quiet"), "small");
     assert_eq!(
         stdout(&quiet),
         format!(
@@ -132,7 +125,7 @@ fn quiet_and_json_runs_are_for_scripts() {
     let json = raylab(&dir, &["run", "small.toml", "--out", "json", "--json"]);
     assert!(json.status.success());
     let value: serde_json::Value = serde_json::from_slice(&json.stdout).unwrap();
-    let results = only_run(&dir.join("json"));
+    let results = only_run(&dir.join("json"), "small");
     assert_eq!(
         value["results"],
         Path::new("json/small")

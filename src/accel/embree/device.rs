@@ -92,7 +92,11 @@ impl<A: EmbreeApi> Device<A> {
         if let Some(device) = &*slot {
             return Ok(device.clone());
         }
-        let device = Arc::new(Device::with_config(shared_config().as_deref())?);
+        let config = shared_config();
+        if let Some(config) = &config {
+            check_isa(config)?;
+        }
+        let device = Arc::new(Device::with_config(config.as_deref())?);
         *slot = Some(device.clone());
         Ok(device)
     }
@@ -153,6 +157,27 @@ pub fn shared_config() -> Option<String> {
     std::env::var(CONFIG_VARIABLE)
         .ok()
         .filter(|c| !c.is_empty())
+}
+
+/// The ISA names Embree's `isa=` and `max_isa=` settings take (Embree 3 and 4).
+const ISA_NAMES: &[&str] = &["sse2", "sse4.2", "avx", "avx2", "avx512", "avx512skx"];
+
+/// Refuses an `isa=` or `max_isa=` value Embree does not know: Embree ignores it silently and
+/// runs its default ISA, while meta.json would record the value asked for.
+fn check_isa(config: &str) -> Result<()> {
+    for setting in config.split(',') {
+        let Some((key, value)) = setting.split_once('=') else {
+            continue;
+        };
+        let (key, value) = (key.trim(), value.trim());
+        if (key == "isa" || key == "max_isa") && !ISA_NAMES.contains(&value) {
+            return Err(Error::usage(format!(
+                "{CONFIG_VARIABLE}: {key}={value} is not an ISA Embree knows (known: {})",
+                ISA_NAMES.join(", ")
+            )));
+        }
+    }
+    Ok(())
 }
 
 /// The Embree library version, via the shared device.
@@ -216,6 +241,16 @@ fn error_name(code: ffi::RTCError::Type) -> String {
 mod tests {
     use super::*;
     use ffi::RTCDeviceProperty::*;
+
+    #[test]
+    fn an_isa_embree_does_not_know_is_a_usage_error() {
+        assert!(check_isa("isa=avx2").is_ok());
+        assert!(check_isa("threads=1, max_isa = sse4.2").is_ok());
+        assert!(check_isa("verbose=1").is_ok());
+        let err = check_isa("isa=bogus").unwrap_err();
+        assert_eq!(err.exit_code(), 2);
+        assert!(err.to_string().contains("RAYLAB_EMBREE_CONFIG"), "{err}");
+    }
 
     #[test]
     fn only_a_patch_release_may_differ_from_the_headers() {

@@ -1,6 +1,7 @@
 //! Fixtures shared by the tracers' integration tests (`packet.rs`, `stream.rs`, `wide_single.rs`):
 //! a scene's ray batches with the reference tracer's answers, the moving room, and the stability
-//! sweep the stability tests run (`stability.rs`, `tinybvh.rs`).
+//! sweep the stability tests run (`stability.rs`, `tinybvh.rs`), and the one results directory of
+//! a run (`cli.rs`, `summary.rs`).
 
 use std::sync::Arc;
 
@@ -138,4 +139,15 @@ pub fn smaller_sweep() -> Sweep {
         bounces: 3,
         ..Sweep::default()
     }
+}
+
+/// The one results directory of experiment `name` under `root`.
+pub fn only_run(root: &std::path::Path, name: &str) -> std::path::PathBuf {
+    let runs: Vec<std::path::PathBuf> = std::fs::read_dir(root.join(name))
+        .unwrap()
+        .flatten()
+        .map(|e| e.path())
+        .collect();
+    assert_eq!(runs.len(), 1, "{runs:?}");
+    runs[0].clone()
 }
