@@ -7,13 +7,13 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand};
 
 use raylab::error::{Error, Result};
+use raylab::experiment::plan::config::DEFAULT_SOFT_SHADOW_SAMPLES;
+use raylab::experiment::plan::overrides::Scale;
+use raylab::experiment::plan::shard::Shard;
 use raylab::experiment::record::files::SUMMARY_MD;
 use raylab::experiment::record::results_dir::PendingResults;
 use raylab::experiment::results::heatmap::{save_panels, Panel};
 use raylab::experiment::results::summary::Summary;
-use raylab::experiment::spec::config::DEFAULT_SOFT_SHADOW_SAMPLES;
-use raylab::experiment::spec::overrides::Scale;
-use raylab::experiment::spec::shard::Shard;
 use raylab::experiment::{run_experiment, Chatter, RunOverrides};
 use raylab::geometry::ray_file::{hits_csv, occlusion_csv, read_rays};
 use raylab::geometry::RayKind;

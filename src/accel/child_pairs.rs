@@ -3,13 +3,13 @@
 //! `[left.min, right.min, left.max, right.max]`, so one SSE sequence tests both children
 //! (the child-pair layout of Aila & Laine 2009, "Understanding the efficiency of ray traversal on
 //! GPUs", used on the CPU as in tinybvh). One 64-byte cache line per interior node; the test runs
-//! on the lane layer's 4-lane `Sse` vector.
+//! on the lane layer's 4-lane `Lanes4` vector.
 
 use glam::Vec3;
 
 use super::bvh::BvhNode;
 use crate::geometry::{RayTests, Robust};
-use crate::lanes::vector::{Sse, Vector};
+use crate::lanes::vector::{Lanes4, Vector};
 use crate::lanes::BroadcastRay;
 
 #[derive(Clone, Copy, Debug, Default)]
@@ -50,8 +50,8 @@ pub fn child_pairs(nodes: &[BvhNode]) -> Vec<ChildPair> {
 /// `max` computes both the entry distance and the (negated) exit distance.
 #[derive(Clone, Copy)]
 pub struct PairRayTest {
-    ray: BroadcastRay<Sse>,
-    far_sign: Sse,
+    ray: BroadcastRay<Lanes4>,
+    far_sign: Lanes4,
 }
 
 impl PairRayTest {
@@ -66,7 +66,7 @@ impl PairRayTest {
     pub fn with<R: RayTests>(origin: Vec3, dir: Vec3) -> Self {
         PairRayTest {
             ray: BroadcastRay::new(origin, dir),
-            far_sign: Sse::new([1.0, 1.0, -R::FAR_SCALE, -R::FAR_SCALE]),
+            far_sign: Lanes4::new([1.0, 1.0, -R::FAR_SCALE, -R::FAR_SCALE]),
         }
     }
 
@@ -78,9 +78,9 @@ impl PairRayTest {
     /// NaN lanes leave the interval unrestricted — the conservative answer, as in `RayBoxTest`.
     #[inline(always)]
     pub fn test(&self, pair: &ChildPair, tmin: f32, tmax: f32) -> ([f32; 2], u32) {
-        let mut acc = Sse::new([tmin, tmin, -tmax, -tmax]);
+        let mut acc = Lanes4::new([tmin, tmin, -tmax, -tmax]);
         for (axis, planes) in [&pair.x, &pair.y, &pair.z].into_iter().enumerate() {
-            let t = (Sse::load(planes, 0) - self.ray.origin[axis]) * self.ray.inv_dir[axis];
+            let t = (Lanes4::load(planes, 0) - self.ray.origin[axis]) * self.ray.inv_dir[axis];
             let t = if self.ray.negative[axis] {
                 t.swap_halves()
             } else {
@@ -88,8 +88,8 @@ impl PairRayTest {
             };
             acc = (t * self.far_sign).max(acc);
         }
-        let exit = Sse::splat(0.0) - acc.swap_halves();
-        let hit = (Sse::bits(acc.le(exit)) & 0b11) as u32;
+        let exit = Lanes4::splat(0.0) - acc.swap_halves();
+        let hit = (Lanes4::bits(acc.le(exit)) & 0b11) as u32;
         let mut lanes = [0.0f32; 4];
         acc.store(&mut lanes);
         ([lanes[0], lanes[1]], hit)

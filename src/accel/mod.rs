@@ -6,6 +6,7 @@ pub mod bvh_validity;
 pub mod child_pairs;
 pub mod embree;
 pub mod grid;
+pub mod libraries;
 pub mod obvhs;
 pub mod presplit;
 pub mod spatial_split;
@@ -97,6 +98,28 @@ impl AccelKind {
             #[cfg(tinybvh)]
             AccelKind::TinyBvh(_) => TinyBvhConfig::from_params(params).map(drop),
         }
+    }
+
+    /// The configuration this structure is built with from `params`, defaults included, as
+    /// runs.csv's `resolved` column records it.
+    pub fn resolved(self, params: &Params) -> Result<String> {
+        Ok(match self {
+            AccelKind::Bvh => format!("{:?}", BvhConfig::from_params(params)?),
+            AccelKind::Wide => format!(
+                "{:?}, width {}",
+                BvhConfig::from_params(params)?,
+                WideTree::width_from_params(params)?
+            ),
+            AccelKind::Embree => format!("{:?}", EmbreeConfig::from_params(params)?),
+            #[cfg(embree4)]
+            AccelKind::Embree4 => format!("{:?}", EmbreeConfig::from_params(params)?),
+            AccelKind::Obvhs => format!("{:?}", ObvhsQuality::from_params(params)?),
+            AccelKind::Grid => format!("{:?}", GridConfig::from_params(params)?),
+            #[cfg(tinybvh)]
+            AccelKind::TinyBvh(layout) => {
+                format!("{layout:?}, {:?}", TinyBvhConfig::from_params(params)?)
+            }
+        })
     }
 
     pub fn build(self, mesh: &Mesh, params: &Params) -> Result<Accel> {

@@ -15,6 +15,10 @@ use serde_json::Value;
 
 use crate::error::{Error, Result};
 
+use super::plan::config::Experiment;
+use super::plan::overrides::RunOverrides;
+use super::plan::shard::{Part, Shard, ShardMeta};
+use super::plan::{Plan, SceneLoader};
 use super::record::csv_file::read_typed;
 use super::record::files::META_JSON;
 use super::record::files::{HEATMAPS_BIN, HISTOGRAMS_CSV, RUNS_CSV, VERIFY_CSV};
@@ -25,10 +29,6 @@ use super::record::{CheckRow, HistogramRow, Records, RunRow};
 use super::results::embree_best;
 use super::results::plots;
 use super::run::meta::{self, MergedShard};
-use super::spec::config::Experiment;
-use super::spec::overrides::RunOverrides;
-use super::spec::plan::{Plan, SceneLoader};
-use super::spec::shard::{Part, Shard, ShardMeta};
 use super::{write_outputs, write_summary};
 
 /// One shard's results directory, as read from its meta.json.
@@ -322,9 +322,9 @@ mod tests {
     use std::fs;
 
     use super::*;
+    use crate::experiment::plan::tests::load_quads;
     use crate::experiment::record::files::TABLES_MD;
     use crate::experiment::run;
-    use crate::experiment::spec::plan::tests::load_quads;
 
     const TEXT: &str = "name = \"m\"\nscenes = [\"lit\", \"dark\", \"moving\"]\n\
         tracers = [\"reference\", \"obvhs\", \"embree1\", \"embree16\"]\n\

@@ -4,22 +4,24 @@
 //! paper-vs-ours tables (tables.md, see `tables`) and line figures (see `figures`).
 
 pub mod merge;
+pub mod plan;
 pub mod record;
 pub mod reproduce;
 pub mod results;
 pub mod run;
-pub mod spec;
 
 use std::path::{Path, PathBuf};
 
 use crate::error::{Error, Result};
 use crate::scene::library::load_scene;
 
+pub use plan::config::{check_threads, Experiment, SceneSpec, StructureKey, TracerInstance};
+pub use plan::overrides::{Chatter, RunOverrides};
+pub use plan::{Plan, SceneLoader};
 pub use record::files::RAYS_DIR;
-pub use spec::config::{check_threads, Experiment, SceneSpec, StructureKey, TracerInstance};
-pub use spec::overrides::{Chatter, RunOverrides};
-pub use spec::plan::{Plan, SceneLoader};
 
+use plan::figure_spec::DataFile;
+use plan::shard;
 use record::files::{HEATMAPS_BIN, HISTOGRAMS_CSV, RUNS_CSV, SUMMARY_MD, TABLES_MD, VERIFY_CSV};
 use record::heatmap_set::HeatmapSet;
 use record::selection::Row;
@@ -27,8 +29,6 @@ use record::{check_row, heatmap_file, histogram_row, results_dir, run_row, utc};
 use record::{HistogramRow, Records, RunRow};
 use results::{error_plot, plots, summary, tables};
 use run::{meta, runner};
-use spec::figure_spec::DataFile;
-use spec::shard;
 
 /// Runs the experiment in `path` with the built-in and library scenes; returns the results
 /// directory.

@@ -14,13 +14,13 @@ use std::time::Instant;
 use serde_json::Value;
 
 use crate::error::{Error, Result};
+use crate::experiment::plan::overrides::Scale;
 use crate::experiment::record::files::META_JSON;
 use crate::experiment::record::provenance::SourceTree;
 use crate::experiment::results::report::claims::{Claims, CLAIMS_TOML};
 use crate::experiment::results::report::paper::papers_under;
 use crate::experiment::results::report::write;
 use crate::experiment::results::staleness;
-use crate::experiment::spec::overrides::Scale;
 use crate::experiment::{run_experiment, Chatter, Experiment, RunOverrides};
 
 /// Rays per second assumed for the estimate of a file never run at this scale: a conservative

@@ -437,14 +437,10 @@ impl<'a> Rays<'a> {
 /// Prefetches every cache line of `data` into all cache levels (a hint: no effect on results).
 #[inline(always)]
 pub fn prefetch<T>(data: &[T]) {
-    use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T1};
-    const LINE: usize = 64;
-    let bytes = std::mem::size_of_val(data);
-    let start = data.as_ptr() as *const i8;
-    for offset in (0..bytes).step_by(LINE) {
-        // SAFETY: SSE is part of the x86_64 baseline, and a prefetch of an address inside
-        // `data` never faults.
-        unsafe { _mm_prefetch::<_MM_HINT_T1>(start.wrapping_add(offset)) };
+    use crate::lanes::prefetch::{line, Level, LINE};
+    let start = data.as_ptr() as *const u8;
+    for offset in (0..std::mem::size_of_val(data)).step_by(LINE) {
+        line(start.wrapping_add(offset), Level::Far);
     }
 }
 

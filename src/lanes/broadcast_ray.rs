@@ -1,15 +1,15 @@
 //! One ray broadcast to every lane of a vector per axis, for tests that put boxes (not rays) in
-//! the lanes: the reference tracer's two-children test (`accel::child_pairs`, `Sse`) and
-//! `wide-single`'s test of a wide node's children (`Sse` or `Avx2`, by the node's width).
+//! the lanes: the reference tracer's two-children test (`accel::child_pairs`, `Lanes4`) and
+//! `wide-single`'s test of a wide node's children (`Lanes4` or `Avx2`, by the node's width).
 
 use glam::Vec3;
 
-use super::vector::{Sse, Vector};
+use super::vector::{Lanes4, Vector};
 
 /// The ray's origin and reciprocal direction in all lanes of `V` per axis, and its direction's
 /// sign bits (−0.0 counts as negative, as in `RayBoxTest`).
 #[derive(Clone, Copy)]
-pub struct BroadcastRay<V: Vector = Sse> {
+pub struct BroadcastRay<V: Vector = Lanes4> {
     pub origin: [V; 3],
     pub inv_dir: [V; 3],
     pub negative: [bool; 3],

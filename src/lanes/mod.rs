@@ -9,7 +9,7 @@
 //!
 //! - `LaneMask<L>`: which lanes a test passed (one bit per lane).
 //! - `vector`: explicit f32 vectors (`Avx512`, `Avx2`, `Sse`, `Portable<N>`; `Native` the
-//!   build's widest) for kernels with something other than rays in the lanes: frusta, a node's
+//!   build's widest, `Lanes4` its 4-lane one: `Sse`, or `Portable<4>` off x86-64) for kernels with something other than rays in the lanes: frusta, a node's
 //!   children.
 //! - `BroadcastRay<V>`: one ray in every lane of a `vector`, for tests with boxes in the lanes.
 //! - `SharedFrame`: the origin and watertight axes all lanes of some SIMD rays share, so a
@@ -25,6 +25,7 @@
 //! - `stream`: in-place compaction and partition of a stream of rays in SoA columns by a lane
 //!   predicate — what coherent grid traversal drops finished rays with, and what stream filtering
 //!   (Gribble & Ramani 2008) is built on.
+//! - `prefetch`: cache prefetch hints (an instruction on x86-64, nothing elsewhere).
 //! - `min_max`: running per-lane bounds of a stream (the frusta's extremes); `lowest` and
 //!   `highest` of one lane array.
 //!
@@ -38,6 +39,7 @@ mod dispatch;
 mod mask;
 mod min_max;
 pub mod moller;
+pub mod prefetch;
 mod shared_frame;
 mod simd_ray;
 pub mod slab;

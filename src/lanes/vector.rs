@@ -71,7 +71,14 @@ pub type Native = Avx2;
 )))]
 pub type Native = Portable<8>;
 
+/// The build's 4-lane vector: `Sse` on x86-64 (its baseline), `Portable<4>` elsewhere.
+#[cfg(target_arch = "x86_64")]
+pub type Lanes4 = Sse;
+#[cfg(not(target_arch = "x86_64"))]
+pub type Lanes4 = Portable<4>;
+
 /// Implements the arithmetic operators of a vector type from binary functions.
+#[cfg(target_arch = "x86_64")]
 macro_rules! arithmetic {
     ($t:ty, $add:expr, $sub:expr, $mul:expr, $div:expr) => {
         impl Add for $t {
@@ -166,6 +173,22 @@ mod portable {
         #[inline(always)]
         fn test(self, y: Self, f: impl Fn(f32, f32) -> bool) -> BitMask {
             BitMask((0..N).fold(0, |m, l| m | (f(self.0[l], y.0[l]) as u64) << l))
+        }
+    }
+
+    /// `Sse`'s own operations, for `Lanes4` off x86-64.
+    impl Portable<4> {
+        /// The lanes `[x0, x1, x2, x3]`.
+        #[inline(always)]
+        pub fn new(x: [f32; 4]) -> Self {
+            Portable(x)
+        }
+
+        /// Lanes 2, 3, 0, 1: the halves swapped.
+        #[inline(always)]
+        pub fn swap_halves(self) -> Self {
+            let [a, b, c, d] = self.0;
+            Portable([c, d, a, b])
         }
     }
 
@@ -645,6 +668,8 @@ mod sse {
 }
 
 #[cfg(test)]
+// The agreement helpers compare x86-64's vectors against `Portable`; elsewhere only it is left.
+#[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
 mod tests {
     use super::*;
     use crate::random::SplitMix64;
@@ -744,6 +769,10 @@ mod tests {
         );
         assert_eq!(Portable::<4>::bits(p.lt(q)), 0b0001);
         assert_eq!(Portable::<4>::bits(!p.lt(q)), 0b1110);
+        assert_eq!(
+            Portable::new([1.0, 2.0, 3.0, 4.0]).swap_halves().0,
+            [3.0, 4.0, 1.0, 2.0]
+        );
     }
 
     #[cfg(all(target_arch = "x86_64", target_feature = "avx512f"))]

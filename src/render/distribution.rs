@@ -41,7 +41,7 @@ use crate::render::specular::{reflect, reflection_ray};
 use crate::render::wavefront::{trace, Answers, BatchRecord, Tracing, Work};
 use crate::scene::{Camera, Frame, Scene};
 use crate::stats::Counters;
-use crate::tracers::{tracer_for_mesh, Params, Tracer};
+use crate::tracers::{tracer_for_mesh, Params, Tracer, TracerInfo};
 
 /// A wave holds at least this many camera rays (whole tiles), so each traced batch spreads over
 /// many `tracers::chunked` chunks and every core has work even at 1 sample per pixel.
@@ -453,7 +453,10 @@ impl<'a> FrameGeometry<'a> {
     pub fn tracer(&self, name: &str, params: &Params) -> Result<Box<dyn Tracer>> {
         match self {
             FrameGeometry::Static(mesh) => tracer_for_mesh(name, params, mesh),
-            FrameGeometry::Moving(moving) => tracer_for_motion(name, params, moving),
+            FrameGeometry::Moving(moving) => {
+                let info = TracerInfo::find(name)?;
+                tracer_for_motion(info, &info.config(params)?, params, moving)
+            }
         }
     }
 

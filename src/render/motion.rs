@@ -8,7 +8,7 @@ use crate::error::{Error, Result};
 use crate::geometry::{Hit, Ray, Triangle};
 use crate::render::rays::SurfacePoint;
 use crate::scene::{Mesh, Scene};
-use crate::tracers::{make_tracer, Params, Tracer, TracerInfo};
+use crate::tracers::{make_tracer, Params, Tracer, TracerConfig, TracerInfo};
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct MovingMesh {
@@ -84,23 +84,23 @@ impl MovingMesh {
     }
 }
 
-/// Tracer `name` over `moving`: its structure built for motion (`AccelKind::build_moving`), so rays
-/// are traced at their time. Only `reference`, `packet` and the Embree tracers can; the others
-/// are refused (`AccelKind::build_moving`, `make_tracer`).
+/// Tracer `info` in its configuration `config` (`info.config(params)`, parsed once by the caller)
+/// over `moving`: its structure built for motion (`AccelKind::build_moving`), so rays are traced at
+/// their time. Only the tracers whose entry says `motion_blur` can; the others are refused
+/// (`AccelKind::build_moving`, `make_tracer`).
 pub fn tracer_for_motion(
-    name: &str,
+    info: &TracerInfo,
+    config: &TracerConfig,
     params: &Params,
     moving: &MovingMesh,
 ) -> Result<Box<dyn Tracer>> {
-    let info = TracerInfo::find(name)?;
-    let config = info.config(params)?;
     let close = Mesh {
         triangles: moving.close.clone(),
         material_ids: moving.open.material_ids.clone(),
     };
-    let (kind, structure_params) = info.structure(&config, params);
+    let (kind, structure_params) = info.structure(config, params);
     let accel = kind.build_moving(&moving.open, &close, &structure_params)?;
-    make_tracer(info, &config, &accel)
+    make_tracer(info, config, &accel)
 }
 
 #[cfg(test)]
@@ -112,6 +112,12 @@ mod tests {
     use crate::scene::library::load_scene;
     use crate::tracers::chunked::{trace_hits, trace_occlusion};
     use crate::tracers::{oracle_params, tracer_for_frame};
+
+    /// `tracer_for_motion` for tracer `name` with `params`.
+    fn by_name(name: &str, params: &Params, moving: &MovingMesh) -> Result<Box<dyn Tracer>> {
+        let info = TracerInfo::find(name)?;
+        tracer_for_motion(info, &info.config(params)?, params, moving)
+    }
 
     /// The deforming flag over [1.0 s, 1.25 s]: every flag vertex moves.
     fn moving_flag() -> (Scene, MovingMesh) {
@@ -138,7 +144,7 @@ mod tests {
         assert!(MovingMesh::of_scene(&flag, 0.0, 0.0).is_err());
         assert!(MovingMesh::of_scene(&flag, 0.0, f32::NAN).is_err());
         let (_, moving) = moving_flag();
-        assert!(tracer_for_motion("grid-dda", &Params::new(), &moving).is_err());
+        assert!(by_name("grid-dda", &Params::new(), &moving).is_err());
     }
 
     /// A ray at time 0 sees the frame-t mesh, at time 1 the frame-(t + shutter) mesh: the moving
@@ -173,9 +179,7 @@ mod tests {
                     &batch,
                 );
                 let blurred = trace_hits(
-                    tracer_for_motion(name, &Params::new(), &moving)
-                        .unwrap()
-                        .as_ref(),
+                    by_name(name, &Params::new(), &moving).unwrap().as_ref(),
                     &batch,
                 );
                 let hits = still.iter().filter(|h| h.is_hit()).count();
@@ -198,13 +202,13 @@ mod tests {
         let batch = rays_at(&scene, None);
         assert!(batch.time.iter().any(|&t| t > 0.5) && batch.time.iter().any(|&t| t < 0.5));
         let ours = trace_hits(
-            tracer_for_motion("reference", &Params::new(), &moving)
+            by_name("reference", &Params::new(), &moving)
                 .unwrap()
                 .as_ref(),
             &batch,
         );
         let embree = trace_hits(
-            tracer_for_motion("embree1", &oracle_params(), &moving)
+            by_name("embree1", &oracle_params(), &moving)
                 .unwrap()
                 .as_ref(),
             &batch,
@@ -230,7 +234,7 @@ mod tests {
     fn packet_tracer_agrees_with_the_reference_on_motion_blurred_rays() {
         let (scene, moving) = moving_flag();
         let batch = rays_at(&scene, None);
-        let reference = tracer_for_motion("reference", &Params::new(), &moving).unwrap();
+        let reference = by_name("reference", &Params::new(), &moving).unwrap();
         let want = trace_hits(reference.as_ref(), &batch);
         let mut shadows = batch.clone();
         shadows.kind = Some(RayKind::Shadow);
@@ -260,7 +264,7 @@ mod tests {
                     .with("frustum", frustum)
                     .with("lanes", lanes)
                     .with("packet", packet);
-                let packet = tracer_for_motion("packet", &params, &moving).unwrap();
+                let packet = by_name("packet", &params, &moving).unwrap();
                 let got = trace_hits(packet.as_ref(), &batch);
                 for (i, (a, b)) in want.iter().zip(&got).enumerate() {
                     assert_eq!(a, b, "{traversal}, frustum {frustum}: ray {i}");
@@ -274,12 +278,14 @@ mod tests {
         }
     }
 
+    /// Every tracer whose entry says `motion_blur` traces a moving structure; every other one
+    /// refuses it.
     #[test]
     fn tracers_without_motion_blur_refuse_a_moving_structure() {
         let (_, moving) = moving_flag();
-        for name in ["obvhs", "grid-dda", "cgt"] {
-            let refused = tracer_for_motion(name, &Params::new(), &moving);
-            assert!(refused.is_err(), "{name} accepted a moving mesh");
+        for info in crate::tracers::TRACERS {
+            let made = by_name(info.name, &Params::new(), &moving);
+            assert_eq!(made.is_ok(), info.motion_blur, "{}", info.name);
         }
     }
 }

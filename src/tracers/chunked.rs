@@ -9,7 +9,9 @@ use rayon::prelude::*;
 
 use crate::geometry::{Hit, RayBatch, RayKind, Rays};
 use crate::stats::Counters;
-use crate::tracers::{StagedRays, Tracer, VisibilityQuery};
+use crate::tracers::kernel::Tracer;
+use crate::tracers::staged::StagedRays;
+use crate::tracers::visibility::VisibilityQuery;
 
 /// Rays per work chunk of most tracers (at least; see `chunk_ranges`). 4096 = four whole 32×32 camera tiles: a multiple of 16 (and of every
 /// aligned n×n block, n ≤ 32), so no packet or Morton block of primary rays straddles two chunks

@@ -32,7 +32,7 @@ use std::sync::Arc;
 use crate::accel::Grid;
 use crate::geometry::{Hit, Ray, RayTests, Robust};
 use crate::stats::{Event, Stats};
-use crate::tracers::SingleRayKernel;
+use crate::tracers::kernel::SingleRayKernel;
 
 /// `R`: the triangle test (`robust`): watertight, or Möller–Trumbore.
 pub struct GridDdaTracer<R: RayTests = Robust> {
@@ -328,8 +328,8 @@ mod tests {
     use crate::random::SplitMix64;
     use crate::stats::{Counters, NoStats};
     use crate::test_util::Soup;
+    use crate::tracers::kernel::Kernel;
     use crate::tracers::reference::ReferenceTracer;
-    use crate::tracers::Kernel;
 
     /// `n` triangles in [-1, 1]³ of spread `size`, every 20th degenerate.
     fn soup(n: usize, size: f32, seed: u64) -> Vec<Triangle> {

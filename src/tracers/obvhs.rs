@@ -46,7 +46,7 @@ use glam::{UVec2, Vec3, Vec3A};
 use crate::accel::ObvhsBvh;
 use crate::geometry::{Aabb, Hit, Ray, RayBoxTest, WatertightRay};
 use crate::stats::Stats;
-use crate::tracers::SingleRayKernel;
+use crate::tracers::kernel::SingleRayKernel;
 
 /// 2⁶⁴: the exact stretch of obvhs's t axis that moves its fixed box-entry clamp out of the way.
 const T_SCALE: f32 = 18_446_744_073_709_551_616.0;
@@ -187,15 +187,14 @@ impl SingleRayKernel for ObvhsTracer {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::accel::{Accel, AccelKind, Bvh, BvhConfig, ObvhsQuality};
+    use crate::accel::{Bvh, BvhConfig, ObvhsQuality};
     use crate::geometry::{RayBatch, RayKind, Triangle};
+    use crate::params::Params;
     use crate::random::SplitMix64;
-    use crate::scene::Mesh;
     use crate::stats::{Counters, NoStats};
     use crate::test_util::Soup;
+    use crate::tracers::kernel::Kernel;
     use crate::tracers::reference::ReferenceTracer;
-    use crate::tracers::Kernel;
-    use crate::tracers::{make_tracer, Params, TracerInfo};
 
     fn soup(n: usize, size: f32, seed: u64) -> Vec<Triangle> {
         Soup::unit(size).triangles(n, seed)
@@ -711,41 +710,6 @@ mod tests {
         assert!(err.to_string().contains("very_slow_build"), "{err}");
     }
 
-    #[test]
-    fn registry_builds_the_obvhs_tracer() {
-        let mut mesh = Mesh::default();
-        mesh.push(unit_triangle(), 0);
-        let info = TracerInfo::find("obvhs").unwrap();
-        assert_eq!(info.accel, AccelKind::Obvhs);
-        assert_eq!(info.accepts(), vec!["quality"]);
-        let params = Params::new().with("quality", "fast_build");
-        let accel = info.accel.build(&mesh, &params).unwrap();
-        let Accel::Obvhs(bvh) = &accel else {
-            panic!("wrong structure")
-        };
-        assert_eq!(bvh.quality, ObvhsQuality::FastBuild);
-        assert!(accel.build_seconds() > 0.0);
-        let config = info.config(&params).unwrap();
-        let tracer = make_tracer(info, &config, &accel).unwrap();
-        let mut rays = RayBatch::new(RayKind::Primary);
-        rays.push(
-            Ray::new(Vec3::new(0.2, 0.3, 1.0), -Vec3::Z, 0.0, f32::INFINITY),
-            0,
-        );
-        let mut hits = vec![Hit::MISS];
-        tracer.intersect(rays.view(), &mut hits);
-        assert_eq!((hits[0].prim, hits[0].t), (0, 1.0));
-        assert!(
-            (hits[0].u - 0.2).abs() < 1e-6 && (hits[0].v - 0.3).abs() < 1e-6,
-            "{:?}",
-            hits[0]
-        );
-        // The reference tracer's structure is refused.
-        let bvh_accel = AccelKind::Bvh.build(&mesh, &Params::new()).unwrap();
-        assert!(make_tracer(info, &config, &bvh_accel).is_err());
-        assert!(info.config(&Params::new().with("leaf_size", 2)).is_err());
-    }
-
     /// Seconds this thread has spent on a CPU (Linux `schedstat`): on a machine shared with other
     /// work, the time spent waiting for a core is not the tracer's.
     fn thread_cpu_seconds() -> Option<f64> {
@@ -773,7 +737,7 @@ mod tests {
             rays.len()
         );
         println!("reference BVH build {:.3} s", reference_bvh.build_seconds);
-        let mut tracers: Vec<(String, Box<dyn crate::tracers::Tracer>)> = vec![(
+        let mut tracers: Vec<(String, Box<dyn crate::tracers::kernel::Tracer>)> = vec![(
             "reference".into(),
             Box::new(ReferenceTracer::new(Arc::new(reference_bvh))),
         )];

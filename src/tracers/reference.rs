@@ -13,7 +13,7 @@ use crate::accel::child_pairs::PairRayTest;
 use crate::accel::{Bvh, BvhConfig};
 use crate::geometry::{Hit, Ray, RayBoxTest, RayTests, Robust};
 use crate::stats::Stats;
-use crate::tracers::SingleRayKernel;
+use crate::tracers::kernel::SingleRayKernel;
 
 /// `R`: the box and triangle tests (`robust`; `Robust` unless asked).
 pub struct ReferenceTracer<R: RayTests = Robust> {

@@ -4,7 +4,7 @@
 
 #[cfg(embree4)]
 use crate::accel::embree::Embree4;
-use crate::accel::embree::{Embree3, EMBREE4_BUILT, EMBREE4_HINT};
+use crate::accel::embree::{Embree3, EmbreeConfig, EMBREE4_BUILT, EMBREE4_HINT};
 use std::ops::Range;
 
 #[cfg(tinybvh)]
@@ -73,6 +73,23 @@ pub enum TracerConfig {
 }
 
 impl TracerConfig {
+    /// Whether our tracer runs the robust tests (its `robust`); `None` for a library's tracer,
+    /// whose tests its library or structure decides (`TracerInfo::robust_tests`).
+    pub fn robust(&self) -> Option<bool> {
+        match *self {
+            TracerConfig::Reference { robust }
+            | TracerConfig::WideSingle { robust, .. }
+            | TracerConfig::GridDda { robust } => Some(robust),
+            TracerConfig::Cgt(c) => Some(c.robust),
+            TracerConfig::Packet { config, .. } => Some(config.robust),
+            TracerConfig::Mft(c) => Some(c.robust),
+            TracerConfig::Stream(c) => Some(c.robust),
+            TracerConfig::Plain | TracerConfig::Embree(_) => None,
+            #[cfg(tinybvh)]
+            TracerConfig::TinyTile(_) => None,
+        }
+    }
+
     /// Children per node of the BVH the tracer walks: 2 (the binary tree; also every tracer
     /// over another structure), or 4 or 8 for a wide tree (`accel::WideTree`).
     pub fn tree_width(&self) -> usize {
@@ -116,7 +133,44 @@ pub struct TracerInfo {
     /// on: what a run that measured it depends on besides the shared core
     /// (`experiment::record::provenance`), so only a change here makes that run stale.
     pub source: &'static [&'static str],
+    /// The configurations the test suites check it in, its defaults (`&[]`) first, then one per
+    /// code path worth a check of its own: agreement with Embree, the light-visibility bits and,
+    /// for ours, `robust = false` against the fast reference (tests/suite). The suites iterate
+    /// the registry, so a new tracer is tested from its entry alone.
+    pub test_configs: &'static [Settings],
+    /// Whether and how the shorthand entries `embree-best` and `baseline-best` run it.
+    pub best: BaselineBest,
 }
+
+/// Parameter settings given in code: (key, value) pairs.
+pub type Settings = &'static [(&'static str, &'static str)];
+
+/// Parameter axes given in code: (key, values).
+pub type Axes = &'static [(&'static str, &'static [&'static str])];
+
+/// A baseline's part in the shorthand entries of an experiment file: `embree-best` runs every
+/// `Sweep` tracer, `baseline-best` those and every `Fixed` one, so that runs.csv's
+/// `baseline_best` is the fastest production library on the rays.
+#[derive(Clone, Copy, Debug)]
+pub enum BaselineBest {
+    /// Not in either (our tracers).
+    Not,
+    /// Swept over these axes unless the entry gives them (Embree's entry points: intersect
+    /// context × build quality); the entry's `params` apply.
+    Sweep(Axes),
+    /// Run with exactly these settings, its library's recommended ones; the entry's `params` do
+    /// not apply.
+    Fixed(Axes),
+}
+
+/// The axes `embree-best` sweeps unless its entry gives them.
+const EMBREE_BEST_AXES: Axes = &[
+    ("context", &["coherent", "incoherent"]),
+    ("quality", &["medium", "high"]),
+];
+
+/// The settings a tracer is tested in when it declares no others: its defaults.
+const DEFAULTS_ONLY: &[Settings] = &[&[]];
 
 /// The families' source (`TracerInfo::source`): each family's own folder or file, then those of
 /// the families it imports.
@@ -124,6 +178,7 @@ const REFERENCE_SOURCE: &[&str] = &["tracers/reference.rs"];
 const WIDE_SINGLE_SOURCE: &[&str] = &["tracers/wide_single", "tracers/reference.rs"];
 const EMBREE_SOURCE: &[&str] = &["tracers/embree"];
 const OBVHS_SOURCE: &[&str] = &["tracers/obvhs.rs", "tracers/reference.rs"];
+#[cfg(tinybvh)]
 const TINYBVH_SOURCE: &[&str] = &["tracers/tinybvh"];
 const GRID_DDA_SOURCE: &[&str] = &["tracers/grid_dda.rs", "tracers/reference.rs"];
 const CGT_SOURCE: &[&str] = &[
@@ -207,6 +262,9 @@ const fn embree_entry(
         motion_blur: true,
         chunk_rays: CHUNK_RAYS,
         source: EMBREE_SOURCE,
+        // Embree's default (non-robust) build and its robust one.
+        test_configs: &[&[], &[("robust", "true")]],
+        best: BaselineBest::Sweep(EMBREE_BEST_AXES),
     }
 }
 
@@ -218,6 +276,7 @@ const fn tinybvh_entry(
     layout: TinyLayout,
     about: &'static str,
     make: Make,
+    best: BaselineBest,
 ) -> TracerInfo {
     TracerInfo {
         name,
@@ -231,6 +290,9 @@ const fn tinybvh_entry(
         motion_blur: false,
         chunk_rays: CHUNK_RAYS,
         source: TINYBVH_SOURCE,
+        // Its default build, and spatial splits plus reinsertion.
+        test_configs: &[&[], &[("builder", "sbvh"), ("optimize", "5")]],
+        best,
     }
 }
 
@@ -293,14 +355,7 @@ pub fn plan_note(name: &str, kinds: &[RayKind]) -> Option<String> {
     })
 }
 
-/// Whether this build has the tinybvh tracers (`build.rs` compiled the shim over the header of
-/// the cache `.ci/fetch-tinybvh` fills).
-pub const TINYBVH_BUILT: bool = cfg!(tinybvh);
-
-/// What to do to get tinybvh into a build without it.
-pub const TINYBVH_HINT: &str = "tinybvh was not built into this raylab: run `bash \
-     .ci/fetch-tinybvh`, make sure a C++ compiler (g++) is installed, and rebuild (with the \
-     default feature `tinybvh`)";
+pub use crate::accel::libraries::{TINYBVH_BUILT, TINYBVH_HINT};
 
 /// The tinybvh tracers, which a build without tinybvh lacks.
 pub const TINYBVH_TRACERS: &[&str] = &["tinybvh-2", "tinybvh-4", "tinybvh-8", "tinybvh-256"];
@@ -323,7 +378,7 @@ pub fn is_embree(name: &str) -> bool {
 }
 
 /// The Embree 4 tracers, which a build without Embree 4 lacks (`accel::embree::EMBREE4_HINT`).
-const EMBREE4_TRACERS: &[&str] = &["embree4-1", "embree4-4", "embree4-8", "embree4-16"];
+pub const EMBREE4_TRACERS: &[&str] = &["embree4-1", "embree4-4", "embree4-8", "embree4-16"];
 
 pub const TRACERS: &[TracerInfo] = &[
     TracerInfo {
@@ -350,6 +405,8 @@ pub const TRACERS: &[TracerInfo] = &[
         motion_blur: true,
         chunk_rays: CHUNK_RAYS,
         source: REFERENCE_SOURCE,
+        test_configs: DEFAULTS_ONLY,
+        best: BaselineBest::Not,
     },
     TracerInfo {
         name: "wide-single",
@@ -379,6 +436,8 @@ pub const TRACERS: &[TracerInfo] = &[
         motion_blur: true,
         chunk_rays: CHUNK_RAYS,
         source: WIDE_SINGLE_SOURCE,
+        test_configs: &[&[], &[("width", "4")]],
+        best: BaselineBest::Not,
     },
     embree_entry(
         "embree3-1",
@@ -450,6 +509,8 @@ pub const TRACERS: &[TracerInfo] = &[
         motion_blur: false,
         chunk_rays: CHUNK_RAYS,
         source: OBVHS_SOURCE,
+        test_configs: DEFAULTS_ONLY,
+        best: BaselineBest::Fixed(&[]),
     },
     #[cfg(tinybvh)]
     tinybvh_entry(
@@ -457,6 +518,7 @@ pub const TRACERS: &[TracerInfo] = &[
         TinyLayout::Binary,
         "tinybvh 1.6.8 baseline: single rays, BVH (2-wide, 32-byte nodes) Intersect / IsOccluded; tinybvh's builders (builder = sah|sbvh, optimize = rounds of reinsertion); Möller–Trumbore triangles",
         |_, accel| Ok(Box::new(SingleTracer::new(accel.tinybvh(TinyLayout::Binary)?.clone()))),
+        BaselineBest::Not,
     ),
     #[cfg(tinybvh)]
     tinybvh_entry(
@@ -464,6 +526,7 @@ pub const TRACERS: &[TracerInfo] = &[
         TinyLayout::Wide4,
         "tinybvh 1.6.8 baseline: single rays, BVH4_CPU (4-wide SSE nodes, triangles 4 per leaf block) Intersect / IsOccluded; tinybvh's builders as tinybvh-2",
         |_, accel| Ok(Box::new(SingleTracer::new(accel.tinybvh(TinyLayout::Wide4)?.clone()))),
+        BaselineBest::Not,
     ),
     #[cfg(tinybvh)]
     tinybvh_entry(
@@ -471,6 +534,9 @@ pub const TRACERS: &[TracerInfo] = &[
         TinyLayout::Wide8,
         "tinybvh 1.6.8 baseline: single rays, BVH8_CPU (8-wide AVX2 + FMA nodes after Fuetterling et al. 2017) Intersect / IsOccluded; tinybvh's builders as tinybvh-2",
         |_, accel| Ok(Box::new(SingleTracer::new(accel.tinybvh(TinyLayout::Wide8)?.clone()))),
+        // Its fastest single-ray layout over its highest-quality build (spatial splits, then
+        // reinsertion: tiny_bvh.h's `BuildHQ` and `Optimize`).
+        BaselineBest::Fixed(&[("builder", &["sbvh"]), ("optimize", &["25"])]),
     ),
     #[cfg(tinybvh)]
     TracerInfo {
@@ -491,6 +557,8 @@ pub const TRACERS: &[TracerInfo] = &[
         motion_blur: false,
         chunk_rays: CHUNK_RAYS,
         source: TINYBVH_SOURCE,
+        test_configs: &[&[], &[("sse", "false")]],
+        best: BaselineBest::Not,
     },
     TracerInfo {
         name: "grid-dda",
@@ -515,6 +583,8 @@ pub const TRACERS: &[TracerInfo] = &[
         motion_blur: false,
         chunk_rays: CHUNK_RAYS,
         source: GRID_DDA_SOURCE,
+        test_configs: DEFAULTS_ONLY,
+        best: BaselineBest::Not,
     },
     TracerInfo {
         name: "cgt",
@@ -531,6 +601,8 @@ pub const TRACERS: &[TracerInfo] = &[
         motion_blur: false,
         chunk_rays: CHUNK_RAYS,
         source: CGT_SOURCE,
+        test_configs: &[&[], &[("packet", "8"), ("lanes", "8"), ("cull", "false")]],
+        best: BaselineBest::Not,
     },
     TracerInfo {
         name: "packet",
@@ -553,6 +625,15 @@ pub const TRACERS: &[TracerInfo] = &[
         motion_blur: true,
         chunk_rays: CHUNK_RAYS,
         source: PACKET_SOURCE,
+        test_configs: &[
+            &[],
+            &[("traversal", "partition"), ("packet", "8"), ("lanes", "8")],
+            &[("traversal", "ia"), ("packet", "32"), ("lanes", "16")],
+            &[("traversal", "masked"), ("packet", "4"), ("lanes", "4"), ("frustum", "false")],
+            &[("traversal", "ranged"), ("packet", "16"), ("frustum", "false"), ("width", "4")],
+            &[("traversal", "ranged"), ("packet", "8"), ("lanes", "8"), ("width", "8")],
+        ],
+        best: BaselineBest::Not,
     },
     TracerInfo {
         name: "mft",
@@ -569,6 +650,14 @@ pub const TRACERS: &[TracerInfo] = &[
         motion_blur: false,
         chunk_rays: CHUNK_RAYS,
         source: MFT_SOURCE,
+        test_configs: &[
+            &[],
+            &[("cr", "false"), ("fs", "false"), ("leaf_rays", "false")],
+            &[("fs", "false"), ("block", "64")],
+            &[("width", "4"), ("primary", "frusta")],
+            &[("width", "8"), ("block", "64"), ("primary", "frusta")],
+        ],
+        best: BaselineBest::Not,
     },
     TracerInfo {
         name: "stream",
@@ -587,8 +676,22 @@ pub const TRACERS: &[TracerInfo] = &[
         motion_blur: false,
         chunk_rays: 16 * CHUNK_RAYS,
         source: STREAM_SOURCE,
+        test_configs: &[
+            &[],
+            &[("width", "12"), ("stream", "1024")],
+            &[("width", "64"), ("stream", "frame")],
+            &[("width", "4"), ("stream", "64"), ("single", "8"), ("single_tree", "4")],
+        ],
+        best: BaselineBest::Not,
     },
 ];
+
+/// A tracer entry shows as its name (its functions have nothing to show).
+impl std::fmt::Debug for TracerInfo {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name)
+    }
+}
 
 impl TracerInfo {
     /// The tracer `name` names, directly or through one of its `ALIASES`.
@@ -646,8 +749,29 @@ impl TracerInfo {
             .collect()
     }
 
+    /// Whether an instance in `config` (from `params`) runs robust, watertight tests: ours by
+    /// `robust` (default true), Embree's by its scene's `robust` (default false), obvhs's always
+    /// (watertight triangles), tinybvh's never (Möller–Trumbore).
+    pub fn robust_tests(&self, config: &TracerConfig, params: &Params) -> Result<bool> {
+        match (config.robust(), self.accel) {
+            (Some(robust), _) => Ok(robust),
+            (None, AccelKind::Obvhs) => Ok(true),
+            (None, kind) if kind.is_embree() => Ok(EmbreeConfig::from_params(params)?.robust),
+            (None, _) => Ok(false),
+        }
+    }
+
+    /// `test_configs` as parameters.
+    pub fn test_params(&self) -> Vec<Params> {
+        let params = |settings: Settings| {
+            let with = |p: Params, &(key, value): &(&str, &str)| p.with(key, value);
+            settings.iter().fold(Params::new(), with)
+        };
+        self.test_configs.iter().map(|&c| params(c)).collect()
+    }
+
     /// Whether it is one of our from-scratch tracers (not a library's).
-    fn is_ours(&self) -> bool {
+    pub fn is_ours(&self) -> bool {
         self.role != Role::Baseline
     }
 }
@@ -685,10 +809,20 @@ pub fn make_tracer(
 /// Builds tracer `name` with `params` over `mesh` (its own structure, built here).
 pub fn tracer_for_mesh(name: &str, params: &Params, mesh: &Mesh) -> Result<Box<dyn Tracer>> {
     let info = TracerInfo::find(name)?;
-    let config = info.config(params)?;
-    let (kind, structure_params) = info.structure(&config, params);
+    make_for_mesh(info, &info.config(params)?, params, mesh)
+}
+
+/// Builds tracer `info` in `config` (what `info.config(params)` returned) over `mesh` (its own
+/// structure, built with `params`' structure parameters here).
+pub fn make_for_mesh(
+    info: &TracerInfo,
+    config: &TracerConfig,
+    params: &Params,
+    mesh: &Mesh,
+) -> Result<Box<dyn Tracer>> {
+    let (kind, structure_params) = info.structure(config, params);
     let accel = kind.build(mesh, &structure_params)?;
-    make_tracer(info, &config, &accel)
+    make_tracer(info, config, &accel)
 }
 
 /// Builds tracer `name` with `params` over `frame`'s geometry (its own structure, built here).
@@ -763,6 +897,43 @@ impl Tracer for Registered {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::geometry::{Ray, RayBatch, Triangle};
+    use glam::Vec3;
+
+    #[test]
+    fn registry_builds_the_obvhs_tracer() {
+        let mut mesh = Mesh::default();
+        mesh.push(Triangle::new(Vec3::ZERO, Vec3::X, Vec3::Y), 0);
+        let info = TracerInfo::find("obvhs").unwrap();
+        assert_eq!(info.accel, AccelKind::Obvhs);
+        assert_eq!(info.accepts(), vec!["quality"]);
+        let params = Params::new().with("quality", "fast_build");
+        let accel = info.accel.build(&mesh, &params).unwrap();
+        let Accel::Obvhs(bvh) = &accel else {
+            panic!("wrong structure")
+        };
+        assert_eq!(bvh.quality, crate::accel::ObvhsQuality::FastBuild);
+        assert!(accel.build_seconds() > 0.0);
+        let config = info.config(&params).unwrap();
+        let tracer = make_tracer(info, &config, &accel).unwrap();
+        let mut rays = RayBatch::new(RayKind::Primary);
+        rays.push(
+            Ray::new(Vec3::new(0.2, 0.3, 1.0), -Vec3::Z, 0.0, f32::INFINITY),
+            0,
+        );
+        let mut hits = vec![Hit::MISS];
+        tracer.intersect(rays.view(), &mut hits);
+        assert_eq!((hits[0].prim, hits[0].t), (0, 1.0));
+        assert!(
+            (hits[0].u - 0.2).abs() < 1e-6 && (hits[0].v - 0.3).abs() < 1e-6,
+            "{:?}",
+            hits[0]
+        );
+        // The reference tracer's structure is refused.
+        let bvh_accel = AccelKind::Bvh.build(&mesh, &Params::new()).unwrap();
+        assert!(make_tracer(info, &config, &bvh_accel).is_err());
+        assert!(info.config(&Params::new().with("leaf_size", 2)).is_err());
+    }
 
     #[test]
     fn aliases_resolve_to_the_embree_3_tracers() {

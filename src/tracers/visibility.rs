@@ -10,7 +10,6 @@
 //! (`occluded_by_rays`) makes those rays and calls the tracer's occlusion kernel; a tracer that
 //! answers natively (multi-frusta, generating rays on demand) must give the same bits.
 
-use std::cell::RefCell;
 use std::ops::Range;
 
 use glam::Vec3;
@@ -19,8 +18,6 @@ use crate::error::{Error, Result};
 use crate::geometry::ray_slots::RaySlots;
 use crate::geometry::{Ray, RayBatch, RayKind};
 use crate::scene::Light;
-use crate::stats::Stats;
-use crate::tracers::Kernel;
 
 /// A parallelogram light `corner + s·edge_u + t·edge_v`, s, t ∈ [0, 1]. A point light is the
 /// quad with zero edges.
@@ -362,85 +359,20 @@ impl Visibility {
     }
 }
 
-/// The default answer: the query's shadow rays through `kernel`'s occlusion test. `occluded`
-/// holds `words_per_point` words per point of `query` and is overwritten.
-pub fn occluded_by_rays<K: Kernel + ?Sized, S: Stats>(
-    kernel: &K,
-    query: VisibilityQuery<'_>,
-    occluded: &mut [u64],
-    stats: &mut S,
-) {
-    let words = query.samples.words_per_point();
-    // The rays that get through clear their bit. Samples behind their surface cast no ray and stay
-    // occluded.
-    query.samples.set_all_occluded(occluded);
-    SCRATCH.with_borrow_mut(
-        |Scratch {
-             batch,
-             traced,
-             flags,
-         }| {
-            query.rays(batch, traced);
-            flags.clear();
-            flags.resize(batch.len(), false);
-            // Per-ray counters charge each shadow ray's counts to its shading point.
-            let points: Vec<Range<u32>> = match S::ENABLED {
-                true => batch.pixel.iter().map(|&p| p..p + 1).collect(),
-                false => Vec::new(),
-            };
-            stats.relabelled(&points, |stats| {
-                kernel.occluded_with(batch.view(), flags, stats)
-            });
-            for (&(i, sample), _) in traced.iter().zip(&*flags).filter(|(_, &o)| !o) {
-                occluded[i as usize * words + sample as usize / 64] &= !(1 << (sample % 64));
-            }
-        },
-    )
-}
-
-/// One worker's buffers for `occluded_by_rays`, reused from chunk to chunk (fresh ones per chunk
-/// cost page faults comparable to generating the rays).
-#[derive(Default)]
-struct Scratch {
-    batch: RayBatch,
-    traced: Vec<(u32, u32)>,
-    flags: Vec<bool>,
-}
-
-thread_local! {
-    static SCRATCH: RefCell<Scratch> = RefCell::default();
-}
-
 #[cfg(test)]
-mod tests {
-    use std::sync::Arc;
-
+pub(crate) mod tests {
     use super::*;
-    use crate::accel::{Bvh, BvhConfig};
-    use crate::geometry::Triangle;
-    use crate::stats::Counters;
-    use crate::tracers::reference::ReferenceTracer;
 
-    /// A 2 × 2 light at height 4 over x, z ∈ [0, 2]; a blocker square over x ∈ [0, 1] at height 2
-    /// (two triangles, facing either way).
-    fn setup() -> (ReferenceTracer, QuadLight) {
-        let (a, b, c, d) = (
-            Vec3::new(0.0, 2.0, -1.0),
-            Vec3::new(1.0, 2.0, -1.0),
-            Vec3::new(1.0, 2.0, 3.0),
-            Vec3::new(0.0, 2.0, 3.0),
-        );
-        let blocker = [Triangle { v: [a, b, c] }, Triangle { v: [a, c, d] }];
-        let tracer = ReferenceTracer::new(Arc::new(Bvh::build(&blocker, BvhConfig::default())));
-        let light = QuadLight {
+    /// A 2 × 2 light at height 4 over x, z ∈ [0, 2].
+    pub(crate) fn light() -> QuadLight {
+        QuadLight {
             corner: Vec3::new(0.0, 4.0, 0.0),
             edge_u: Vec3::new(2.0, 0.0, 0.0),
             edge_v: Vec3::new(0.0, 0.0, 2.0),
-        };
-        (tracer, light)
+        }
     }
 
-    fn point(x: f32, normal: Vec3, set: u32) -> ShadingPoint {
+    pub(crate) fn point(x: f32, normal: Vec3, set: u32) -> ShadingPoint {
         let position = Vec3::new(x, 0.0, 1.0);
         ShadingPoint {
             position,
@@ -452,103 +384,11 @@ mod tests {
     }
 
     /// `per_point` samples evenly across the light's width at its middle (t = 0.5).
-    fn samples(per_point: usize) -> LightSamples {
+    pub(crate) fn samples(per_point: usize) -> LightSamples {
         let uv = (0..per_point)
             .map(|i| [(i as f32 + 0.5) / per_point as f32, 0.5])
             .collect();
         LightSamples::new(per_point, uv).unwrap()
-    }
-
-    fn answer(tracer: &ReferenceTracer, query: VisibilityQuery<'_>) -> (Visibility, Counters) {
-        let mut v = Visibility::new(query.len(), query.samples);
-        let mut counters = Counters::default();
-        tracer.light_visibility_with(query, &mut v.words, &mut counters);
-        (v, counters)
-    }
-
-    #[test]
-    fn bits_follow_the_blocker_and_the_horizon() {
-        let (tracer, light) = setup();
-        let samples = samples(10);
-        let mut points = ShadingPoints::default();
-        points.push(point(0.4, Vec3::Y, 0), false);
-        // Facing away from the light: every sample is behind the surface.
-        points.push(point(0.4, -Vec3::Y, 0), true);
-        let query = VisibilityQuery::new(&points, light, &samples).unwrap();
-        assert_eq!(query.ray_count(), 10);
-        let (v, counters) = answer(&tracer, query);
-        // Light x = 0.1, 0.3, …, 1.9: the ray from x = 0.4 crosses y = 2 at (0.4 + x) / 2,
-        // inside the blocker (< 1) for light x < 1.6: samples 0..=7.
-        let first: Vec<bool> = (0..10).map(|s| v.occluded(0, s)).collect();
-        let expected: Vec<bool> = (0..10).map(|s| s <= 7).collect();
-        assert_eq!(first, expected);
-        assert!((v.visible_fraction(0) - 0.2).abs() < 1e-6);
-        assert!((0..10).all(|s| v.occluded(1, s)), "behind the surface");
-        assert_eq!(v.visible_fraction(1), 0.0);
-        assert_eq!(v.total_occluded(), 18);
-        // Only the 10 rays in front of their surface were traced.
-        assert_eq!(counters.rays, 10);
-    }
-
-    #[test]
-    fn bits_span_several_words_and_stop_at_the_sample_count() {
-        let (tracer, light) = setup();
-        let samples = samples(100);
-        let mut points = ShadingPoints::default();
-        points.push(point(0.4, -Vec3::Y, 0), true);
-        let query = VisibilityQuery::new(&points, light, &samples).unwrap();
-        let (v, _) = answer(&tracer, query);
-        assert_eq!(v.words, vec![u64::MAX, (1 << 36) - 1]);
-        assert_eq!(v.occluded_count(0), 100);
-    }
-
-    #[test]
-    fn the_default_answer_is_the_rays_one_by_one() {
-        // Points across x ∈ [−1, 3], two sample sets: each bit equals the occlusion of its own ray.
-        let (tracer, light) = setup();
-        let uv = (0..32)
-            .map(|i| [(i % 8) as f32 / 7.0, (i / 8) as f32 / 3.0])
-            .collect();
-        let samples = LightSamples::new(16, uv).unwrap();
-        let mut points = ShadingPoints::default();
-        for i in 0..40 {
-            points.push(point(-1.0 + 0.1 * i as f32, Vec3::Y, i % 2), i % 4 == 0);
-        }
-        let query = VisibilityQuery::new(&points, light, &samples).unwrap();
-        let (v, _) = answer(&tracer, query);
-        let mut occluded = 0;
-        for i in 0..points.len() {
-            for s in 0..16 {
-                let ray = query.ray(i, s).unwrap();
-                let mut one = [false];
-                let rays = RayBatch {
-                    kind: Some(RayKind::SoftShadow),
-                    ox: vec![ray.origin.x],
-                    oy: vec![ray.origin.y],
-                    oz: vec![ray.origin.z],
-                    dx: vec![ray.dir.x],
-                    dy: vec![ray.dir.y],
-                    dz: vec![ray.dir.z],
-                    tmin: vec![ray.tmin],
-                    tmax: vec![ray.tmax],
-                    pixel: vec![0],
-                    ..RayBatch::default()
-                };
-                tracer.occluded_with(rays.view(), &mut one, &mut crate::stats::NoStats);
-                assert_eq!(v.occluded(i, s), one[0], "point {i} sample {s}");
-                occluded += one[0] as usize;
-            }
-        }
-        assert!(
-            occluded > 0 && occluded < 40 * 16,
-            "a case with both answers"
-        );
-        // The query's rays keep its packets: one explicit packet per 4 points.
-        let mut batch = RayBatch::default();
-        let mut traced = Vec::new();
-        query.rays(&mut batch, &mut traced);
-        assert_eq!(batch.packet_start.iter().filter(|s| **s).count(), 10);
-        assert_eq!(traced.len(), 40 * 16);
     }
 
     #[test]
@@ -560,7 +400,7 @@ mod tests {
         let samples = LightSamples::new(1, vec![[0.5, 0.5]]).unwrap();
         let mut points = ShadingPoints::default();
         points.push(point(0.0, Vec3::Y, 1), true);
-        let light = setup().1;
+        let light = light();
         assert!(VisibilityQuery::new(&points, light, &samples).is_err());
     }
 

@@ -1,15 +1,18 @@
-//! The foundation's correctness bar: the reference, obvhs, cgt, packet, stream and mft tracers agree
-//! with Embree (robust mode) on well over a million rays — primary, shadow and diffuse bounces —
-//! over three built-in scenes and two real ones (conference, bunny), with zero unexplained
-//! disagreements, also over trees with spatial splits and trees built by Embree's builder; and the reference, packet and stream
-//! tracers agree on Whitted's reflection and refraction rays. Embree 4 agrees with both Embree 3 and the reference tracer. Ties are
-//! classified and printed, not hidden.
+//! The foundation's correctness bar: every tracer of the registry, in every configuration its entry
+//! declares for tests (`TracerInfo::test_configs`), agrees with Embree (robust mode) on well over
+//! a million rays — primary, shadow and diffuse bounces — over three built-in scenes and two real
+//! ones (conference, bunny), with zero unexplained disagreements; ours also with `robust = false`
+//! against Embree's non-robust build, over trees with spatial splits and over trees built by
+//! Embree's builder, and on Whitted's reflection and refraction rays. Embree 4 agrees with both
+//! Embree 3 and the reference tracer. Ties are classified and printed, not hidden. No test here
+//! names a tracer: a new registry entry is checked from its entry alone.
 
-use raylab::accel::embree::{EMBREE4_BUILT, EMBREE4_HINT};
+use crate::common;
+
+use raylab::accel::AccelKind;
 use raylab::geometry::RayKind;
 use raylab::scene::library::load_scene;
-use raylab::tracers::registry::{TINYBVH_BUILT, TINYBVH_HINT};
-use raylab::tracers::{oracle_params, tracer_for_frame, Params, ORACLE};
+use raylab::tracers::{oracle_params, tracer_for_frame, Params, Role, TracerInfo, ORACLE, TRACERS};
 use raylab::verify::{
     compare_batches, format_table, verification_batches, verify_frame, Tolerance,
 };
@@ -27,10 +30,6 @@ fn scenes() -> Vec<(&'static str, Option<u32>)> {
         }
     }
     scenes
-}
-
-fn agrees_with_embree(tracer: &str) {
-    agrees_with_embree_with(tracer, &Params::new());
 }
 
 fn agrees_with_embree_with(tracer: &str, params: &Params) {
@@ -92,24 +91,47 @@ fn agrees_within(
     }
 }
 
-#[test]
-fn reference_agrees_with_embree() {
-    agrees_with_embree("reference");
+/// `common::test_configurations`, by name.
+fn test_configurations(keep: impl Fn(&TracerInfo) -> bool) -> Vec<(&'static str, Params)> {
+    let all = common::test_configurations(keep).into_iter();
+    all.map(|(info, params)| (info.name, params)).collect()
 }
 
-/// `raylab verify --tracer embree4-1` and `embree4-16`, Embree's default build and the robust
-/// one: Embree 4 agrees with Embree 3 robust (the oracle) and with the reference tracer.
+/// The registry's tracers that `keep`, each in its defaults (its first test configuration).
+fn defaults(keep: impl Fn(&TracerInfo) -> bool) -> Vec<(&'static str, Params)> {
+    TRACERS
+        .iter()
+        .filter(|info| keep(info))
+        .map(|info| (info.name, info.test_params().swap_remove(0)))
+        .collect()
+}
+
 #[test]
-fn embree4_agrees_with_embree3_and_the_reference() {
-    if !EMBREE4_BUILT {
-        println!("SKIPPED: {EMBREE4_HINT}");
-        return;
+fn every_tracer_of_ours_agrees_with_embree() {
+    for (tracer, params) in test_configurations(TracerInfo::is_ours) {
+        agrees_with_embree_with(tracer, &params);
     }
-    for tracer in ["embree4-1", "embree4-16"] {
-        for params in [Params::new(), Params::new().with("robust", true)] {
-            agrees_with_embree_with(tracer, &params);
-            agrees_with(tracer, &params, "reference", &Params::new());
-        }
+}
+
+/// Embree 4 and 3 in their default and robust builds, obvhs, tinybvh's single-ray kernels over
+/// each of its CPU layouts (default build, and spatial splits plus reinsertion) and its 256-ray
+/// packet kernel (SSE and scalar) on the camera rays' 16×16 blocks.
+#[test]
+fn every_baseline_agrees_with_embree() {
+    let configurations = test_configurations(|info| !info.is_ours());
+    assert!(configurations.len() >= 8, "{configurations:?}");
+    for (tracer, params) in configurations {
+        agrees_with_embree_with(tracer, &params);
+    }
+}
+
+/// `raylab verify --tracer embree4-1 --against reference`: Embree 4, default and robust builds,
+/// agrees with the reference tracer too, not only with Embree 3 (the oracle).
+#[test]
+fn embree4_agrees_with_the_reference() {
+    let reference = TracerInfo::of_role(Role::Reference).unwrap().name;
+    for (tracer, params) in test_configurations(|info| info.accel == AccelKind::Embree4) {
+        agrees_with(tracer, &params, reference, &Params::new());
     }
 }
 
@@ -126,74 +148,21 @@ fn fast_tests_agree_with_embree_without_robust_mode() {
         max_unexplained: 4,
         ..Tolerance::default()
     };
-    let ours = [
-        "reference",
-        "wide-single",
-        "packet",
-        "stream",
-        "cgt",
-        "grid-dda",
-        "mft",
-    ];
-    for tracer in ours {
-        let fast = Params::new().with("robust", false);
+    for (tracer, params) in defaults(TracerInfo::is_ours) {
+        let fast = params.with("robust", false);
         agrees_within(tracer, &fast, ORACLE, &embree_fast, &leaks);
     }
 }
 
-#[test]
-fn obvhs_agrees_with_embree() {
-    agrees_with_embree("obvhs");
-}
-
-/// `raylab verify --tracer tinybvh-<layout>`: tinybvh's single-ray kernels over each of its CPU
-/// layouts, with its default build and with spatial splits plus reinsertion, and its 256-ray
-/// packet kernel (SSE and scalar) on the camera rays' 16×16 blocks.
-#[test]
-fn tinybvh_agrees_with_embree() {
-    if !TINYBVH_BUILT {
-        println!("SKIPPED: {TINYBVH_HINT}");
-        return;
-    }
-    for tracer in ["tinybvh-2", "tinybvh-4", "tinybvh-8"] {
-        agrees_with_embree(tracer);
-    }
-    let hq = Params::new().with("builder", "sbvh").with("optimize", 5);
-    agrees_with_embree_with("tinybvh-8", &hq);
-    agrees_with_embree("tinybvh-256");
-    agrees_with_embree_with("tinybvh-256", &Params::new().with("sse", false));
-}
-
-#[test]
-fn cgt_agrees_with_embree() {
-    agrees_with_embree("cgt");
-}
-
 /// Reflection rays on the room with every surface a mirror (scenes/room-reflective.toml), and
 /// reflection and refraction rays on the room with every surface glass (scenes/room-glass.toml),
-/// for the reference tracer, every traversal of the packet tracer and the stream tracer.
+/// for every tracer of ours in every test configuration.
 #[test]
 fn tracers_agree_with_embree_on_reflection_and_refraction() {
     let tol = Tolerance::default();
     let mirrors = load_scene("room-reflective", None).unwrap();
     let glass = load_scene("room-glass", None).unwrap();
-    let packet = |traversal: &str, packet: u32, lanes: u32| {
-        Params::new()
-            .with("traversal", traversal)
-            .with("packet", packet)
-            .with("lanes", lanes)
-    };
-    let tracers = [
-        ("reference", Params::new()),
-        ("packet", packet("ranged", 16, 16)),
-        ("packet", packet("partition", 8, 8)),
-        ("packet", packet("ia", 32, 16)),
-        ("packet", packet("masked", 4, 4)),
-        (
-            "stream",
-            Params::new().with("width", 12).with("stream", 1024),
-        ),
-    ];
+    let tracers = test_configurations(TracerInfo::is_ours);
     for ((scene, kinds), (tracer, params)) in [
         (&mirrors, &[RayKind::Reflection][..]),
         (&glass, &[RayKind::Reflection, RayKind::Refraction][..]),
@@ -237,130 +206,31 @@ fn tracers_agree_with_embree_on_reflection_and_refraction() {
     }
 }
 
-/// One configuration per traversal, covering every SIMD width and both frustum settings, and
-/// ranged over the 4- and 8-wide trees; the exhaustive grid of configurations is checked against
-/// the reference tracer in tests/suite/packet.rs.
-#[test]
-fn packet_agrees_with_embree() {
-    for (traversal, packet, lanes, frustum, width) in [
-        ("ranged", 16, 16, true, 2),
-        ("partition", 8, 8, true, 2),
-        ("ia", 32, 16, true, 2),
-        ("masked", 4, 4, false, 2),
-        ("ranged", 16, 16, false, 4),
-        ("ranged", 8, 8, true, 8),
-    ] {
-        let params = Params::new()
-            .with("traversal", traversal)
-            .with("packet", packet)
-            .with("lanes", lanes)
-            .with("frustum", frustum)
-            .with("width", width);
-        agrees_with_embree_with("packet", &params);
-    }
-}
-
-/// Three widths — one lane group (16), 12 of 16 lanes, four groups as one (64) — with streams of
-/// a 32×32 tile and of the whole chunk; every width × stream size is checked against the
-/// reference tracer in tests/suite/stream.rs.
-#[test]
-fn stream_agrees_with_embree() {
-    for (width, stream) in [(16, "4096"), (12, "1024"), (64, "frame")] {
-        let params = Params::new().with("width", width).with("stream", stream);
-        agrees_with_embree_with("stream", &params);
-    }
-}
-
 /// Trees with spatial splits (`spatial = α`, SBVH) reference a triangle from several leaves, each
-/// with a box around only its part: every tracer that walks our BVH (binary, 4- and 8-wide) still
-/// finds Embree's hits, with and without early split clipping beside them.
+/// with a box around only its part: every tracer that walks our BVH (binary, 4- and 8-wide; each
+/// in its defaults) still finds Embree's hits; the reference also with early split clipping
+/// beside them.
 #[test]
 fn tracers_agree_with_embree_over_spatial_split_trees() {
     let spatial =
         |params: Params, presplit: f32| params.with("spatial", 1e-5).with("presplit", presplit);
-    for (tracer, params) in [
-        ("reference", spatial(Params::new(), 0.0)),
-        ("reference", spatial(Params::new(), 0.5)),
-        ("wide-single", spatial(Params::new().with("width", 8), 0.0)),
-        ("wide-single", spatial(Params::new().with("width", 4), 0.5)),
-        (
-            "packet",
-            spatial(
-                Params::new()
-                    .with("traversal", "ranged")
-                    .with("packet", 16)
-                    .with("width", 8),
-                0.0,
-            ),
-        ),
-        (
-            "packet",
-            spatial(Params::new().with("traversal", "ia").with("packet", 8), 0.0),
-        ),
-        (
-            "stream",
-            spatial(
-                Params::new()
-                    .with("width", 16)
-                    .with("stream", 4096)
-                    .with("single", 256),
-                0.0,
-            ),
-        ),
-        ("mft", spatial(Params::new(), 0.0)),
-    ] {
-        agrees_with_embree_with(tracer, &params);
+    for (tracer, params) in defaults(|info| info.accel == AccelKind::Bvh) {
+        agrees_with_embree_with(tracer, &spatial(params, 0.0));
     }
+    let reference = TracerInfo::of_role(Role::Reference).unwrap().name;
+    agrees_with_embree_with(reference, &spatial(Params::new(), 0.5));
 }
 
 /// Trees built by Embree's own builder (`builder = "embree"`: rtcBuildBVH, its SBVH, laid out as
-/// ours; issue 29): every tracer that walks our BVH (binary, 4- and 8-wide) finds Embree's hits on
-/// them, and the reference on Embree's tree finds the reference's hits on ours.
+/// ours; issue 29): every tracer that walks our BVH (binary, 4- and 8-wide; each in its defaults)
+/// finds Embree's hits on them, and the reference on Embree's tree finds the reference's hits on
+/// ours.
 #[test]
 fn tracers_agree_with_embree_over_trees_built_by_embree() {
     let embree = |params: Params| params.with("builder", "embree");
-    for (tracer, params) in [
-        ("reference", embree(Params::new())),
-        ("wide-single", embree(Params::new().with("width", 8))),
-        ("wide-single", embree(Params::new().with("width", 4))),
-        (
-            "packet",
-            embree(
-                Params::new()
-                    .with("traversal", "ranged")
-                    .with("packet", 16)
-                    .with("width", 8),
-            ),
-        ),
-        (
-            "packet",
-            embree(Params::new().with("traversal", "ia").with("packet", 8)),
-        ),
-        (
-            "stream",
-            embree(
-                Params::new()
-                    .with("width", 16)
-                    .with("stream", 4096)
-                    .with("single", 256)
-                    .with("single_tree", 8),
-            ),
-        ),
-        ("mft", embree(Params::new())),
-    ] {
-        agrees_with_embree_with(tracer, &params);
+    for (tracer, params) in defaults(|info| info.accel == AccelKind::Bvh) {
+        agrees_with_embree_with(tracer, &embree(params));
     }
-    agrees_with(
-        "reference",
-        &embree(Params::new()),
-        "reference",
-        &Params::new(),
-    );
-}
-
-/// The multi-frusta tracer on ordinary ray batches (4×4 packets; its native light-visibility
-/// answer is checked against Embree in tests/suite/visibility.rs).
-#[test]
-fn mft_agrees_with_embree() {
-    agrees_with_embree("mft");
+    let reference = TracerInfo::of_role(Role::Reference).unwrap().name;
+    agrees_with(reference, &embree(Params::new()), reference, &Params::new());
 }

@@ -1,4 +1,4 @@
-//! End-to-end runs of experiments on tiny scenes (`experiment::spec::quad_scenes`) and built-in
+//! End-to-end runs of experiments on tiny scenes (`experiment::plan::quad_scenes`) and built-in
 //! ones: what a run writes (runs.csv, histograms.csv, verify.csv, plots, tables, figures, meta.json,
 //! summary.md), its values against hand-worked counts, and what it refuses.
 use std::cell::Cell;
@@ -9,11 +9,11 @@ use std::path::{Path, PathBuf};
 
 use raylab::accel::embree::{EMBREE4_BUILT, EMBREE4_HINT};
 use raylab::error::{Error, Result};
+use raylab::experiment::plan::quad_scenes::load_quads;
+use raylab::experiment::plan::table_spec::RowsSpec;
 use raylab::experiment::record::files::*;
 use raylab::experiment::record::{check_row, histogram_row, run_row, selection};
 use raylab::experiment::results::summary::Summary;
-use raylab::experiment::spec::quad_scenes::load_quads;
-use raylab::experiment::spec::table_spec::RowsSpec;
 use raylab::experiment::{run, Chatter, Experiment, Plan, RunOverrides, SceneLoader, SceneSpec};
 use raylab::scene::library::load_scene;
 use raylab::scene::Scene;
@@ -620,7 +620,7 @@ resolution = { width = 8, height = 8 }
         .map(|l| l.as_str())
         .collect();
     let expected = match TINYBVH_BUILT {
-        true => vec!["tinybvh-8[builder=sbvh;optimize=25]", "obvhs"],
+        true => vec!["obvhs", "tinybvh-8[builder=sbvh;optimize=25]"],
         false => vec!["obvhs"],
     };
     assert_eq!(others, expected);

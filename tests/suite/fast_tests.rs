@@ -1,4 +1,5 @@
-//! `robust = false` on every tracer of ours (`geometry::robustness`): plain slabs and
+//! `robust = false` on every tracer of ours (`geometry::robustness`), in every configuration its
+//! registry entry declares for tests: plain slabs and
 //! Möller–Trumbore in every lane and every single-ray kernel, bit for bit the scalar tests, and
 //! all culling conservative — so each tracer's closest hits are the reference tracer's with
 //! `robust = false` on the same rays (or a tie at exactly the same distance) and its occlusion
@@ -10,7 +11,7 @@ use crate::common;
 
 use raylab::geometry::Fast;
 use raylab::tracers::chunked::{trace_hits, trace_occlusion};
-use raylab::tracers::{build_tracer, tracer_for_mesh, Params, TracerInfo};
+use raylab::tracers::{build_tracer, tracer_for_mesh, Params, Role, TracerInfo};
 
 use common::{reference_rays, ties_against, ReferenceRays};
 
@@ -25,7 +26,8 @@ fn agrees_with_the_fast_reference(name: &str, size: Option<u32>) {
         ..
     } = reference_rays(name, size);
     let fast = || Params::new().with("robust", false);
-    let reference = build_tracer(TracerInfo::find("reference").unwrap(), &fast(), &accel).unwrap();
+    let reference = TracerInfo::of_role(Role::Reference).unwrap();
+    let reference = build_tracer(reference, &fast(), &accel).unwrap();
     let want = [&primary, &diffuse].map(|b| trace_hits(reference.as_ref(), b));
     let want_shadow = trace_occlusion(reference.as_ref(), &shadow);
     assert!(want[0].iter().filter(|h| h.is_hit()).count() > primary.len() / 2);
@@ -35,37 +37,13 @@ fn agrees_with_the_fast_reference(name: &str, size: Option<u32>) {
         a.iter().zip(b).filter(|(x, y)| x != y).count()
     };
     assert!(differ(&want[0], &expected_hits[0]) > primary.len() / 10);
-    let packet = |traversal: &str, side: u32, lanes: u32| {
-        fast()
-            .with("traversal", traversal)
-            .with("packet", side)
-            .with("lanes", lanes)
-    };
-    let tracers = [
-        ("grid-dda", fast()),
-        ("cgt", fast()),
-        (
-            "cgt",
-            fast()
-                .with("packet", 8)
-                .with("lanes", 8)
-                .with("cull", false),
-        ),
-        ("packet", packet("masked", 8, 16)),
-        ("packet", packet("ranged", 16, 8)),
-        ("packet", packet("partition", 4, 4)),
-        ("packet", packet("ia", 16, 16)),
-        ("packet", packet("ranged", 16, 16).with("frustum", false)),
-        ("packet", packet("ranged", 8, 16).with("width", 4)),
-        ("packet", packet("ranged", 16, 8).with("width", 8)),
-        ("stream", fast()),
-        ("stream", fast().with("width", 64).with("stream", "frame")),
-        ("stream", fast().with("width", 4).with("single", 8)),
-        ("stream", fast().with("single", 256).with("single_tree", 8)),
-        ("mft", fast()),
-        ("mft", fast().with("primary", "frusta")),
-        ("mft", fast().with("primary", "frusta").with("width", 4)),
-    ];
+    // Every tracer of ours but the reference itself, in every configuration its entry declares
+    // for tests.
+    let tracers: Vec<(&str, Params)> =
+        common::test_configurations(|info| info.is_ours() && info.role != Role::Reference)
+            .into_iter()
+            .map(|(info, params)| (info.name, params.with("robust", false)))
+            .collect();
     let mut ties = 0;
     for (tracer_name, params) in &tracers {
         let tracer = tracer_for_mesh(tracer_name, params, &mesh).unwrap();

@@ -154,7 +154,7 @@ fn no_module_imports_from_a_layer_above_it() {
 /// below it; `run` and `results` stand side by side and import neither each other nor anything
 /// above. The files beside the rooms (`experiment/mod.rs`, `merge.rs`, `reproduce.rs`) join them
 /// and may import any.
-const ROOMS: &[&[&str]] = &[&["record"], &["spec"], &["run", "results"]];
+const ROOMS: &[&[&str]] = &[&["record"], &["plan"], &["run", "results"]];
 const PEERS: &[&str] = &["run", "results"];
 
 fn room_rank(room: &str) -> Option<usize> {
@@ -239,7 +239,7 @@ fn the_experiment_rooms_import_only_downwards() {
     for file in &outside {
         assert!(
             ["merge.rs", "mod.rs", "reproduce.rs"].contains(&file.as_str()),
-            "experiment/{file} is in no room: move it into record/, spec/, run/ or results/"
+            "experiment/{file} is in no room: move it into record/, plan/, run/ or results/"
         );
     }
     assert!(checked > 20, "only {checked} files checked");
@@ -253,13 +253,13 @@ fn the_experiment_rooms_import_only_downwards() {
 #[test]
 fn the_room_checker_refuses_upward_and_sideways_imports() {
     let text = "use crate::experiment::record::files::RUNS_CSV;\n\
-                use crate::experiment::{spec::plan::Plan, results::plots};\n\
+                use crate::experiment::{plan::Plan, results::plots};\n\
                 use super::super::run::runner::Case;\n";
     assert_eq!(
         room_imports(text),
         [
             (1, "record".to_string()),
-            (2, "spec".to_string()),
+            (2, "plan".to_string()),
             (2, "results".to_string()),
             (3, "run".to_string()),
         ]
@@ -268,7 +268,7 @@ fn the_room_checker_refuses_upward_and_sideways_imports() {
         room_violations("results/x.rs", "results", text),
         ["results/x.rs:3: experiment/results imports experiment/run"]
     );
-    assert_eq!(room_violations("spec/x.rs", "spec", text).len(), 2);
+    assert_eq!(room_violations("plan/x.rs", "plan", text).len(), 2);
     assert_eq!(room_violations("record/x.rs", "record", text).len(), 3);
 }
 

@@ -8,9 +8,9 @@
 use std::fs;
 use std::path::PathBuf;
 
+use raylab::experiment::plan::overrides::Scale;
 use raylab::experiment::reproduce::{plan, reproduce, QUICK_DIR};
 use raylab::experiment::results::report::{REPORT_MD, VERDICTS_MD};
-use raylab::experiment::spec::overrides::Scale;
 use raylab::experiment::Chatter;
 
 fn scratch() -> PathBuf {

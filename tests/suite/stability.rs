@@ -1,5 +1,5 @@
-//! The numerical stability suite on every case kind, for the from-scratch tracers (one
-//! configuration of each packet traversal, cgt, grid-dda, reference, stream): no leak, no crash, no hang,
+//! The numerical stability suite on every case kind, for the from-scratch tracers (each in
+//! every configuration its registry entry declares for tests): no leak, no crash, no hang,
 //! every ill-formed ray a miss, and no answer the f64 truth calls wrong — slivers and crowded
 //! needle fans included: the watertight test redoes in f64 the edge functions that lost more than
 //! 4 bits to cancellation (`geometry::triangle::needs_f64`; at 11 bits a handful of sliver rays
@@ -7,45 +7,22 @@
 
 use std::time::Duration;
 
-use raylab::tracers::Params;
+use raylab::tracers::TracerInfo;
 use raylab::verify::stability::{generate, run, CaseKind, Contender, Status};
 
 use crate::common;
 use common::smaller_sweep;
 
-fn contender(name: &'static str, params: &[(&str, &str)]) -> Contender {
-    let params = params.iter().fold(Params::new(), |p, (k, v)| p.with(k, v));
-    Contender {
-        label: format!("{name}{params:?}"),
-        name,
-        params,
-    }
-}
-
+/// Every tracer of ours in every configuration its registry entry declares for tests.
 #[test]
 fn from_scratch_tracers_pass_every_stiff_case() {
     let sweep = smaller_sweep();
     let cases = generate(&sweep);
-    let contenders = [
-        contender("reference", &[]),
-        contender("grid-dda", &[]),
-        contender("cgt", &[("packet", "8")]),
-        contender("packet", &[("traversal", "masked"), ("packet", "8")]),
-        contender(
-            "packet",
-            &[
-                ("traversal", "ranged"),
-                ("packet", "16"),
-                ("frustum", "true"),
-            ],
-        ),
-        contender("packet", &[("traversal", "partition"), ("packet", "16")]),
-        contender(
-            "packet",
-            &[("traversal", "ia"), ("packet", "8"), ("frustum", "true")],
-        ),
-    ];
-    let outcomes = run(cases, &contenders, Duration::from_secs(120), &|_, _| {});
+    let contenders: Vec<Contender> = common::test_configurations(TracerInfo::is_ours)
+        .into_iter()
+        .map(|(info, p)| Contender::new(format!("{} {p}", info.name), info, p).unwrap())
+        .collect();
+    let outcomes = run(cases, &contenders, Duration::from_secs(120), &|_, _| {}).unwrap();
     assert!(!outcomes.is_empty());
     for o in &outcomes {
         assert_eq!(o.status, Status::Answered, "{o:?}");

@@ -12,7 +12,7 @@ use raylab::render::rays::primary_rays;
 use raylab::scene::library::load_scene;
 use raylab::tracers::chunked::trace_hits;
 use raylab::tracers::tinybvh::tile::{block_slots, mirrored, PACKET};
-use raylab::tracers::{tracer_for_frame, Params};
+use raylab::tracers::{tracer_for_frame, Params, TracerInfo};
 use raylab::verify::stability::cases::Case;
 use raylab::verify::stability::{generate, run, CaseKind, Contender, Status};
 
@@ -70,10 +70,9 @@ fn tinybvh_answers_every_stiff_case_without_a_crash() {
     let sweep = smaller_sweep();
     let contenders: Vec<Contender> = ["tinybvh-2", "tinybvh-4", "tinybvh-8", "tinybvh-256"]
         .into_iter()
-        .map(|name| Contender {
-            label: name.to_string(),
-            name,
-            params: Params::new(),
+        .map(|name| {
+            let info = TracerInfo::find(name).unwrap();
+            Contender::new(name.to_string(), info, Params::new()).unwrap()
         })
         .collect();
     // Each case is named before it runs: a crash (tinybvh's cannot be caught) shows which.
@@ -91,7 +90,8 @@ fn tinybvh_answers_every_stiff_case_without_a_crash() {
         &contenders,
         Duration::from_secs(120),
         &progress,
-    );
+    )
+    .unwrap();
     assert!(!outcomes.is_empty());
     for o in &outcomes {
         assert_eq!(o.status, Status::Answered, "{o:?}");

@@ -1,9 +1,13 @@
 //! The light-visibility query gives every tracer the same rays, so every tracer must give the same
-//! occlusion bits: reference, packet (each traversal), stream, obvhs, tinybvh, cgt, grid-dda, mft (multi-
-//! frusta, answering natively: with and without CR / FS) and Embree (robust), on the room and the conference room with a quad light and on a BART scene with one added —
-//! the soft-shadow workload of the runner (16 interleaved light samples per primary hit).
+//! occlusion bits: every tracer of the registry in every configuration its entry declares for
+//! tests (mft among them answering natively, with and without CR / FS), on the room and the
+//! conference room with a quad light and on a BART scene with one added — the soft-shadow
+//! workload of the runner (16 interleaved light samples per primary hit). No test here names a
+//! tracer of ours or a library's: a new registry entry is checked from its entry alone.
 
 use glam::Vec3;
+
+use crate::common::test_configurations;
 use raylab::render::area_light::{soft_shadow_points, LightSampleSets};
 use raylab::render::rays::primary_rays;
 use raylab::render::wavefront::{answer, Answers, Work};
@@ -11,7 +15,9 @@ use raylab::scene::library::load_scene;
 use raylab::scene::{Light, Scene};
 use raylab::tracers::chunked::trace_hits;
 use raylab::tracers::visibility::{QuadLight, Visibility};
-use raylab::tracers::{oracle_params, tracer_for_frame, Params, VisibilityQuery};
+use raylab::tracers::{
+    oracle_params, tracer_for_frame, Params, Role, TracerInfo, VisibilityQuery, ORACLE,
+};
 
 const RESOLUTION: u32 = 128;
 const SAMPLES: u32 = 16;
@@ -29,7 +35,7 @@ fn with_quad_light(mut scene: Scene, side: f32) -> Scene {
 }
 
 /// Real scenes come from the search path; CI always has them. Locally without them the test says so.
-fn scenes() -> Vec<(&'static str, Scene)> {
+pub(crate) fn scenes() -> Vec<(&'static str, Scene)> {
     let mut scenes = vec![(
         "room-area-light",
         load_scene("room-area-light", None).unwrap(),
@@ -48,9 +54,9 @@ fn scenes() -> Vec<(&'static str, Scene)> {
     scenes
 }
 
-fn visibility(scene: &Scene, tracer: &str, params: &Params) -> (Visibility, usize) {
+pub(crate) fn visibility(scene: &Scene, tracer: &str, params: &Params) -> (Visibility, usize) {
     let frame = scene.frame(0, 1);
-    let oracle = tracer_for_frame("embree16", &oracle_params(), &frame).unwrap();
+    let oracle = tracer_for_frame(ORACLE, &oracle_params(), &frame).unwrap();
     let primary = primary_rays(&frame.camera, RESOLUTION, RESOLUTION);
     let hits = trace_hits(oracle.as_ref(), &primary);
     let (points, samples) = soft_shadow_points(
@@ -77,38 +83,10 @@ fn visibility(scene: &Scene, tracer: &str, params: &Params) -> (Visibility, usiz
 
 #[test]
 fn every_tracer_sees_the_same_light_samples() {
-    let packet = |traversal: &str| Params::new().with("traversal", traversal).with("packet", 4);
-    let mut tracers = vec![
-        ("reference", Params::new()),
-        ("obvhs", Params::new()),
-        ("grid-dda", Params::new()),
-        ("cgt", Params::new()),
-        ("packet", packet("masked")),
-        ("packet", packet("ranged")),
-        ("packet", packet("partition")),
-        ("packet", packet("ia")),
-        ("stream", Params::new()),
-        ("stream", Params::new().with("width", 4).with("stream", 64)),
-        ("embree1", Params::new()),
-        ("mft", Params::new()),
-        (
-            "mft",
-            Params::new()
-                .with("cr", false)
-                .with("fs", false)
-                .with("leaf_rays", false),
-        ),
-        ("mft", Params::new().with("fs", false).with("block", 64)),
-        ("mft", Params::new().with("width", 4)),
-        ("mft", Params::new().with("width", 8).with("block", 64)),
-    ];
-    if raylab::tracers::registry::TINYBVH_BUILT {
-        for name in ["tinybvh-2", "tinybvh-4", "tinybvh-8", "tinybvh-256"] {
-            tracers.push((name, Params::new()));
-        }
-    }
+    let tracers = test_configurations(|_| true);
+    let tracers: Vec<(&str, Params)> = tracers.into_iter().map(|(i, p)| (i.name, p)).collect();
     for (name, scene) in scenes() {
-        let (expected, rays) = visibility(&scene, "embree16", &oracle_params());
+        let (expected, rays) = visibility(&scene, ORACLE, &oracle_params());
         let occluded = expected.total_occluded();
         let samples = expected.points() * SAMPLES as usize;
         println!(
@@ -136,55 +114,25 @@ fn every_tracer_sees_the_same_light_samples() {
     }
 }
 
-/// The multi-frusta tracer answers natively (its rays made on demand inside frusta); the reference
-/// tracer answers by tracing the same sample rays as ordinary shadow rays: the bits must be equal.
-#[test]
-fn mft_bits_equal_the_reference_tracers_shadow_rays() {
-    for (name, scene) in scenes() {
-        let (expected, rays) = visibility(&scene, "reference", &Params::new());
-        for (block, width) in [(4, 2), (16, 2), (64, 2), (16, 4), (16, 8)] {
-            let params = Params::new().with("block", block).with("width", width);
-            let (got, _) = visibility(&scene, "mft", &params);
-            assert_eq!(
-                got, expected,
-                "{name}: mft block {block} width {width} ({rays} rays)"
-            );
-        }
-    }
-}
-
 /// `robust = false` like for like: every tracer of ours with plain slabs and Möller–Trumbore in
-/// its lanes gives the bits the reference tracer gives with `robust = false` (every lane is the
-/// scalar test bit for bit, all culling conservative); mft answering natively among them.
+/// its lanes, in every test configuration, gives the bits the reference tracer gives with
+/// `robust = false` (every lane is the scalar test bit for bit, all culling conservative); mft
+/// answering natively among them.
 #[test]
 fn fast_tests_give_the_fast_reference_tracers_bits() {
     let fast = || Params::new().with("robust", false);
-    let tracers = [
-        ("grid-dda", fast()),
-        ("cgt", fast()),
-        (
-            "packet",
-            fast().with("traversal", "masked").with("packet", 4),
-        ),
-        ("packet", fast().with("traversal", "ia").with("lanes", 4)),
-        ("packet", fast().with("width", 8)),
-        ("stream", fast()),
-        ("stream", fast().with("single", 8).with("single_tree", 4)),
-        ("mft", fast()),
-        (
-            "mft",
-            fast()
-                .with("cr", false)
-                .with("fs", false)
-                .with("leaf_rays", false),
-        ),
-        ("mft", fast().with("width", 8).with("block", 64)),
-    ];
+    let reference = TracerInfo::of_role(Role::Reference).unwrap().name;
+    let tracers = test_configurations(TracerInfo::is_ours);
     for (name, scene) in scenes() {
-        let (expected, rays) = visibility(&scene, "reference", &fast());
+        let (expected, rays) = visibility(&scene, reference, &fast());
         for (tracer, params) in &tracers {
-            let (got, _) = visibility(&scene, tracer, params);
-            assert_eq!(got, expected, "{name}: {tracer} {params} ({rays} rays)");
+            let params = params.clone().with("robust", false);
+            let (got, _) = visibility(&scene, tracer.name, &params);
+            assert_eq!(
+                got, expected,
+                "{name}: {} {params} ({rays} rays)",
+                tracer.name
+            );
         }
     }
 }

@@ -493,12 +493,7 @@ mod tests {
         let unguarded = build_bvh(&tris, embree(4)).unwrap();
         let capacity =
             ((tris.len() as f64 * SPLIT_REPLICATIONS).ceil() as usize).max(tris.len() + 1);
-        let mut isas = vec![None];
-        if is_x86_feature_detected!("avx512f") && is_x86_feature_detected!("avx2") {
-            isas.push(Some("isa=avx2"));
-        }
-        isas.push(Some("isa=sse4.2"));
-        for isa in isas {
+        for isa in crate::accel::embree::test_isas() {
             let device = Device::<Embree3>::with_config(isa).unwrap();
             for placement in Placement::BOTH {
                 let what = format!("rtcBuildBVH at {isa:?}, {placement:?}");

@@ -237,6 +237,24 @@ fn error_name(code: ffi::RTCError::Type) -> String {
     }
 }
 
+/// The device configurations a test runs Embree at: the machine's own ISA, then each lower one it
+/// can run (on x86-64; elsewhere its own only).
+#[cfg(test)]
+pub fn test_isas() -> Vec<Option<&'static str>> {
+    #[allow(unused_mut)]
+    let mut isas = vec![None];
+    #[cfg(target_arch = "x86_64")]
+    {
+        if is_x86_feature_detected!("avx512f") && is_x86_feature_detected!("avx2") {
+            isas.push(Some("isa=avx2"));
+        }
+        if is_x86_feature_detected!("sse4.2") {
+            isas.push(Some("isa=sse4.2"));
+        }
+    }
+    isas
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

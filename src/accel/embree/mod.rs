@@ -15,6 +15,8 @@ pub mod v4;
 pub use api::{Embree3, EmbreeApi, Padded};
 pub use build_bvh::build_bvh;
 pub use config::{BuildQuality, EmbreeConfig};
+#[cfg(test)]
+pub use device::test_isas;
 pub use device::{shared_config, version, Device, CONFIG_VARIABLE};
 pub use scene::EmbreeScene;
 #[cfg(embree4)]

@@ -62,7 +62,14 @@ impl CheckRow {
         ]
     }
 
+    /// A verify.csv row; files written before the f64 truth judged disagreements read with every
+    /// unexplained one undecided.
     pub fn parse(cells: &Cells) -> CellResult<CheckRow> {
+        let unexplained = cells.number("unexplained")?;
+        let judged = |column: &str| match cells.0.contains_key(column) {
+            true => cells.number(column).map(Some),
+            false => Ok(None),
+        };
         Ok(CheckRow {
             scene: cells.text("scene")?,
             triangles: cells.number("triangles")?,
@@ -72,11 +79,11 @@ impl CheckRow {
             ray_kind: cells.text("ray_kind")?,
             checked_rays: cells.number("checked_rays")?,
             ties: cells.number("ties")?,
-            unexplained: cells.number("unexplained")?,
-            ours_right: cells.number("ours_right")?,
-            ours_wrong: cells.number("ours_wrong")?,
-            rounding: cells.number("rounding")?,
-            undecided: cells.number("undecided")?,
+            unexplained,
+            ours_right: judged("ours_right")?.unwrap_or(0),
+            ours_wrong: judged("ours_wrong")?.unwrap_or(0),
+            rounding: judged("rounding")?.unwrap_or(0),
+            undecided: judged("undecided")?.unwrap_or(unexplained),
         })
     }
 }

@@ -1,6 +1,7 @@
 //! The record of a run, the bottom room of `experiment/`: what a measurement is once taken — one
 //! typed row per measurement (`run_row`, runs.csv), per BVH depth of a counted batch
-//! (`histogram_row`) and per sampled check (`check_row`) — the file names of a results
+//! (`histogram_row`), per sampled check (`check_row`) and per case of the stability suite
+//! (`stability_row`) — the file names of a results
 //! directory, how rows are selected and reduced for tables and figures, and how a results
 //! directory is written all at once or not at all. `spec`, `run` and `results` all import it; it
 //! imports none of them.
@@ -16,6 +17,7 @@ pub mod provenance;
 pub mod results_dir;
 pub mod run_row;
 pub mod selection;
+pub mod stability_row;
 pub mod utc;
 
 pub use check_row::CheckRow;

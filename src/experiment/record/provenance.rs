@@ -28,6 +28,7 @@ pub const CORE: &[&str] = &[
     "scene/builtin",
     "stats.rs",
     "tracers/chunked.rs",
+    "tracers/kernel.rs",
     "tracers/mod.rs",
     "tracers/registry.rs",
     "tracers/staged.rs",

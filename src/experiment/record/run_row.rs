@@ -24,6 +24,7 @@ pub const RUNS_COLUMNS: &[&str] = &[
     "tracer",
     "parameters",
     "structure",
+    "resolved",
     "render",
     "ray_kind",
     "bounce_depth",
@@ -103,6 +104,9 @@ pub struct RunRow {
     /// The instance's parameters as `key=value;…` (`Params`' display).
     pub parameters: String,
     pub structure: String,
+    /// The configuration the instance ran, defaults included: its tracer's and its structure's
+    /// (`InstancePlan::resolved`); `None` in files written before the column.
+    pub resolved: Option<String>,
     /// The render workload, for the batches and frames of a rendered frame.
     pub render: Option<String>,
     /// The ray kind, the batch kind of a rendered frame, `frame`, or `file:<name>`.
@@ -177,6 +181,7 @@ impl RunRow {
             self.tracer.clone(),
             self.parameters.clone(),
             self.structure.clone(),
+            cell(self.resolved.as_ref()),
             cell(self.render.as_ref()),
             self.ray_kind.clone(),
             cell(self.bounce_depth),
@@ -256,6 +261,10 @@ impl RunRow {
             tracer: cells.text("tracer")?,
             parameters: cells.text("parameters")?,
             structure: cells.text("structure")?,
+            resolved: match cells.0.contains_key("resolved") {
+                true => cells.optional_text("resolved")?,
+                false => None,
+            },
             render: cells.optional_text("render")?,
             ray_kind: cells.text("ray_kind")?,
             bounce_depth: cells.optional("bounce_depth")?,
@@ -320,6 +329,7 @@ mod tests {
             tracer: "packet".into(),
             parameters: "packet=8;traversal=ranged".into(),
             structure: "bvh".into(),
+            resolved: Some("Packet { config: PacketConfig { packet: 8 }, width: Binary }; BvhConfig { bins: 16 }".into()),
             render: Some("renderer=whitted;max_depth=2".into()),
             ray_kind: "reflection".into(),
             bounce_depth: Some(1),
@@ -383,6 +393,10 @@ mod tests {
             (old.baseline_best, old.embree_best),
             (None, row.embree_best.clone())
         );
+        // And from before the resolved configuration.
+        let mut old = fields.clone();
+        old.remove("resolved");
+        assert_eq!(RunRow::parse(&Cells(&old)).unwrap().resolved, None);
         bad.remove("hits");
         assert_eq!(
             RunRow::parse(&Cells(&bad)).unwrap_err(),

@@ -13,8 +13,8 @@
 
 use std::collections::HashMap;
 
+use crate::experiment::plan::{InstancePlan, Plan};
 use crate::experiment::record::{Best, RunRow};
-use crate::experiment::spec::plan::{InstancePlan, Plan};
 use crate::geometry::RayKind;
 use crate::tracers::embree::Coherence;
 use crate::tracers::registry::role_of;
@@ -126,7 +126,7 @@ fn config(instance: &InstancePlan, ray_kind: &str) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::experiment::spec::plan::tests::{experiment, load_quads};
+    use crate::experiment::plan::tests::{experiment, load_quads};
 
     /// A row of `instance` of `plan` on `kind` of `scene` at 1 and 2 threads with these fastest
     /// passes (seconds), built in `build` seconds.
@@ -149,6 +149,7 @@ mod tests {
                 tracer: i.tracer.clone(),
                 parameters: i.params.to_string(),
                 structure: i.structure.to_string(),
+                resolved: Some(i.resolved()),
                 render: None,
                 ray_kind: kind.name().to_string(),
                 bounce_depth: Some(0),

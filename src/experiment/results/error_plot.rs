@@ -18,11 +18,11 @@ use crate::error::Result;
 use crate::experiment::record::RunRow;
 use crate::render::convergence::{write_error_csv, ErrorPoint};
 
+use crate::experiment::plan::config::{Experiment, RenderWorkload};
+use crate::experiment::plan::Plan;
 use crate::experiment::results::plots::{
     draw_legend, plot_error, register_font, scene_stem, significant, PlotResult, FONT,
 };
-use crate::experiment::spec::config::{Experiment, RenderWorkload};
-use crate::experiment::spec::plan::Plan;
 
 /// Tableau colours, one per tracer in name order.
 const PALETTE: [RGBColor; 6] = [

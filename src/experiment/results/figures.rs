@@ -1,13 +1,13 @@
 //! Line figures, drawn: each `[[figures]]` of an experiment (declared and checked in
-//! `spec::figure_spec`) over the rows of its data file, into the results directory.
+//! `plan::figure_spec`) over the rows of its data file, into the results directory.
 
 use std::path::Path;
 
 use plotters::prelude::*;
 
 use crate::error::Result;
+use crate::experiment::plan::figure_spec::{FigureSpec, Line};
 use crate::experiment::record::selection::{distinct, Filter, Measure, Row};
-use crate::experiment::spec::figure_spec::{FigureSpec, Line};
 
 use super::plots::{draw_legend, plot_error, register_font, significant, PlotResult, FONT};
 
@@ -142,7 +142,7 @@ fn series_label(field: Option<&str>, value: &str) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::experiment::spec::figure_spec::{DataFile, Metrics};
+    use crate::experiment::plan::figure_spec::{DataFile, Metrics};
 
     fn figure(text: &str) -> FigureSpec {
         toml::from_str(text).unwrap()

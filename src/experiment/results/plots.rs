@@ -13,9 +13,9 @@ use plotters::style::FontStyle;
 use crate::error::{Error, Result};
 use crate::geometry::RayKind;
 
+use crate::experiment::plan::Plan;
 use crate::experiment::record::run_row::mrays_per_s;
 use crate::experiment::record::{HistogramRow, RunRow};
-use crate::experiment::spec::plan::Plan;
 
 const FONT_PATH: &str = "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf";
 pub const FONT: &str = "sans-serif";

@@ -11,7 +11,7 @@ use serde_json::Value;
 
 use crate::error::{Error, Result};
 use crate::experiment::record::files::META_JSON;
-use crate::experiment::record::provenance::SourceTree;
+use crate::experiment::record::provenance::{SourceTree, CORE};
 
 /// A results directory and why it is stale (empty: it is not).
 #[derive(Clone, Debug, PartialEq)]
@@ -75,6 +75,20 @@ pub fn source_reasons(
                     changed.join(", ")
                 ));
             }
+            // The shared core grew since (a file split out of one the run recorded, say): what
+            // the run did not record, it cannot vouch for. An area recorded whole by an older
+            // run (`tracers`) covers the files under it.
+            let covered = |area: &str| {
+                then.keys()
+                    .any(|t| t == area || area.starts_with(&format!("{t}/")))
+            };
+            let unrecorded: Vec<&str> = CORE.iter().copied().filter(|a| !covered(a)).collect();
+            if !unrecorded.is_empty() {
+                reasons.push(format!(
+                    "it did not record the measured core's {}",
+                    unrecorded.join(", ")
+                ));
+            }
         }
     }
     let then = meta
@@ -86,6 +100,20 @@ pub fn source_reasons(
         }
     }
     reasons
+}
+
+/// Why the run whose meta.json is `meta` is stale against `today`, its experiment file read from
+/// where the run recorded it (`reasons`).
+pub fn reasons_now(meta: &Value, today: &SourceTree) -> Vec<String> {
+    reasons(meta, today, experiment_now(meta).as_deref())
+}
+
+/// A run's status in one phrase: "current", or "stale: " and why.
+pub fn status(reasons: &[String]) -> String {
+    match reasons.is_empty() {
+        true => "current".to_string(),
+        false => format!("stale: {}", reasons.join("; ")),
+    }
 }
 
 /// The experiment file the run (`meta`) recorded, as it reads now (from the working directory the
@@ -122,7 +150,7 @@ pub fn check(paths: &[PathBuf]) -> Result<Vec<Verdict>> {
             let meta: Value = serde_json::from_str(&text)
                 .map_err(|e| Error::input(&file, Some(e.line()), e.to_string()))?;
             verdicts.push(Verdict {
-                reasons: reasons(&meta, &today, experiment_now(&meta).as_deref()),
+                reasons: reasons_now(&meta, &today),
                 dir,
             });
         }
@@ -221,7 +249,7 @@ mod tests {
         // A run recorded before staleness per family (whole folders) is compared by folder.
         let whole = serde_json::json!({
             "commit": { "hash": "abc", "dirty": false },
-            "measured_source": before.digests(&["tracers"]).unwrap(),
+            "measured_source": before.digests(&["accel", "geometry", "lanes", "tracers"]).unwrap(),
         });
         std::fs::write(src.join("tracers/multi_frusta/mod.rs"), "// changed").unwrap();
         let after = SourceTree::at(&src);
@@ -240,9 +268,14 @@ mod tests {
             reasons(&mft, &core, None),
             ["the code it measured changed since: lanes, tracers/multi_frusta"]
         );
+        // It did not record the areas the core has gained since, so it cannot vouch for them.
         assert_eq!(
             reasons(&whole, &core, None),
-            ["the code it measured changed since: tracers"]
+            [
+                "the code it measured changed since: lanes, tracers",
+                "it did not record the measured core's experiment/run/passes.rs, render, \
+                 scene/builtin, stats.rs"
+            ]
         );
         std::fs::remove_dir_all(&src).unwrap();
     }

@@ -20,14 +20,17 @@ use std::path::Path;
 
 use serde::Serialize;
 
+use crate::accel::AccelKind;
 use crate::error::{Error, Result};
 use crate::tracers::registry::{is_embree, role_of};
-use crate::tracers::Role;
+use crate::tracers::{Role, TracerInfo};
 
+use crate::experiment::record::csv_file::{read_typed, Cells};
 use crate::experiment::record::files::META_JSON;
 use crate::experiment::record::files::RUNS_CSV;
 use crate::experiment::record::files::VERIFY_CSV;
 use crate::experiment::record::selection::{read_rows, Row};
+use crate::experiment::record::CheckRow;
 
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Summary {
@@ -164,21 +167,12 @@ impl<'a> Table<'a> {
         Ok(Table { path, rows })
     }
 
-    /// The cell of row `i` parsed as a number; `None` when empty.
+    /// The cell of row `i` parsed as a number (by the record's `Cells`); `None` when empty.
     fn number<T: std::str::FromStr>(&self, i: usize, column: &str) -> Result<Option<T>> {
-        let cell = self.rows[i][column].as_str();
-        if cell.is_empty() {
-            return Ok(None);
-        }
         // Row i is on line i + 2: the header is line 1.
-        let parsed = cell.parse::<T>().map_err(|_| {
-            Error::at_line(
-                self.path,
-                i + 2,
-                format!("{column} = {cell:?} is not a number"),
-            )
-        })?;
-        Ok(Some(parsed))
+        Cells(&self.rows[i])
+            .optional(column)
+            .map_err(|e| Error::at_line(self.path, i + 2, e))
     }
 
     fn required<T: std::str::FromStr>(&self, i: usize, column: &str) -> Result<T> {
@@ -245,7 +239,7 @@ impl Summary {
         let runs = Table::read(&runs_path, RUNS_NEEDS)?;
         let verify_path = dir.join(VERIFY_CSV);
         let checks = match verify_path.is_file() {
-            true => read_checks(&Table::read(&verify_path, &VERIFY_NEEDS)?)?,
+            true => read_checks(&verify_path)?,
             false => BTreeMap::new(),
         };
         let mut summary = summarise(&runs, &checks, threads)?;
@@ -444,46 +438,24 @@ fn read_meta(path: &Path) -> Result<MetaFacts> {
     })
 }
 
-const VERIFY_NEEDS: [&str; 8] = [
-    "scene",
-    "triangles",
-    "tracer",
-    "parameters",
-    "ray_kind",
-    "checked_rays",
-    "ties",
-    "unexplained",
-];
-
-/// verify.csv's checks, summed over frames per (scene, triangles, ray kind) and configuration.
-fn read_checks(table: &Table) -> Result<BTreeMap<(GroupKey, ConfigKey), Checks>> {
+/// verify.csv's checks (`CheckRow`s), summed over frames per (scene, triangles, ray kind) and
+/// configuration.
+fn read_checks(path: &Path) -> Result<BTreeMap<(GroupKey, ConfigKey), Checks>> {
     let mut checks: BTreeMap<(GroupKey, ConfigKey), Checks> = BTreeMap::new();
-    for i in 0..table.rows.len() {
-        let group = (
-            table.text(i, "scene").to_string(),
-            table.required(i, "triangles")?,
-            table.text(i, "ray_kind").to_string(),
-        );
-        let config = (
-            table.text(i, "tracer").to_string(),
-            table.text(i, "parameters").to_string(),
-        );
-        let unexplained = table.required(i, "unexplained")?;
-        let judged = |column: &str| -> Result<Option<u64>> {
-            match table.rows[i].contains_key(column) {
-                true => table.required(i, column).map(Some),
-                false => Ok(None),
-            }
-        };
-        checks.entry((group, config)).or_default().add(Checks {
-            rays: table.required(i, "checked_rays")?,
-            ties: table.required(i, "ties")?,
-            unexplained,
-            ours_right: judged("ours_right")?.unwrap_or(0),
-            ours_wrong: judged("ours_wrong")?.unwrap_or(0),
-            rounding: judged("rounding")?.unwrap_or(0),
-            undecided: judged("undecided")?.unwrap_or(unexplained),
-        });
+    for row in read_typed(path, CheckRow::parse)? {
+        let group = (row.scene, row.triangles as u64, row.ray_kind);
+        checks
+            .entry((group, (row.tracer, row.parameters)))
+            .or_default()
+            .add(Checks {
+                rays: row.checked_rays as u64,
+                ties: row.ties,
+                unexplained: row.unexplained,
+                ours_right: row.ours_right,
+                ours_wrong: row.ours_wrong,
+                rounding: row.rounding,
+                undecided: row.undecided,
+            });
     }
     Ok(checks)
 }
@@ -667,7 +639,9 @@ fn summary_row(
         x_embree_best,
         baseline_best,
         x_baseline_best,
-        obvhs: fastest(&|tracer, _| tracer == "obvhs"),
+        obvhs: fastest(&|tracer, _| {
+            TracerInfo::find(tracer).is_ok_and(|info| info.accel == AccelKind::Obvhs)
+        }),
         reference: fastest(&|tracer, _| role_of(tracer) == Some(Role::Reference)),
     }
 }

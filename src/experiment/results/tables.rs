@@ -1,11 +1,11 @@
 //! Paper-vs-ours tables, rendered: each `[[tables]]` of an experiment (declared and checked in
-//! `spec::table_spec`) as markdown over the run's rows, written to `tables.md`.
+//! `plan::table_spec`) as markdown over the run's rows, written to `tables.md`.
 
 use std::fmt::Write;
 
 use crate::error::{Error, Result};
+use crate::experiment::plan::table_spec::{RowsSpec, TableSpec};
 use crate::experiment::record::selection::{distinct, Filter, Measure, Reduce, Row};
-use crate::experiment::spec::table_spec::{RowsSpec, TableSpec};
 
 impl TableSpec {
     /// The table as markdown over runs.csv `rows`.

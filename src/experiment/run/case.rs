@@ -2,8 +2,8 @@
 //! it (its counting pass and its timing at every thread count), and the rows it becomes. The
 //! runner's own intermediate: everything after the run reads the rows (`record`).
 
+use crate::experiment::plan::Plan;
 use crate::experiment::record::{CheckRow, HistogramRow, Records, RunRow};
-use crate::experiment::spec::plan::Plan;
 use crate::geometry::RayKind;
 use crate::render::assembly::BatchKind;
 use crate::stats::Event;
@@ -109,6 +109,7 @@ impl Case {
             tracer: instance.tracer.clone(),
             parameters: instance.params.to_string(),
             structure: instance.structure.to_string(),
+            resolved: Some(instance.resolved()),
             render: self.traced.render().map(|r| plan.renders[r].to_string()),
             ray_kind: self.traced.kind_name(plan),
             bounce_depth: self.traced.depth(),

@@ -20,7 +20,7 @@ use crate::geometry::ray_file::{write_rays, RayFileFormat};
 use crate::geometry::{RayBatch, RayKind, Triangle};
 use crate::tracers::visibility::{QuadLight, ShadingPoints};
 
-use crate::experiment::spec::config::SceneSpec;
+use crate::experiment::plan::config::SceneSpec;
 
 /// The stem of every dump file of `spec`'s frame `frame`.
 fn stem(spec: &SceneSpec, frame: usize) -> String {

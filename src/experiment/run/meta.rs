@@ -7,12 +7,14 @@ use std::process::Command;
 
 use serde::Serialize;
 
+use crate::accel::libraries::LIBRARIES;
+
+use crate::experiment::plan::overrides::RunOverrides;
+use crate::experiment::plan::shard::ShardMeta;
+use crate::experiment::plan::Plan;
 use crate::experiment::record::files::META_JSON;
 use crate::experiment::record::provenance::{every_area, measured_areas, SourceTree};
 use crate::experiment::record::utc::UtcTime;
-use crate::experiment::spec::overrides::RunOverrides;
-use crate::experiment::spec::plan::Plan;
-use crate::experiment::spec::shard::ShardMeta;
 
 #[derive(Debug, Serialize)]
 pub struct Meta<'a> {
@@ -228,90 +230,20 @@ fn features_compiled() -> Vec<&'static str> {
     .collect()
 }
 
-/// The lock file the binary was built with: the exact versions of its dependencies.
-const CARGO_LOCK: &str = include_str!("../../../Cargo.lock");
-
-/// The locked version of `package`, if it is a dependency.
-fn locked_version(lock: &str, package: &str) -> Option<String> {
-    let name_line = format!("name = \"{package}\"");
-    let mut lines = lock.lines();
-    lines.find(|l| l.trim() == name_line)?;
-    let version = lines
-        .next()?
-        .trim()
-        .strip_prefix("version = \"")?
-        .strip_suffix('"')?;
-    Some(version.to_string())
-}
-
 fn versions() -> BTreeMap<&'static str, String> {
-    let mut v = BTreeMap::new();
-    // The library actually loaded, asked at run time; a run without Embree tracers still records
-    // why it is missing.
-    use crate::accel::embree::{version, Embree3};
-    let embree = version::<Embree3>().unwrap_or_else(|e| format!("unavailable: {e}"));
-    v.insert("embree", embree);
-    // The devices' configuration (`RAYLAB_EMBREE_CONFIG`, e.g. a lower ISA), or Embree's default.
+    // Every library's version as this build runs it (a run without its tracers still records
+    // why it is missing), and the Embree devices' configuration (`RAYLAB_EMBREE_CONFIG`, e.g. a
+    // lower ISA), or Embree's default.
+    let mut v: BTreeMap<&str, String> = LIBRARIES.iter().map(|l| (l.name, (l.version)())).collect();
     let config = crate::accel::embree::shared_config();
     v.insert("embree_config", config.unwrap_or_else(|| "default".into()));
-    v.insert("embree4", embree4_version());
-    v.insert("tinybvh", tinybvh_version());
     v.insert("raylab", env!("CARGO_PKG_VERSION").to_string());
-    v.insert(
-        "obvhs",
-        locked_version(CARGO_LOCK, "obvhs").unwrap_or_else(|| "unknown".into()),
-    );
     v
-}
-
-/// The Embree 4 library loaded, the headers it was built against and where both came from; or
-/// why this build has none.
-#[cfg(embree4)]
-fn embree4_version() -> String {
-    use crate::accel::embree::{v4, version, Embree4, EmbreeApi};
-    let headers = std::ffi::CStr::from_bytes_with_nul(v4::ffi::RTC_VERSION_STRING)
-        .ok()
-        .and_then(|c| c.to_str().ok())
-        .unwrap_or("?");
-    match version::<Embree4>() {
-        // `Device::new` refuses a library of another release than the headers.
-        Ok(library) => format!("{library} (headers {headers}, its release; {})", v4::SOURCE),
-        Err(e) => format!("unavailable: {e} ({} headers {headers})", Embree4::NAME),
-    }
-}
-
-/// The tinybvh compiled into this build and where its header came from; or why there is none.
-fn tinybvh_version() -> String {
-    #[cfg(tinybvh)]
-    return format!(
-        "{} ({}, compiled -march={})",
-        crate::accel::tinybvh::version(),
-        crate::accel::tinybvh::SOURCE,
-        env!("RAYLAB_TINYBVH_MARCH")
-    );
-    #[cfg(not(tinybvh))]
-    format!("not built: {}", crate::tracers::registry::TINYBVH_HINT)
-}
-
-#[cfg(not(embree4))]
-fn embree4_version() -> String {
-    format!("not built: {}", crate::accel::embree::EMBREE4_HINT)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn locked_versions_come_from_the_lock_file() {
-        let lock = "[[package]]\nname = \"obvhs\"\nversion = \"0.4.0\"\n\n[[package]]\nname = \"obvhs-extra\"\nversion = \"9\"\n";
-        assert_eq!(locked_version(lock, "obvhs").as_deref(), Some("0.4.0"));
-        assert_eq!(locked_version(lock, "glam"), None);
-        assert_eq!(
-            locked_version(CARGO_LOCK, "obvhs").as_deref(),
-            Some("0.4.0")
-        );
-    }
 
     #[test]
     fn results_written_do_not_make_the_tree_dirty_source_does() {

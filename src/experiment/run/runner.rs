@@ -43,14 +43,14 @@ use crate::tracers::{
 use super::case::{Case, Traced};
 use super::dump;
 use super::sampled_check;
-use crate::experiment::run::passes::{count_pass, time_passes, timing_of, Counted, Timing};
-use crate::experiment::spec::config::{
+use crate::experiment::plan::config::{
     DistributionWorkload, Experiment, RenderWorkload, StructureKey,
 };
-use crate::experiment::spec::plan::{
+use crate::experiment::plan::shard::Part;
+use crate::experiment::plan::{
     secondary_ray_structure, secondary_ray_tracer, Plan, SceneLoader, ScenePlan,
 };
-use crate::experiment::spec::shard::Part;
+use crate::experiment::run::passes::{count_pass, time_passes, timing_of, Counted, Timing};
 
 /// The pool with the most threads.
 fn widest(pools: &[ThreadPool]) -> &ThreadPool {
@@ -401,7 +401,7 @@ impl TracerOnFrame<'_> {
         };
         let motion_tracer = moving
             .as_ref()
-            .map(|m| tracer_for_motion(instance.info.name, &instance.params, m))
+            .map(|m| tracer_for_motion(instance.info, &instance.config, &instance.params, m))
             .transpose()?;
         let job = RenderJob {
             scene: self.scene,

@@ -19,14 +19,15 @@
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use crate::error::{Error, Result};
+use crate::experiment::plan::config::{Experiment, StabilitySettings};
+use crate::experiment::plan::overrides::RunOverrides;
 use crate::experiment::record::files::{STABILITY_CSV, TABLES_MD};
+use crate::experiment::record::stability_row::{write_stability, StabilityRow};
 use crate::experiment::record::{results_dir, utc};
 use crate::experiment::run::{meta, runner};
-use crate::experiment::spec::config::{Experiment, StabilitySettings};
-use crate::experiment::spec::overrides::RunOverrides;
 use crate::verify::stability::{self, CaseKind, Cliff, Contender, Outcome, Status};
 
 /// Runs the suite for every tracer instance of `exp` and writes the results directory.
@@ -42,8 +43,9 @@ pub fn run(
         .iter()
         .map(|i| Contender {
             label: i.to_string(),
-            name: i.info.name,
+            info: i.info,
             params: i.params.clone(),
+            config: i.config,
         })
         .collect();
     let cases = stability::generate(&settings.sweep);
@@ -56,17 +58,18 @@ pub fn run(
     let results = results_dir::PendingResults::create(&exp.output, &exp.name, &started.compact())?;
     let progress = runner::progress_bar(
         cases.len() * contenders.len(),
-        overrides.chatter != crate::experiment::spec::overrides::Chatter::Quiet,
+        overrides.chatter != crate::experiment::plan::overrides::Chatter::Quiet,
     );
     let mut outcomes = stability::run(cases, &contenders, settings.timeout, &|case, c| {
         progress.set_message(format!("{} {} {}", case.kind, case.variant, c.label));
         progress.inc(1);
-    });
+    })?;
     progress.finish_and_clear();
     let cliffs = stability::speed_cliffs(&mut outcomes);
 
     let dir = results.dir();
-    write_csv(&dir.join(STABILITY_CSV), &outcomes)?;
+    let rows: Vec<StabilityRow> = outcomes.iter().map(row).collect();
+    write_stability(&dir.join(STABILITY_CSV), &rows)?;
     let report = tables_md(&exp.name, &outcomes) + &cliffs_md(&cliffs);
     overrides.chatter.say(summary(&outcomes).trim_end());
     let path = dir.join(TABLES_MD);
@@ -124,36 +127,18 @@ fn status(o: &Outcome) -> (&'static str, String) {
     }
 }
 
-fn write_csv(path: &Path, outcomes: &[Outcome]) -> Result<()> {
-    let fail = |e: csv::Error| Error::runtime(format!("{}: {e}", path.display()));
-    let mut w = csv::Writer::from_path(path).map_err(fail)?;
-    w.write_record([
-        "case",
-        "variant",
-        "magnitude",
-        "tracer",
-        "query",
-        "status",
-        "note",
-        "rays",
-        "must_hit",
-        "leaks",
-        "missed",
-        "false_hits",
-        "rounding",
-        "unexplained",
-        "unexplained_tracer_right",
-        "unexplained_oracle_right",
-        "unexplained_rounding",
-        "unexplained_both_wrong",
-        "seconds",
-        "relative_time",
-        "slowdown",
-    ])
-    .map_err(fail)?;
-    for o in outcomes {
-        let (status, note) = status(o);
-        let counts = [
+/// The suite's outcome `o` as its stability.csv row.
+fn row(o: &Outcome) -> StabilityRow {
+    let (status, note) = status(o);
+    StabilityRow {
+        case: o.kind.name().to_string(),
+        variant: o.variant.clone(),
+        magnitude: o.magnitude,
+        tracer: o.tracer.clone(),
+        query: o.query.name().to_string(),
+        status: status.to_string(),
+        note,
+        counts: [
             o.rays,
             o.must_hit,
             o.leaks,
@@ -165,23 +150,11 @@ fn write_csv(path: &Path, outcomes: &[Outcome]) -> Result<()> {
             o.unexplained_oracle_right,
             o.unexplained_rounding,
             o.unexplained_both_wrong,
-        ];
-        let mut row = vec![
-            o.kind.name().to_string(),
-            o.variant.clone(),
-            format!("{:e}", o.magnitude),
-            o.tracer.clone(),
-            o.query.name().to_string(),
-            status.to_string(),
-            note,
-        ];
-        row.extend(counts.iter().map(|c| c.to_string()));
-        row.push(format!("{:.6}", o.seconds));
-        row.push(o.relative_time.map_or(String::new(), |r| format!("{r:.3}")));
-        row.push(o.slowdown.map_or(String::new(), |s| format!("{s:.3}")));
-        w.write_record(&row).map_err(fail)?;
+        ],
+        seconds: o.seconds,
+        relative_time: o.relative_time,
+        slowdown: o.slowdown,
     }
-    w.flush().map_err(|e| Error::io(path, e))
 }
 
 /// Sums over the sweep of one case kind and tracer.

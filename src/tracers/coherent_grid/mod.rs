@@ -83,8 +83,9 @@ use crate::error::{Error, Result};
 use crate::geometry::robustness::robust_param;
 use crate::geometry::{Fast, Hit, RayTests, Rays, Robust};
 use crate::lanes::{with_lanes, WIDTHS};
+use crate::params::Params;
 use crate::stats::{NoStats, Stats};
-use crate::tracers::{Kernel, Params};
+use crate::tracers::kernel::Kernel;
 
 pub use cell::CellObserver;
 use setup::Workspace;

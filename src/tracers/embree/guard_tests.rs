@@ -13,22 +13,11 @@ use glam::Vec3;
 use super::record::RayRecord;
 use super::{Packets16, Packets4, Packets8, Single, Submission};
 use crate::accel::embree::ffi::{self, RTCDeviceProperty::*};
+use crate::accel::embree::test_isas;
 use crate::accel::embree::{Device, Embree3, EmbreeApi, EmbreeConfig, EmbreeScene};
 use crate::geometry::{Hit, Ray, RayBatch, RayKind, Rays, Triangle};
 use crate::guard_page::{self, Guarded, Placement};
 use crate::scene::Mesh;
-
-/// The device configurations tested here: the machine's own ISA, then each lower one it can run.
-fn isas() -> Vec<Option<&'static str>> {
-    let mut isas = vec![None];
-    if is_x86_feature_detected!("avx512f") && is_x86_feature_detected!("avx2") {
-        isas.push(Some("isa=avx2"));
-    }
-    if is_x86_feature_detected!("avx2") && is_x86_feature_detected!("sse4.2") {
-        isas.push(Some("isa=sse4.2"));
-    }
-    isas
-}
 
 /// The unit square in the plane z = 0, as two triangles: 0 below the diagonal x = y, 1 above.
 fn square() -> Mesh {
@@ -167,7 +156,7 @@ fn scene_on<A: EmbreeApi>(isa: Option<&str>) -> (EmbreeScene<A>, [isize; 3]) {
 /// Every packet entry point of Embree `A` on every ISA; returns the native widths seen per ISA.
 fn every_entry_point<A: EmbreeApi>(streams: impl Fn(&str, &EmbreeScene<A>)) -> Vec<[isize; 3]> {
     let mut natives = Vec::new();
-    for isa in isas() {
+    for isa in test_isas() {
         let (scene, native) = scene_on::<A>(isa);
         let on = |call: &str| format!("{} {call} at {}", A::NAME, isa.unwrap_or("native ISA"));
         guarded_calls::<A, Single>(&on("1"), &scene);
@@ -183,7 +172,7 @@ fn every_entry_point<A: EmbreeApi>(streams: impl Fn(&str, &EmbreeScene<A>)) -> V
 /// The lower ISAs really are exercised: forced to AVX2 a device has no native 16-wide packets,
 /// forced to SSE4.2 no native 8-wide ones, so `rtcOccluded16` / `rtcOccluded8` take the fallback.
 fn assert_lower_isas_lack_wide_packets(natives: &[[isize; 3]]) {
-    let isas = isas();
+    let isas = test_isas();
     for (isa, native) in isas.iter().zip(natives) {
         match isa {
             Some("isa=avx2") => assert_eq!(native, &[1, 1, 0], "{isa:?}"),

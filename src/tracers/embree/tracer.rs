@@ -14,8 +14,9 @@ use crate::error::Result;
 use crate::geometry::{Hit, RayKind, Rays};
 use crate::params::Params;
 use crate::stats::Stats;
+use crate::tracers::kernel::Kernel;
 use crate::tracers::staged::staged_by;
-use crate::tracers::{Kernel, StagedRays};
+use crate::tracers::staged::StagedRays;
 
 /// One way of calling Embree `A` on a chunk of rays: how the chunk is cut into calls, the record
 /// each call takes (a ray, a packet of 4/8/16, a stream), made from our rays (`stage_*`), and the

@@ -75,9 +75,11 @@ use crate::accel::{Bvh, BvhOfWidth, WideNodes};
 use crate::error::{Error, Result};
 use crate::geometry::robustness::robust_param;
 use crate::geometry::{CameraGrid, Fast, Hit, RayTests, Rays, Robust};
+use crate::params::Params;
 use crate::stats::Stats;
+use crate::tracers::kernel::Kernel;
 use crate::tracers::packet::{PacketConfig, PacketTracer, Traversal};
-use crate::tracers::{Kernel, Params, VisibilityQuery};
+use crate::tracers::visibility::VisibilityQuery;
 use descend::FrustumTree;
 
 pub use block::{light_points, sample_ray};

@@ -69,8 +69,9 @@ use crate::geometry::ray::prefetch;
 use crate::geometry::robustness::robust_param;
 use crate::geometry::{Fast, Hit, RayTests, Rays, Robust};
 use crate::lanes::with_lanes;
+use crate::params::Params;
 use crate::stats::{Event, Stats};
-use crate::tracers::{Kernel, Params};
+use crate::tracers::kernel::Kernel;
 
 pub use frustum::{Frustum, FrustumKind};
 

@@ -59,9 +59,10 @@ use crate::error::{Error, Result};
 use crate::geometry::robustness::robust_param;
 use crate::geometry::{Fast, Hit, RayTests, Rays, Robust};
 use crate::lanes::{with_width, SimdRay};
+use crate::params::Params;
 use crate::stats::Stats;
+use crate::tracers::kernel::Kernel;
 use crate::tracers::packet::{ChildOrder, PacketConfig, TreeWidth};
-use crate::tracers::{Kernel, Params};
 
 use handoff::Handoff;
 use rays::StreamRays;

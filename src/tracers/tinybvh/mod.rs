@@ -32,8 +32,8 @@ use std::sync::Arc;
 use crate::accel::TinyBvh;
 use crate::geometry::{Hit, Rays};
 use crate::stats::Stats;
+use crate::tracers::kernel::Kernel;
 use crate::tracers::staged::{staged_by, StagedRays};
-use crate::tracers::Kernel;
 
 pub use tile::TileTracer;
 use tiny_rays::TinyRays;

@@ -25,8 +25,8 @@ use crate::error::{Error, Result};
 use crate::geometry::{CameraGrid, Hit, Rays};
 use crate::params::Params;
 use crate::stats::Stats;
+use crate::tracers::kernel::Kernel;
 use crate::tracers::staged::{staged_by, StagedRays};
-use crate::tracers::Kernel;
 
 /// The rays of one packet: a 16×16 block.
 pub const PACKET: usize = 256;

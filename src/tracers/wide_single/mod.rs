@@ -28,7 +28,6 @@
 
 mod slab;
 
-use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
 use std::marker::PhantomData;
 use std::mem::MaybeUninit;
 use std::sync::Arc;
@@ -36,9 +35,11 @@ use std::sync::Arc;
 use crate::accel::{Bvh, BvhConfig, WideBvh, WideEntry, WideNode, WideNodes, WideTree};
 use crate::error::{Error, Result};
 use crate::geometry::{Hit, Ray, RayTests, Robust, Triangle};
+use crate::lanes::prefetch::{self, Level};
+use crate::params::Params;
 use crate::stats::Stats;
+use crate::tracers::kernel::SingleRayKernel;
 use crate::tracers::reference::{intersect_leaf, LeafRange, LeafRay};
-use crate::tracers::{Params, SingleRayKernel};
 
 pub use slab::WideRayTest;
 
@@ -154,11 +155,9 @@ struct Pending {
 /// Asks for all of `node`'s cache lines (a wide node spans several).
 #[inline(always)]
 fn prefetch_node<const W: usize>(node: &WideNode<W>) {
-    let base = node as *const WideNode<W> as *const i8;
-    for line in (0..std::mem::size_of::<WideNode<W>>()).step_by(64) {
-        // SAFETY: SSE is part of the x86_64 baseline; a prefetch never faults, and the address
-        // lies inside `node`.
-        unsafe { _mm_prefetch::<_MM_HINT_T0>(base.add(line)) };
+    let base = node as *const WideNode<W> as *const u8;
+    for offset in (0..std::mem::size_of::<WideNode<W>>()).step_by(prefetch::LINE) {
+        prefetch::line(base.wrapping_add(offset), Level::Near);
     }
 }
 
@@ -167,14 +166,15 @@ fn prefetch_node<const W: usize>(node: &WideNode<W>) {
 #[inline(always)]
 fn prefetch_triangles(bvh: &Bvh, first: u32, count: u32) {
     let tris = &bvh.triangles[first as usize..];
-    let base = tris.as_ptr() as *const i8;
+    let base = tris.as_ptr() as *const u8;
     let bytes = (count as usize).min(tris.len()) * std::mem::size_of::<Triangle>();
     // From the line holding the first byte to the one holding the last.
     let (start, end) = (base as usize & !63, (base as usize + bytes - 1) & !63);
-    for line in (start..=end).step_by(64).take(LEAF_PREFETCH_LINES) {
-        // SAFETY: as in `prefetch_node`; the lines hold bytes of `tris` (an address outside
-        // would not fault either).
-        unsafe { _mm_prefetch::<_MM_HINT_T0>(line as *const i8) };
+    for line in (start..=end)
+        .step_by(prefetch::LINE)
+        .take(LEAF_PREFETCH_LINES)
+    {
+        prefetch::line(line as *const u8, Level::Near);
     }
 }
 

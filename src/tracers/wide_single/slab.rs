@@ -13,7 +13,7 @@
 //! sub/mul/max-or-min per group and plane and one movemask per group. The kernel is written once
 //! over `Vector`: groups of 8 children in `Avx2` where the build has AVX2 (`target-cpu=native` on
 //! the AVX2 and AVX-512 machines the project runs on), so an 8-wide node is one pass; otherwise
-//! groups of 4 in `Sse` (the x86-64 baseline, as `child_pairs`).
+//! groups of 4 in `Lanes4` (the x86-64 baseline, as `child_pairs`).
 
 use glam::Vec3;
 
@@ -21,14 +21,14 @@ use crate::accel::WideNode;
 use crate::geometry::RayTests;
 #[cfg(target_feature = "avx2")]
 use crate::lanes::vector::Avx2;
-use crate::lanes::vector::{Sse, Vector};
+use crate::lanes::vector::{Lanes4, Vector};
 use crate::lanes::BroadcastRay;
 
 /// A ray prepared for wide-node tests: origin and reciprocal direction broadcast per axis, in SSE
 /// lanes and (AVX2 builds) AVX lanes.
 #[derive(Clone, Copy)]
 pub struct WideRayTest {
-    sse: BroadcastRay<Sse>,
+    sse: BroadcastRay<Lanes4>,
     /// Origin and reciprocal direction in AVX lanes; the sign bits are `sse`'s (a second copy
     /// cost every ray its stores: 0.2% more instructions on diffuse rays).
     #[cfg(target_feature = "avx2")]
@@ -166,7 +166,7 @@ mod tests {
     type EightWideTest = fn(&WideRayTest, &WideNode<8>, f32, f32) -> ([f32; 8], u32);
 
     /// The ray's SSE lanes as `test_in` reads them.
-    fn sse(r: &WideRayTest) -> [[Sse; 3]; 2] {
+    fn sse(r: &WideRayTest) -> [[Lanes4; 3]; 2] {
         [r.sse.origin, r.sse.inv_dir]
     }
 

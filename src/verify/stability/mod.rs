@@ -27,21 +27,50 @@ use std::time::{Duration, Instant};
 
 use rayon::prelude::*;
 
+use crate::error;
 use crate::geometry::{Hit, RayBatch};
 #[cfg(test)]
 use crate::scene::Mesh;
-use crate::tracers::{oracle_params, tracer_for_mesh, Params, ORACLE};
+use crate::tracers::registry::{make_for_mesh, role_of};
+use crate::tracers::{oracle_params, Params, Role, TracerConfig, TracerInfo, ORACLE};
 use crate::verify::compare::{self, Agreement, Judgement};
 use crate::verify::truth::{Truth, Verdict};
 
 pub use cases::{generate, Case, CaseKind, Sweep};
 
-/// A tracer under test: its registry name and parameters, and how the tables name it.
+/// A tracer under test: its registry entry, its parameters and the configuration parsed from
+/// them once, and how the tables name it.
 #[derive(Clone, Debug)]
 pub struct Contender {
     pub label: String,
-    pub name: &'static str,
+    pub info: &'static TracerInfo,
     pub params: Params,
+    pub config: TracerConfig,
+}
+
+impl Contender {
+    /// Tracer `info` with `params`, checked and parsed here.
+    pub fn new(
+        label: String,
+        info: &'static TracerInfo,
+        params: Params,
+    ) -> error::Result<Contender> {
+        let config = info.config(&params)?;
+        Ok(Contender {
+            label,
+            info,
+            params,
+            config,
+        })
+    }
+
+    /// Whether it runs robust tests (`TracerInfo::robust_tests`).
+    fn robust(&self) -> bool {
+        // The parameters were checked when the contender was made.
+        self.info
+            .robust_tests(&self.config, &self.params)
+            .unwrap_or(true)
+    }
 }
 
 /// Closest hit or occlusion.
@@ -77,11 +106,11 @@ pub struct Outcome {
     pub variant: String,
     pub magnitude: f64,
     pub tracer: String,
-    /// The contender's registry name (`reference` is the cliffs' yardstick).
+    /// The contender's registry name (the tracer of `Role::Reference` is the cliffs' yardstick).
     pub tracer_name: &'static str,
-    /// Whether it ran robust tests (`robust`, default true): with `robust = false` leaks are
-    /// expected and reported (the fast tests are not watertight), and a fast `reference` is not
-    /// the cliffs' yardstick.
+    /// Whether it ran robust tests (`TracerInfo::robust_tests`): without them leaks are expected
+    /// and reported (the fast tests are not watertight), and a fast reference is not the cliffs'
+    /// yardstick.
     pub robust: bool,
     pub query: Query,
     pub status: Status,
@@ -125,12 +154,8 @@ pub fn run(
     contenders: &[Contender],
     timeout: Duration,
     progress: &(dyn Fn(&Case, &Contender) + Sync),
-) -> Vec<Outcome> {
-    let oracle = Contender {
-        label: "oracle".into(),
-        name: ORACLE,
-        params: oracle_params(),
-    };
+) -> error::Result<Vec<Outcome>> {
+    let oracle = Contender::new("oracle".into(), TracerInfo::find(ORACLE)?, oracle_params())?;
     let mut outcomes = Vec::new();
     for case in cases {
         let case = Arc::new(case);
@@ -166,7 +191,7 @@ pub fn run(
             progress(&case, contender);
         }
     }
-    outcomes
+    Ok(outcomes)
 }
 
 fn empty(case: &Case, contender: &Contender, query: Query, status: Status) -> Outcome {
@@ -175,9 +200,8 @@ fn empty(case: &Case, contender: &Contender, query: Query, status: Status) -> Ou
         variant: case.variant.clone(),
         magnitude: case.magnitude,
         tracer: contender.label.clone(),
-        tracer_name: contender.name,
-        // A malformed value was refused when the experiment was read.
-        robust: contender.params.get_or("robust", true).unwrap_or(true),
+        tracer_name: contender.info.name,
+        robust: contender.robust(),
         query,
         status,
         rays: case.rays.len(),
@@ -235,8 +259,13 @@ fn guarded<T: Send + 'static>(
 }
 
 fn trace(case: &Case, contender: &Contender) -> Result<Answers, Status> {
-    let tracer = tracer_for_mesh(contender.name, &contender.params, &case.mesh)
-        .map_err(|e| Status::Refused(e.to_string()))?;
+    let tracer = make_for_mesh(
+        contender.info,
+        &contender.config,
+        &contender.params,
+        &case.mesh,
+    )
+    .map_err(|e| Status::Refused(e.to_string()))?;
     let rays = case.rays.view();
     let mut hits = vec![Hit::MISS; rays.len()];
     let mut occluded = vec![false; rays.len()];
@@ -353,8 +382,11 @@ fn tally(
 pub const CLIFF_RATIO: f64 = 10.0;
 /// Trace times under this are never cliffs: timer resolution and scheduling noise.
 pub const CLIFF_MIN_SECONDS: f64 = 0.01;
-/// The registry name of the yardstick.
-pub const CLIFF_REFERENCE: &str = "reference";
+
+/// Whether `o` is the yardstick's: the tracer of `Role::Reference`.
+fn is_reference(o: &Outcome) -> bool {
+    role_of(o.tracer_name) == Some(Role::Reference)
+}
 
 /// A speed cliff: a contender on a case, its time, and the two ratios that make it one.
 #[derive(Clone, Debug, PartialEq)]
@@ -385,9 +417,7 @@ pub fn speed_cliffs(outcomes: &mut [Outcome]) -> Vec<Cliff> {
         .map(|o| {
             outcomes
                 .iter()
-                .find(|r| {
-                    timed(r) && r.tracer_name == CLIFF_REFERENCE && r.robust && same_case(r, o)
-                })
+                .find(|r| timed(r) && is_reference(r) && r.robust && same_case(r, o))
                 .map(|r| r.seconds)
         })
         .collect();
@@ -450,8 +480,17 @@ mod tests {
             rays: RayBatch::default(),
             must_hit: vec![],
         };
+        // Rows labelled `tracer`, of the reference tracer for "reference", else of another one.
         let row = |tracer: &'static str, magnitude: f64, seconds: f64, query: Query| {
-            let c = contender(tracer, Params::new());
+            let name = if tracer == "reference" {
+                tracer
+            } else {
+                "packet"
+            };
+            let c = Contender {
+                label: tracer.into(),
+                ..contender(name, Params::new())
+            };
             let mut o = empty(&case, &c, query, Status::Answered);
             o.magnitude = magnitude;
             o.seconds = seconds;
@@ -535,11 +574,7 @@ mod tests {
     }
 
     fn contender(name: &'static str, params: Params) -> Contender {
-        Contender {
-            label: name.into(),
-            name,
-            params,
-        }
+        Contender::new(name.into(), TracerInfo::find(name).unwrap(), params).unwrap()
     }
 
     /// The reference tracer on the watertight and ill-formed cases at the origin: no leak, no
@@ -555,7 +590,7 @@ mod tests {
         let fast = || Params::new().with("robust", "false");
         let contenders = [
             contender("reference", Params::new()),
-            contender("embree1", fast()),
+            contender("embree3-1", fast()),
             Contender {
                 label: "reference[robust=false]".into(),
                 ..contender("reference", fast())
@@ -567,7 +602,8 @@ mod tests {
             &contenders,
             Duration::from_secs(60),
             &|_, _| {},
-        );
+        )
+        .unwrap();
         assert_eq!(outcomes.len(), 3 * 4 * 2);
         for o in outcomes.iter().filter(|o| o.tracer == "reference") {
             assert!(o.robust);
@@ -583,7 +619,7 @@ mod tests {
         // verdicts are the fast reference's, so its leaks too.
         let fast: Vec<&Outcome> = outcomes
             .iter()
-            .filter(|o| o.tracer != "reference" && o.tracer_name != "embree1")
+            .filter(|o| o.tracer != "reference" && o.tracer_name != "embree3-1")
             .collect();
         assert_eq!(fast.len(), 3 * 2 * 2);
         for o in &fast {
@@ -623,9 +659,19 @@ mod tests {
         });
         assert_eq!(hung, Err(Status::Hung));
         assert_eq!(guarded("t", second, || Ok(7)), Ok(7));
-        let unknown = contender("no-such-tracer", Params::new());
+        assert!(Contender::new(
+            "x".into(),
+            TracerInfo::find("reference").unwrap(),
+            Params::new().with("lanes", 4)
+        )
+        .is_err());
+        // A tracer that cannot be made (here: handed another family's configuration) is refused.
+        let unmakeable = Contender {
+            config: TracerConfig::Plain,
+            ..contender("reference", Params::new())
+        };
         assert!(matches!(
-            answer(&case, &unknown, Duration::from_secs(5)).err(),
+            answer(&case, &unmakeable, Duration::from_secs(5)).err(),
             Some(Status::Refused(_))
         ));
     }

@@ -15,6 +15,7 @@ use raylab::test_util::same_or_tie_with;
 use raylab::tracers::chunked::{trace_hits, trace_occlusion};
 use raylab::tracers::reference::ReferenceTracer;
 use raylab::tracers::{Params, Tracer};
+use raylab::tracers::{TracerInfo, TRACERS};
 use raylab::verify::stability::Sweep;
 
 /// A scene's SAH BVH and three batches traced by the reference tracer over it: 128² camera rays,
@@ -150,4 +151,16 @@ pub fn only_run(root: &std::path::Path, name: &str) -> std::path::PathBuf {
         .collect();
     assert_eq!(runs.len(), 1, "{runs:?}");
     runs[0].clone()
+}
+
+/// The registry's tracers that `keep`, each in every configuration its entry declares for tests
+/// (`TracerInfo::test_configs`): what the cross-tracer suites iterate instead of naming tracers.
+pub fn test_configurations(
+    keep: impl Fn(&TracerInfo) -> bool,
+) -> Vec<(&'static TracerInfo, Params)> {
+    TRACERS
+        .iter()
+        .filter(|info| keep(info))
+        .flat_map(|info| info.test_params().into_iter().map(move |p| (info, p)))
+        .collect()
 }

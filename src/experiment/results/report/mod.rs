@@ -385,7 +385,7 @@ mod tests {
         );
         assert!(md.contains("raylab reproduce toy2026 "), "{md}");
         assert!(
-            md.contains("| toy | 20260101T000000Z | 2026-01-01T00:00:00Z | abc123 | node7 | Some CPU | avx2 | `raylab run experiments/toy.toml --frames 1` |"),
+            md.contains("| toy | 20260101T000000Z | 2026-01-01T00:00:00Z | abc123 | node7 | Some CPU | avx2 | stale: no record of the source it measured | `raylab run experiments/toy.toml --frames 1` |"),
             "{md}"
         );
         assert!(md.contains("| other | not run |"), "{md}");

@@ -1,3 +1,8 @@
+//! What to run: the experiment file parsed into typed settings (`config`), checked, and turned into
+//! a plan of exactly the structures, ray kinds and render workloads it needs (`plan`), with the
+//! command-line overrides, the shard of a sweep, and the declared paper tables and figures.
+//! Imports only `record` among the experiment rooms.
+//!
 //! What a run needs, and only that, derived before anything is timed: per scene, which ray kinds
 //! make sense (no shadow rays without lights, no reflection or refraction rays without materials
 //! that reflect or refract), which render workloads render something different on it
@@ -5,6 +10,15 @@
 //! structure parameters among the requested tracers, plus our BVH when secondary rays must be
 //! generated), and whether geometry changes per frame (rebuild) or not (build once,
 //! reuse). Printed before the run and stored in meta.json.
+
+pub mod config;
+pub mod figure_spec;
+pub mod overrides;
+#[doc(hidden)]
+pub mod quad_scenes;
+pub mod render_pruning;
+pub mod shard;
+pub mod table_spec;
 
 use std::fmt;
 use std::path::PathBuf;
@@ -18,8 +32,8 @@ use crate::geometry::RayKind;
 use crate::scene::{Material, Scene};
 use crate::tracers::{Params, Role, TracerConfig, TracerInfo};
 
-use crate::experiment::spec::config::{Experiment, RenderWorkload, SceneSpec, StructureKey};
-use crate::experiment::spec::render_pruning::prune_renders;
+use crate::experiment::plan::config::{Experiment, RenderWorkload, SceneSpec, StructureKey};
+use crate::experiment::plan::render_pruning::prune_renders;
 
 /// Finds a scene by its experiment entry. The run uses `scene::library::load_scene`; tests hand in
 /// scenes of their own.
@@ -66,6 +80,17 @@ pub struct InstancePlan {
     /// The tracer's parsed parameters (`TracerInstance::config`).
     #[serde(skip)]
     pub config: TracerConfig,
+}
+
+impl InstancePlan {
+    /// The configuration it runs, defaults included: the tracer's parsed configuration and its
+    /// structure's (`AccelKind::resolved`), as runs.csv's `resolved` column records it.
+    pub fn resolved(&self) -> String {
+        let structure = self.structure.kind.resolved(&self.structure.params);
+        // The parameters were checked when the plan was made.
+        let structure = structure.unwrap_or_else(|e| e.to_string());
+        format!("{:?}; {structure}", self.config)
+    }
 }
 
 #[derive(Debug, Serialize)]
@@ -450,7 +475,28 @@ impl fmt::Display for Plan {
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
-    pub use crate::experiment::spec::quad_scenes::{experiment, load_quads, quad_scene};
+    pub use crate::experiment::plan::quad_scenes::{experiment, load_quads, quad_scene};
+
+    /// An instance's resolved configuration names its defaults, the tracer's and the structure's,
+    /// not only what the file set.
+    #[test]
+    fn an_instance_resolves_its_defaults() {
+        let exp = experiment(
+            "scenes = [\"lit\"]\ntracers = [{ name = \"packet\", params = { packet = [8] } }]\nrays = [\"primary\"]\n",
+        );
+        let plan = Plan::derive(&exp, &load_quads).unwrap();
+        let resolved = plan.instances[0].resolved();
+        assert_eq!(plan.instances[0].params.to_string(), "packet=8");
+        for default in [
+            "packet: 8",
+            "lanes: 16",
+            "traversal: Ranged",
+            "robust: true",
+            "BvhConfig",
+        ] {
+            assert!(resolved.contains(default), "{default} in {resolved}");
+        }
+    }
 
     #[test]
     fn a_scene_without_lights_gets_no_shadow_rays() {

@@ -15,9 +15,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
 
+use crate::experiment::plan::overrides::RunOverrides;
+use crate::experiment::plan::Plan;
 use crate::experiment::record::digest::digest;
-use crate::experiment::spec::overrides::RunOverrides;
-use crate::experiment::spec::plan::Plan;
 
 /// Part `index` of `count` (`index/count` on the command line, counted from 0 like
 /// `$SLURM_ARRAY_TASK_ID`).
@@ -172,7 +172,7 @@ fn unit_cost(plan: &Plan, s: usize) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::experiment::spec::plan::tests::{experiment, load_quads};
+    use crate::experiment::plan::tests::{experiment, load_quads};
 
     #[test]
     fn shard_arguments_are_checked() {

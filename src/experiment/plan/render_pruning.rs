@@ -8,7 +8,7 @@
 use crate::render::distribution::Integrator;
 use crate::scene::{Material, Scene};
 
-use crate::experiment::spec::config::{DistributionWorkload, RenderWorkload};
+use crate::experiment::plan::config::{DistributionWorkload, RenderWorkload};
 
 /// The workloads measured on a scene (indices into the experiment's `renders`) and one note per
 /// pruned stage or workload.
@@ -157,8 +157,8 @@ pub fn prune_renders(renders: &[RenderWorkload], scene: &Scene) -> PrunedRenders
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::experiment::spec::plan::tests::{experiment, load_quads, quad_scene};
-    use crate::experiment::spec::plan::Plan;
+    use crate::experiment::plan::tests::{experiment, load_quads, quad_scene};
+    use crate::experiment::plan::Plan;
     use crate::render::distribution::DrtSettings;
     use crate::render::whitted::WhittedSettings;
     use crate::scene::scene_file::Preset;

@@ -11,7 +11,7 @@ use toml::Spanned;
 
 use crate::accel::AccelKind;
 use crate::error::Result;
-use crate::tracers::registry::not_built;
+use crate::tracers::registry::{not_built, Axes, BaselineBest, TINYBVH_BUILT, TINYBVH_HINT};
 use crate::tracers::{Params, TracerConfig, TracerInfo, TRACERS};
 
 use super::source::{cartesian, line_of, too_many, Source, MAX_COMBINATIONS};
@@ -188,36 +188,18 @@ pub(super) fn expand_tracers(src: &Source, file: &ExperimentFile) -> Result<Vec<
 }
 
 /// The shorthand tracer entry for Embree at its best: every Embree entry point (1, 4, 8, 16,
-/// stream) × intersect context × build quality, so that the run measures the fastest Embree
-/// configuration on its rays. The entry's own `params` replace an axis (e.g. `quality =
-/// ["low", "refit"]` for per-frame rebuilds); the entry points share one scene per quality.
+/// stream) × intersect context × build quality (the registry's `BaselineBest::Sweep`), so that the
+/// run measures the fastest Embree configuration on its rays. The entry's own `params` replace an
+/// axis (e.g. `quality = ["low", "refit"]` for per-frame rebuilds); the entry points share one
+/// scene per quality.
 pub const EMBREE_BEST: &str = "embree-best";
 
 /// The shorthand tracer entry for the production baselines at their best: `embree-best`, plus
-/// tinybvh and obvhs at their recommended settings (`BASELINE_BEST_OTHERS`), so that runs.csv's
-/// `baseline_best` is the fastest production library on the rays, not only the fastest Embree.
-/// The entry's own `params` go to its Embree tracers, as `embree-best`'s do.
+/// the other libraries at their recommended settings (`BaselineBest::Fixed`: tinybvh's and
+/// obvhs's), so that runs.csv's `baseline_best` is the fastest production library on the rays,
+/// not only the fastest Embree. The entry's own `params` go to its Embree tracers, as
+/// `embree-best`'s do.
 pub const BASELINE_BEST: &str = "baseline-best";
-
-/// Parameter axes given in code: (key, values).
-type Axes = &'static [(&'static str, &'static [&'static str])];
-
-/// The axes `embree-best` sweeps unless its entry gives them.
-const EMBREE_BEST_AXES: Axes = &[
-    ("context", &["coherent", "incoherent"]),
-    ("quality", &["medium", "high"]),
-];
-
-/// `baseline-best`'s other baselines, each with the only settings it runs with: tinybvh's
-/// fastest single-ray layout (`BVH8_CPU`) over its highest-quality build (spatial splits, then
-/// reinsertion: tiny_bvh.h's `BuildHQ` and `Optimize`), when built; obvhs's defaults.
-const BASELINE_BEST_OTHERS: &[(&str, Axes)] = &[
-    (
-        "tinybvh-8",
-        &[("builder", &["sbvh"]), ("optimize", &["25"])],
-    ),
-    ("obvhs", &[]),
-];
 
 /// A tracer entry of the file and one tracer it names, with the axes it sweeps by default;
 /// `fixed`: those axes are all it runs with (neither the entry's nor the shared `params` apply).
@@ -229,7 +211,7 @@ struct TracerEntry<'f> {
 }
 
 /// Each tracer entry with the tracer it names (`embree-best` names every Embree tracer,
-/// `baseline-best` those and `BASELINE_BEST_OTHERS` that are built).
+/// `baseline-best` those and the other libraries' `BaselineBest::Fixed` ones).
 fn tracer_entries<'f>(src: &Source, file: &'f ExperimentFile) -> Result<Vec<TracerEntry<'f>>> {
     let mut entries = Vec::new();
     for entry in file.tracers.get_ref() {
@@ -242,20 +224,20 @@ fn tracer_entries<'f>(src: &Source, file: &'f ExperimentFile) -> Result<Vec<Trac
         };
         match name.as_str() {
             EMBREE_BEST | BASELINE_BEST => {
-                let embree = TRACERS.iter().filter(|t| t.accel.is_embree());
-                entries.extend(embree.map(|info| named(info, EMBREE_BEST_AXES, false)));
-                let others = match name.as_str() {
-                    BASELINE_BEST => BASELINE_BEST_OTHERS,
-                    _ => &[],
-                };
-                for &(other, axes) in others {
-                    match TracerInfo::find(other) {
-                        Ok(info) => entries.push(named(info, axes, true)),
-                        Err(e) if not_built(other) => {
-                            eprintln!("note: {}: {name} without {e}", src.path.display())
+                for info in TRACERS {
+                    match (info.best, name.as_str()) {
+                        (BaselineBest::Sweep(axes), _) => entries.push(named(info, axes, false)),
+                        (BaselineBest::Fixed(axes), BASELINE_BEST) => {
+                            entries.push(named(info, axes, true))
                         }
-                        Err(e) => return Err(src.usage_error(&entry.span(), e)),
+                        _ => {}
                     }
+                }
+                if name == BASELINE_BEST && !TINYBVH_BUILT {
+                    eprintln!(
+                        "note: {}: {name} without tinybvh: {TINYBVH_HINT}",
+                        src.path.display()
+                    )
                 }
             }
             _ => match TracerInfo::find(name) {
