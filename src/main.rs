@@ -14,9 +14,10 @@ use raylab::experiment::record::files::SUMMARY_MD;
 use raylab::experiment::record::results_dir::PendingResults;
 use raylab::experiment::results::heatmap::{save_panels, Panel};
 use raylab::experiment::results::summary::Summary;
+use raylab::experiment::run::bench::{bench, BenchSettings};
 use raylab::experiment::{run_experiment, Chatter, RunOverrides};
 use raylab::geometry::ray_file::{hits_csv, occlusion_csv, read_rays};
-use raylab::geometry::RayKind;
+use raylab::geometry::{RayBatch, RayKind};
 use raylab::render::cost_map::{count_per_pixel, wavefront, Cost};
 use raylab::render::distribution::{render_sampled, DrtSettings, FrameGeometry};
 use raylab::render::image::Image;
@@ -29,7 +30,7 @@ use raylab::render::whitted::{render_whitted, WhittedSettings};
 use raylab::scene::library::{list_scenes, load_scene};
 use raylab::scene::{Frame, Scene};
 use raylab::tracers::chunked::{trace_hits, trace_occlusion};
-use raylab::tracers::{Params, TracerInfo};
+use raylab::tracers::{tracer_for_frame, Params, Tracer, TracerInfo};
 use raylab::verify::{self, format_table, Judgement, Tolerance};
 
 #[derive(Parser)]
@@ -229,31 +230,78 @@ enum Command {
     /// Trace the rays of a ray file (binary or CSV, see README "Ray files") with one tracer and
     /// write one line per ray: `ray,hit,t,prim,u,v` (closest hit) or `ray,occluded`.
     Trace {
-        #[arg(long)]
-        scene: String,
-        #[arg(long)]
-        size: Option<u32>,
-        #[arg(long, default_value = "reference")]
-        tracer: String,
-        #[arg(long = "param", value_parser = parse_param)]
-        params: Vec<(String, String)>,
+        #[command(flatten)]
+        on: RayFileArgs,
         /// Frame index along the scene's animation / camera path, of `--frames`.
         #[arg(long, default_value_t = 0)]
         frame: usize,
         #[arg(long, default_value_t = 1)]
         frames: usize,
-        /// The ray file.
-        #[arg(long)]
-        rays: PathBuf,
-        /// Ask whether anything lies within [tmin, tmax] (occlusion) instead of the closest hit.
-        #[arg(long)]
-        occluded: bool,
         /// Where to write the CSV (default: standard output).
         #[arg(long)]
         out: Option<PathBuf>,
     },
+    /// Time one tracer on a ray file (`run --dump-rays` writes them): the runner's warm-up and
+    /// timed passes, their fastest and median, and optionally one counting pass. The inner loop
+    /// of kernel work (`tools/ab`, `tools/callgrind`; docs/REFERENCE.md, *Kernel work*).
+    Bench {
+        #[command(flatten)]
+        on: RayFileArgs,
+        /// Only the file's first N rays.
+        #[arg(long)]
+        sample: Option<usize>,
+        #[arg(long, default_value_t = 1)]
+        threads: usize,
+        #[arg(long, default_value_t = 1)]
+        warmup: usize,
+        /// Timed passes (0: none, only load and build).
+        #[arg(long, default_value_t = 5)]
+        repeats: usize,
+        /// Also run one counting pass: nodes, box and triangle tests per ray.
+        #[arg(long)]
+        counters: bool,
+    },
     /// List built-in scenes and the scenes found on the search path, with triangle counts.
     Scenes,
+}
+
+/// A tracer on a scene and a ray file: what `trace` and `bench` share.
+#[derive(clap::Args)]
+struct RayFileArgs {
+    #[arg(long)]
+    scene: String,
+    #[arg(long)]
+    size: Option<u32>,
+    #[arg(long, default_value = "reference")]
+    tracer: String,
+    #[arg(long = "param", value_parser = parse_param)]
+    params: Vec<(String, String)>,
+    /// The ray file.
+    #[arg(long)]
+    rays: PathBuf,
+    /// Ask whether anything lies within [tmin, tmax] (occlusion) instead of the closest hit.
+    #[arg(long)]
+    occluded: bool,
+}
+
+impl RayFileArgs {
+    /// The ray file's rays (a shadow batch with `--occluded`), the scene, and the tracer with its
+    /// parameters built over the scene's frame `frame` of `frames`.
+    fn load(self, frame: usize, frames: usize) -> Result<(RayBatch, Box<dyn Tracer>, String)> {
+        check_frame(frame, frames)?;
+        let mut batch = read_rays(&self.rays)?;
+        if self.occluded {
+            batch.kind = Some(RayKind::Shadow);
+        }
+        let loaded = load_scene(&self.scene, self.size)?;
+        let params = params_of(self.params);
+        let tracer = tracer_for_frame(&self.tracer, &params, &loaded.frame(frame, frames))?;
+        let label = match params.0.is_empty() {
+            true => self.tracer,
+            false => format!("{} {params}", self.tracer),
+        };
+        Ok((batch, tracer, label))
+    }
 }
 
 /// `render --renderer`'s default, which is not a renderer of the registry: ray casting with
@@ -749,26 +797,16 @@ fn execute(command: Command) -> Result<bool> {
             return Ok(pass);
         }
         Command::Trace {
-            scene,
-            size,
-            tracer,
-            params,
+            on,
             frame,
             frames,
-            rays,
-            occluded,
             out,
         } => {
-            check_frame(frame, frames)?;
-            let mut batch = read_rays(&rays)?;
-            let loaded = load_scene(&scene, size)?;
-            let frame = loaded.frame(frame, frames);
-            let tracer = raylab::tracers::tracer_for_frame(&tracer, &params_of(params), &frame)?;
-            let csv = if occluded {
-                batch.kind = Some(RayKind::Shadow);
-                occlusion_csv(&trace_occlusion(tracer.as_ref(), &batch))
-            } else {
-                hits_csv(&trace_hits(tracer.as_ref(), &batch))
+            let occluded = on.occluded;
+            let (batch, tracer, _) = on.load(frame, frames)?;
+            let csv = match occluded {
+                true => occlusion_csv(&trace_occlusion(tracer.as_ref(), &batch)),
+                false => hits_csv(&trace_hits(tracer.as_ref(), &batch)),
             };
             match out {
                 Some(path) => {
@@ -777,6 +815,28 @@ fn execute(command: Command) -> Result<bool> {
                 }
                 None => print!("{csv}"),
             }
+        }
+        Command::Bench {
+            on,
+            sample,
+            threads,
+            warmup,
+            repeats,
+            counters,
+        } => {
+            let (batch, tracer, label) = on.load(0, 1)?;
+            let batch = match sample {
+                Some(n) => batch.first(n),
+                None => batch,
+            };
+            let settings = BenchSettings {
+                threads,
+                warmup,
+                repeats,
+                counters,
+            };
+            let measured = bench(tracer.as_ref(), &batch, settings)?;
+            println!("{label}: {}", measured.line());
         }
         Command::Scenes => {
             println!("{:<22} {:>10}  source", "scene", "triangles");

@@ -214,6 +214,19 @@ impl RayBatch {
         self.camera = None;
     }
 
+    /// The batch's first `n` rays (all of them when it has fewer), in a batch of its kind: a
+    /// sample of a ray file (`raylab bench --sample`).
+    pub fn first(&self, n: usize) -> RayBatch {
+        let mut sample = RayBatch {
+            kind: self.kind,
+            ..RayBatch::default()
+        };
+        for i in 0..n.min(self.len()) {
+            sample.push(self.ray(i), self.pixel[i]);
+        }
+        sample
+    }
+
     pub fn push(&mut self, ray: Ray, pixel: u32) {
         self.camera = None;
         self.push_ray(ray, pixel);

@@ -610,3 +610,71 @@ fn report_check_exits_1_on_a_stale_run_and_0_when_stale_is_ok() {
     let (code, _) = raylab(&dir, &["report", "--stale-ok", "results"]);
     assert_eq!(code, 2, "--stale-ok needs --check");
 }
+
+/// `raylab bench` times a tracer on a ray file, with its counters, in the line `tools/ab` and
+/// `tools/callgrind` parse; a missing file, no threads and an unknown tracer are exit 2.
+#[test]
+fn bench_times_a_ray_file_and_refuses_bad_input() {
+    use raylab::geometry::ray_file::{write_rays, RayFileFormat};
+    use raylab::geometry::{Ray, RayBatch, RayKind};
+    let dir = scratch("bench");
+    let mut batch = RayBatch::new(RayKind::Primary);
+    for x in [0.3f32, 0.6] {
+        let origin = glam::Vec3::new(x, 0.5, 0.5);
+        batch.push(Ray::new(origin, -glam::Vec3::Y, 0.0, f32::INFINITY), 0);
+    }
+    let file = dir.join("two.rays");
+    write_rays(&file, batch.view(), RayFileFormat::Binary).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_raylab"))
+        .args([
+            "bench",
+            "--scene",
+            "room",
+            "--rays",
+            "two.rays",
+            "--counters",
+        ])
+        .args([
+            "--tracer",
+            "packet",
+            "--param",
+            "packet=2",
+            "--repeats",
+            "2",
+        ])
+        .current_dir(&dir)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{stdout}");
+    assert!(
+        stdout.starts_with("packet packet=2: 2 rays, 1 thread: min "),
+        "{stdout}"
+    );
+    assert!(stdout.contains(" Mrays/s; per ray: "), "{stdout}");
+    fails_with(
+        &dir,
+        &["bench", "--scene", "room", "--rays", "none.rays"],
+        "none.rays",
+    );
+    fails_with(
+        &dir,
+        &[
+            "bench",
+            "--scene",
+            "room",
+            "--rays",
+            "two.rays",
+            "--threads",
+            "0",
+        ],
+        "--threads",
+    );
+    fails_with(
+        &dir,
+        &[
+            "bench", "--scene", "room", "--rays", "two.rays", "--tracer", "nope",
+        ],
+        "nope",
+    );
+}

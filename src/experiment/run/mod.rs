@@ -3,6 +3,7 @@
 //! oracle (`sampled_check`), run the stability suite (`stability_suite`), and gather the run's
 //! provenance (`meta`). It produces rows (`record`); it never reads `results`.
 
+pub mod bench;
 pub mod case;
 pub mod dump;
 pub mod meta;
