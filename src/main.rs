@@ -156,16 +156,8 @@ enum Command {
     /// Render a frame to a PNG: ray casting with point-light shadows and Lambert shading, or
     /// Whitted ray tracing (mirror reflection, Fresnel refraction, packet-assembled batches).
     Render {
-        #[arg(long)]
-        scene: String,
-        /// The scene's size knob (built-in generators).
-        #[arg(long)]
-        size: Option<u32>,
-        #[arg(long, default_value = "reference")]
-        tracer: String,
-        /// Tracer or structure parameter, `key=value` (repeatable).
-        #[arg(long = "param", value_parser = parse_param)]
-        params: Vec<(String, String)>,
+        #[command(flatten)]
+        on: TracerOnScene,
         #[arg(long, default_value_t = 1024)]
         width: u32,
         #[arg(long, default_value_t = 768)]
@@ -265,17 +257,26 @@ enum Command {
     Scenes,
 }
 
-/// A tracer on a scene and a ray file: what `trace` and `bench` share.
+/// A tracer on a scene: what `render`, `trace` and `bench` share.
 #[derive(clap::Args)]
-struct RayFileArgs {
+struct TracerOnScene {
     #[arg(long)]
     scene: String,
+    /// The scene's size knob (built-in generators).
     #[arg(long)]
     size: Option<u32>,
     #[arg(long, default_value = "reference")]
     tracer: String,
+    /// Tracer or structure parameter, `key=value` (repeatable).
     #[arg(long = "param", value_parser = parse_param)]
     params: Vec<(String, String)>,
+}
+
+/// A tracer on a scene and a ray file: what `trace` and `bench` share.
+#[derive(clap::Args)]
+struct RayFileArgs {
+    #[command(flatten)]
+    on: TracerOnScene,
     /// The ray file.
     #[arg(long)]
     rays: PathBuf,
@@ -293,14 +294,20 @@ impl RayFileArgs {
         if self.occluded {
             batch.kind = Some(RayKind::Shadow);
         }
-        let loaded = load_scene(&self.scene, self.size)?;
-        let params = params_of(self.params);
-        let tracer = tracer_for_frame(&self.tracer, &params, &loaded.frame(frame, frames))?;
+        let TracerOnScene {
+            scene,
+            size,
+            tracer,
+            params,
+        } = self.on;
+        let loaded = load_scene(&scene, size)?;
+        let params = params_of(params);
+        let built = tracer_for_frame(&tracer, &params, &loaded.frame(frame, frames))?;
         let label = match params.0.is_empty() {
-            true => self.tracer,
-            false => format!("{} {params}", self.tracer),
+            true => tracer,
+            false => format!("{tracer} {params}"),
         };
-        Ok((batch, tracer, label))
+        Ok((batch, built, label))
     }
 }
 
@@ -599,10 +606,13 @@ fn execute(command: Command) -> Result<bool> {
             println!("report: {}", path.display());
         }
         Command::Render {
-            scene,
-            size,
-            tracer,
-            params,
+            on:
+                TracerOnScene {
+                    scene,
+                    size,
+                    tracer,
+                    params,
+                },
             width,
             height,
             frame,
@@ -826,6 +836,7 @@ fn execute(command: Command) -> Result<bool> {
         } => {
             let (batch, tracer, label) = on.load(0, 1)?;
             let batch = match sample {
+                Some(0) => return Err(Error::usage("--sample must keep at least one ray")),
                 Some(n) => batch.first(n),
                 None => batch,
             };

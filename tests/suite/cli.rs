@@ -7,12 +7,7 @@ use std::process::Command;
 use crate::common::only_run;
 
 fn scratch(name: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
-        .join("cli")
-        .join(name);
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+    crate::common::scratch_in("cli", name)
 }
 
 /// Runs raylab in `dir`; returns (exit code, stderr).
@@ -612,7 +607,8 @@ fn report_check_exits_1_on_a_stale_run_and_0_when_stale_is_ok() {
 }
 
 /// `raylab bench` times a tracer on a ray file, with its counters, in the line `tools/ab` and
-/// `tools/callgrind` parse; a missing file, no threads and an unknown tracer are exit 2.
+/// `tools/callgrind` parse; a missing file, no threads, an unknown tracer and an empty sample are
+/// exit 2.
 #[test]
 fn bench_times_a_ray_file_and_refuses_bad_input() {
     use raylab::geometry::ray_file::{write_rays, RayFileFormat};

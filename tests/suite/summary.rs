@@ -8,12 +8,7 @@ use std::process::{Command, Output};
 use crate::common::only_run;
 
 fn scratch(name: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
-        .join("summary")
-        .join(name);
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+    crate::common::scratch_in("summary", name)
 }
 
 fn raylab(dir: &Path, args: &[&str]) -> Output {

@@ -20,7 +20,7 @@ use serde::Deserialize;
 use crate::error::{Error, Result};
 use crate::tracers::registry::canonical_name;
 
-use crate::experiment::record::files::RUNS_CSV;
+use crate::experiment::record::files::{read_text, RUNS_CSV};
 use crate::experiment::record::run_row::runs_columns;
 
 /// One runs.csv row: column → cell.
@@ -213,10 +213,13 @@ pub fn distinct(rows: &[Row], filter: &Filter, field: &str) -> Vec<String> {
     seen
 }
 
-/// Reads runs.csv back as rows.
+/// Reads a results CSV (runs.csv, verify.csv, …) back as rows, plain or compressed
+/// (`files::read_text`).
 pub fn read_rows(path: &std::path::Path) -> Result<Vec<Row>> {
     let fail = |e: csv::Error| Error::input(path, None, e.to_string());
-    let mut reader = csv::Reader::from_path(path).map_err(fail)?;
+    let text = read_text(path)?
+        .ok_or_else(|| Error::io(path, std::io::Error::from(std::io::ErrorKind::NotFound)))?;
+    let mut reader = csv::Reader::from_reader(text.as_bytes());
     let header: Vec<String> = reader
         .headers()
         .map_err(fail)?

@@ -27,8 +27,8 @@ use crate::tracers::{Role, TracerInfo};
 
 use crate::experiment::record::csv_file::{read_typed, Cells};
 use crate::experiment::record::files::META_JSON;
-use crate::experiment::record::files::RUNS_CSV;
 use crate::experiment::record::files::VERIFY_CSV;
+use crate::experiment::record::files::{self, RUNS_CSV};
 use crate::experiment::record::selection::{read_rows, Row};
 use crate::experiment::record::CheckRow;
 
@@ -229,7 +229,7 @@ impl Summary {
     pub fn read_at(dir: &Path, threads: Option<usize>) -> Result<Summary> {
         let runs_path = dir.join(RUNS_CSV);
         let meta_path = dir.join(META_JSON);
-        if !runs_path.is_file() || !meta_path.is_file() {
+        if !files::exists(&runs_path) || !meta_path.is_file() {
             return Err(Error::usage(format!(
                 "{}: not a results directory of `raylab run` (needs {RUNS_CSV} and {META_JSON})",
                 dir.display()
@@ -238,7 +238,7 @@ impl Summary {
         let meta = read_meta(&meta_path)?;
         let runs = Table::read(&runs_path, RUNS_NEEDS)?;
         let verify_path = dir.join(VERIFY_CSV);
-        let checks = match verify_path.is_file() {
+        let checks = match files::exists(&verify_path) {
             true => read_checks(&verify_path)?,
             false => BTreeMap::new(),
         };

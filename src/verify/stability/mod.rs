@@ -412,12 +412,17 @@ pub fn speed_cliffs(outcomes: &mut [Outcome]) -> Vec<Cliff> {
     let same_case = |a: &Outcome, b: &Outcome| {
         a.kind == b.kind && a.variant == b.variant && a.magnitude == b.magnitude
     };
+    // The yardstick's rows, looked up in the registry once, not once per pair.
+    let yardsticks: Vec<&Outcome> = outcomes
+        .iter()
+        .filter(|r| timed(r) && r.robust && is_reference(r))
+        .collect();
     let reference: Vec<Option<f64>> = outcomes
         .iter()
         .map(|o| {
-            outcomes
+            yardsticks
                 .iter()
-                .find(|r| timed(r) && is_reference(r) && r.robust && same_case(r, o))
+                .find(|r| same_case(r, o))
                 .map(|r| r.seconds)
         })
         .collect();

@@ -164,3 +164,13 @@ pub fn test_configurations(
         .flat_map(|info| info.test_params().into_iter().map(move |p| (info, p)))
         .collect()
 }
+
+/// A fresh, empty scratch directory `<suite>/<name>` under the test target's temporary directory.
+pub fn scratch_in(suite: &str, name: &str) -> std::path::PathBuf {
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(suite)
+        .join(name);
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}

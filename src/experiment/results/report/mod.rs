@@ -30,7 +30,7 @@ use crate::experiment::record::digest::digest;
 use crate::experiment::record::files::META_JSON;
 use crate::experiment::record::files::STABILITY_CSV;
 use crate::experiment::record::files::TABLES_MD;
-use crate::experiment::record::files::{RUNS_CSV, SUMMARY_MD};
+use crate::experiment::record::files::{read_text, RUNS_CSV, SUMMARY_MD};
 use blocks::Block;
 use paper::{papers_under, Paper};
 
@@ -54,14 +54,6 @@ pub struct Results {
     pub digest: String,
 }
 
-fn read_optional(path: &Path) -> Result<Option<String>> {
-    match std::fs::read_to_string(path) {
-        Ok(text) => Ok(Some(text)),
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
-        Err(e) => Err(Error::io(path, e)),
-    }
-}
-
 impl Results {
     pub fn read(dir: &Path) -> Result<Results> {
         if !dir.is_dir() {
@@ -75,12 +67,12 @@ impl Results {
             std::fs::read_to_string(&meta_path).map_err(|e| Error::io(&meta_path, e))?;
         let meta: Value = serde_json::from_str(&meta_text)
             .map_err(|e| Error::input(&meta_path, Some(e.line()), e.to_string()))?;
-        let data = match read_optional(&dir.join(RUNS_CSV))? {
+        let data = match read_text(&dir.join(RUNS_CSV))? {
             Some(text) => Some((RUNS_CSV, text)),
-            None => read_optional(&dir.join(STABILITY_CSV))?.map(|t| (STABILITY_CSV, t)),
+            None => read_text(&dir.join(STABILITY_CSV))?.map(|t| (STABILITY_CSV, t)),
         };
-        let tables_text = read_optional(&dir.join(TABLES_MD))?.unwrap_or_default();
-        let summary_text = read_optional(&dir.join(SUMMARY_MD))?.unwrap_or_default();
+        let tables_text = read_text(&dir.join(TABLES_MD))?.unwrap_or_default();
+        let summary_text = read_text(&dir.join(SUMMARY_MD))?.unwrap_or_default();
         let mut figures = Vec::new();
         for entry in std::fs::read_dir(dir).map_err(|e| Error::io(dir, e))? {
             let path = entry.map_err(|e| Error::io(dir, e))?.path();
