@@ -4,10 +4,14 @@
 //! where the file lists its rows, one of its rows (an experiment that declares no tables, the
 //! stability suite, is judged against its committed run's by the report). A typo is caught here, not on the day of the
 //! run, and a table renamed in an experiment file is caught before its next run reads "not run".
+//! Every paper claim's quote is the paper's own text (`Claims::read` checks that the tests' numbers
+//! are the quote's).
 
 use std::path::Path;
 
-use raylab::experiment::results::report::claims::{Claims, Test, CLAIMS_TOML};
+use raylab::experiment::results::report::claims::{
+    normalised, Claims, Test, CLAIMS_TOML, EVERY_ROW,
+};
 use raylab::experiment::results::report::paper::papers_under;
 
 /// The `[[tables]]` of an experiment file: (title, row labels when listed, column labels).
@@ -48,7 +52,7 @@ fn references_name_declared_tables_rows_and_columns() {
         for experiment in &claims.experiments {
             declared_tables(experiment);
         }
-        for claim in &claims.claims {
+        for (claim, _) in claims.all() {
             for test in &claim.tests {
                 for r in Test::parse(test).unwrap().references() {
                     let experiment = r.experiment.as_deref().unwrap_or(&claim.experiment);
@@ -75,7 +79,7 @@ fn references_name_declared_tables_rows_and_columns() {
                         "{where_}: no column {:?} in {columns:?}",
                         r.column
                     );
-                    if let Some(rows) = rows {
+                    if let (Some(rows), false) = (rows, r.row == EVERY_ROW) {
                         assert!(
                             rows.contains(&r.row),
                             "{where_}: no row {:?} in {rows:?}",
@@ -88,4 +92,54 @@ fn references_name_declared_tables_rows_and_columns() {
         }
     }
     assert!(checked > 0, "no reference was checked");
+}
+
+/// Where the papers' texts are: `RAYLAB_PAPERS`, else `papers/` beside the scene directory
+/// (`RAYLAB_SCENES`), else `../shared/papers` beside the repository.
+fn papers_dir() -> Option<std::path::PathBuf> {
+    let candidates = [
+        std::env::var_os("RAYLAB_PAPERS").map(std::path::PathBuf::from),
+        std::env::var_os("RAYLAB_SCENES").map(|s| Path::new(&s).join("..").join("papers")),
+        Some(Path::new("..").join("shared").join("papers")),
+    ];
+    candidates.into_iter().flatten().find(|d| d.is_dir())
+}
+
+/// Each paper claim's `quote` is in its paper's text, matched without regard to case, line breaks
+/// or runs of spaces: the range a test uses is the paper's own. A quote typed from memory, or a
+/// number moved, fails here.
+#[test]
+fn every_quote_is_the_papers_own_text() {
+    let Some(papers) = papers_dir() else {
+        eprintln!("no papers directory (RAYLAB_PAPERS, RAYLAB_SCENES/../papers, ../shared/papers): quotes not checked");
+        return;
+    };
+    let mut checked = 0;
+    for dir in papers_under(Path::new("results")).unwrap() {
+        let (claims, _) = Claims::read(&dir.join(CLAIMS_TOML)).unwrap_or_else(|e| panic!("{e}"));
+        let Some(file) = &claims.paper_text else {
+            assert!(
+                claims.claims.is_empty(),
+                "{}: claims without paper_text",
+                dir.display()
+            );
+            continue;
+        };
+        let path = papers.join(file);
+        let text = normalised(
+            &std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display())),
+        );
+        for claim in &claims.claims {
+            let quote = normalised(claim.quote.as_deref().unwrap());
+            assert!(
+                text.contains(&quote),
+                "{}: {:?}: the quote {quote:?} is not in {}",
+                dir.display(),
+                claim.claim,
+                path.display()
+            );
+            checked += 1;
+        }
+    }
+    assert!(checked > 0, "no quote was checked");
 }

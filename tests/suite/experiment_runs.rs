@@ -806,7 +806,7 @@ fn the_wald06_experiments_parse_with_their_tables_and_figures() {
     let exp = load("wald06-packets.toml");
     assert_eq!(exp.instances.len(), 6);
     assert_eq!(exp.scenes.len(), 10);
-    assert_eq!((exp.tables.len(), exp.figures.len()), (2, 3));
+    assert_eq!((exp.tables.len(), exp.figures.len()), (4, 3));
     let exp = load("wald06-animated.toml");
     let labels: Vec<String> = exp.instances.iter().map(|i| i.to_string()).collect();
     assert_eq!(
@@ -824,7 +824,7 @@ fn the_wald06_experiments_parse_with_their_tables_and_figures() {
         (exp.width, exp.height, exp.threads.as_slice()),
         (1024, 1024, &[1, 2][..])
     );
-    assert_eq!(exp.tables.len(), 4);
+    assert_eq!(exp.tables.len(), 5);
     let bench = load("wald06-benchmark.toml");
     assert_eq!(exp.scenes, bench.scenes);
     // cgt 4×4, 8×8, 16×16; every Embree entry point and context at low and refit.
@@ -842,9 +842,9 @@ fn the_wald06_experiments_parse_with_their_tables_and_figures() {
 fn the_boulos07_experiments_parse_and_select_their_own_workloads() {
     for (file, instances, renders, tables, figures) in [
         // Plus baseline-best's baselines (below).
-        ("boulos07.toml", 5, 12, 3, 1),
-        ("boulos07-drt.toml", 2, 8, 2, 1),
-        ("boulos07-fig8.toml", 1, 2, 1, 2),
+        ("boulos07.toml", 5, 12, 6, 1),
+        ("boulos07-drt.toml", 2, 8, 3, 1),
+        ("boulos07-fig8.toml", 1, 2, 4, 2),
     ] {
         let exp = Experiment::load(
             &Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -858,7 +858,11 @@ fn the_boulos07_experiments_parse_and_select_their_own_workloads() {
         };
         assert_eq!(exp.instances.len(), instances + embree, "{file}");
         assert_eq!(exp.renders.len(), renders, "{file}");
-        assert_eq!((exp.tables.len(), exp.figures.len()), (tables, figures));
+        assert_eq!(
+            (exp.tables.len(), exp.figures.len()),
+            (tables, figures),
+            "{file}"
+        );
         let labels: Vec<String> = exp.renders.iter().map(|r| r.to_string()).collect();
         let filters = exp.tables.iter().flat_map(|t| {
             let rows = match &t.rows {

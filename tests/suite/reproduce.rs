@@ -42,10 +42,13 @@ columns = [{ label = "reference", where = { tracer = "reference" } }]
 
 const CLAIMS: &str = r#"title = "Toy 2026"
 paper = "A. Toy. Toys. 2026."
+paper_text = "toy.txt"
 experiments = ["tiny"]
 [[claims]]
+item = "T1"
 claim = "single rays test some boxes, but not a million each"
 paper = "none"
+quote = "fewer than 1,000,000 boxes per ray"
 experiment = "tiny"
 tests = ["{{Tests per ray | room | reference}} > 0", "{{Tests per ray | room | reference}} > 1000000"]
 "#;
@@ -119,18 +122,18 @@ fn a_quick_reproduction_runs_reports_and_resumes() {
     let report = fs::read_to_string(paper.join(REPORT_MD)).unwrap();
     assert!(report.contains("**Quick scale (`raylab reproduce --scale quick`), a smoke test and not evidence:** tiny."), "{report}");
     assert!(
-        report.contains("**1 claims: 0 hold, 1 partly, 0 differ, 0 not run.**"),
+        report.contains("**The paper: 1 claims: 0 hold, 1 partly, 0 differ, 0 within noise, 0 not run; 0 not reproducible here.**"),
         "{report}"
     );
     assert!(
         report.contains(
-            "| single rays test some boxes, but not a million each | none | **partly** |"
+            "| T1 | single rays test some boxes, but not a million each | none | **partly** |"
         ),
         "{report}"
     );
     let index = fs::read_to_string(results.join(QUICK_DIR).join(VERDICTS_MD)).unwrap();
     assert!(
-        index.contains("toy2026/REPORT.md) | 1 | 0 | 1 | 0 | 0 |"),
+        index.contains("toy2026/REPORT.md) | 1 | 0 | 1 | 0 | 0 | 0 | 0 |"),
         "{index}"
     );
 

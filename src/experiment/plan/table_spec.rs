@@ -19,6 +19,7 @@
 //!   { label = "n/n paper", paper = { toys = 14.0, hand = "12.5" } },  # keyed by row label
 //!   { label = "ratio", ratio = ["n/n", "y/y"] },     # quotient of two columns of the row
 //!   { label = "total", sum = ["build", "trace"] },   # sum of columns of the row
+//!   { label = "saved", difference = ["off", "on"] }, # one column of the row less another
 //!   { label = "best", min = ["low", "refit"] },      # smallest of columns of the row
 //!   { label = "fps", inverse = "total", scale = 1000 },  # scale / column (ms → frames/s)
 //!   { label = "Embree best", text = "embree_best_config" },  # a field's values, as written
@@ -86,6 +87,7 @@ pub struct ColumnSpec {
     pub paper: Option<BTreeMap<String, toml::Value>>,
     pub ratio: Option<[String; 2]>,
     pub sum: Option<Vec<String>>,
+    pub difference: Option<[String; 2]>,
     pub min: Option<Vec<String>>,
     pub inverse: Option<String>,
     /// A runs.csv field shown as written (e.g. which Embree configuration was the best): the
@@ -96,7 +98,11 @@ pub struct ColumnSpec {
 impl ColumnSpec {
     /// Computed from other columns of the row rather than measured.
     pub fn derived(&self) -> bool {
-        self.ratio.is_some() || self.sum.is_some() || self.min.is_some() || self.inverse.is_some()
+        self.ratio.is_some()
+            || self.sum.is_some()
+            || self.difference.is_some()
+            || self.min.is_some()
+            || self.inverse.is_some()
     }
 }
 
@@ -123,13 +129,14 @@ impl TableSpec {
                 c.paper.is_some(),
                 c.ratio.is_some(),
                 c.sum.is_some(),
+                c.difference.is_some(),
                 c.min.is_some(),
                 c.inverse.is_some(),
                 c.text.is_some(),
             ];
             if kinds.iter().filter(|&&k| k).count() > 1 {
                 return Err(Error::usage(format!(
-                    "{what}: give at most one of paper, ratio, sum, min, inverse, text"
+                    "{what}: give at most one of paper, ratio, sum, difference, min, inverse, text"
                 )));
             }
             if let Some(field) = &c.text {
@@ -140,6 +147,7 @@ impl TableSpec {
                 .iter()
                 .flatten()
                 .chain(c.sum.iter().flatten())
+                .chain(c.difference.iter().flatten())
                 .chain(c.min.iter().flatten())
                 .chain(&c.inverse);
             for r in refs {
@@ -149,7 +157,7 @@ impl TableSpec {
                     )));
                 }
             }
-            if kinds == [false; 6] {
+            if kinds == [false; 7] {
                 match c.metric.as_ref().or(self.metric.as_ref()) {
                     Some(m) => check_field(m, &what)?,
                     None => return Err(Error::usage(format!("{what}: no metric"))),

@@ -3,7 +3,8 @@
 //! (`histogram_row`), per sampled check (`check_row`) and per case of the stability suite
 //! (`stability_row`) — the file names of a results
 //! directory, how rows are selected and reduced for tables and figures, and how a results
-//! directory is written all at once or not at all. `spec`, `run` and `results` all import it; it
+//! directory is written all at once or not at all, and the spread of a timed number over its
+//! passes (`spread`). `plan`, `run` and `results` all import it; it
 //! imports none of them.
 
 pub mod check_row;
@@ -17,6 +18,8 @@ pub mod provenance;
 pub mod results_dir;
 pub mod run_row;
 pub mod selection;
+pub mod settings;
+pub mod spread;
 pub mod stability_row;
 pub mod utc;
 

@@ -52,12 +52,14 @@ pub const RUNS_COLUMNS: &[&str] = &[
     "rmse",
     "retraced_share",
     "embree_best_seconds",
+    "embree_best_seconds_median",
     "embree_best_config",
     "x_embree_best",
     "embree_best_build_plus_trace_seconds",
     "embree_best_build_plus_trace_config",
     "x_embree_best_build_plus_trace",
     "baseline_best_seconds",
+    "baseline_best_seconds_median",
     "baseline_best_config",
     "x_baseline_best",
 ];
@@ -80,6 +82,8 @@ pub fn mrays_per_s(rays: usize, seconds: f64) -> Option<f64> {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Best {
     pub seconds: f64,
+    /// The same configuration's median pass: with `seconds`, the spread a verdict weighs.
+    pub median: f64,
     /// `tracer parameters`, with the intersect context `auto` chose spelled out.
     pub config: String,
 }
@@ -209,6 +213,7 @@ impl RunRow {
             cell(self.rmse),
             cell(self.retraced_share),
             cell(self.embree_best.as_ref().map(|b| b.seconds)),
+            cell(self.embree_best.as_ref().map(|b| b.median)),
             cell(self.embree_best.as_ref().map(|b| &b.config)),
             cell(Best::ratio(self.embree_best.as_ref(), self.seconds_min)),
             cell(
@@ -226,6 +231,7 @@ impl RunRow {
                 self.build_plus_trace_seconds(),
             )),
             cell(self.baseline_best.as_ref().map(|b| b.seconds)),
+            cell(self.baseline_best.as_ref().map(|b| b.median)),
             cell(self.baseline_best.as_ref().map(|b| &b.config)),
             cell(Best::ratio(self.baseline_best.as_ref(), self.seconds_min)),
         ];
@@ -245,10 +251,19 @@ impl RunRow {
     /// A row read back from runs.csv. The derived columns are not read: they are computed again
     /// from the fields.
     pub fn parse(cells: &Cells) -> CellResult<RunRow> {
-        let best = |seconds: &str, config: &str| -> CellResult<Option<Best>> {
+        // A runs.csv from before a best's median column reads as without spread (median = fastest).
+        let best = |seconds: &str, median: &str, config: &str| -> CellResult<Option<Best>> {
+            let median = match cells.0.contains_key(median) {
+                true => cells.optional(median)?,
+                false => None,
+            };
             Ok(
                 match (cells.optional(seconds)?, cells.optional_text(config)?) {
-                    (Some(seconds), Some(config)) => Some(Best { seconds, config }),
+                    (Some(seconds), Some(config)) => Some(Best {
+                        seconds,
+                        median: median.unwrap_or(seconds),
+                        config,
+                    }),
                     _ => None,
                 },
             )
@@ -296,14 +311,23 @@ impl RunRow {
                 .iter()
                 .map(|e| cells.optional(e.name()))
                 .collect::<CellResult<_>>()?,
-            embree_best: best("embree_best_seconds", "embree_best_config")?,
+            embree_best: best(
+                "embree_best_seconds",
+                "embree_best_seconds_median",
+                "embree_best_config",
+            )?,
             embree_best_build_plus_trace: best(
                 "embree_best_build_plus_trace_seconds",
+                "",
                 "embree_best_build_plus_trace_config",
             )?,
             // runs.csv files written before baseline best have no such columns.
             baseline_best: match cells.0.contains_key("baseline_best_seconds") {
-                true => best("baseline_best_seconds", "baseline_best_config")?,
+                true => best(
+                    "baseline_best_seconds",
+                    "baseline_best_seconds_median",
+                    "baseline_best_config",
+                )?,
                 false => None,
             },
         })
@@ -356,11 +380,13 @@ mod tests {
                 .collect(),
             embree_best: Some(Best {
                 seconds: 0.25,
+                median: 0.375,
                 config: "embree3-16 (context coherent)".into(),
             }),
             embree_best_build_plus_trace: None,
             baseline_best: Some(Best {
                 seconds: 0.125,
+                median: 0.125,
                 config: "tinybvh-8 builder=sbvh".into(),
             }),
         }
@@ -383,6 +409,7 @@ mod tests {
         let mut old = fields.clone();
         for column in [
             "baseline_best_seconds",
+            "baseline_best_seconds_median",
             "baseline_best_config",
             "x_baseline_best",
         ] {

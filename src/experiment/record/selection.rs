@@ -22,6 +22,7 @@ use crate::tracers::registry::canonical_name;
 
 use crate::experiment::record::files::{read_text, RUNS_CSV};
 use crate::experiment::record::run_row::runs_columns;
+use crate::experiment::record::spread::Spread;
 
 /// One runs.csv row: column → cell.
 pub type Row = BTreeMap<String, String>;
@@ -177,10 +178,16 @@ pub struct Measure {
 impl Measure {
     /// The reduction of `metric` over the rows `filter` keeps; `None` when no kept row has a value.
     pub fn of(&self, rows: &[Row], filter: &Filter) -> Option<f64> {
+        self.spread_of(rows, filter).map(|s| s.value)
+    }
+
+    /// `of`, with the range the number spans over the run's timed passes (`Spread`): the same
+    /// reductions applied to each end.
+    pub fn spread_of(&self, rows: &[Row], filter: &Filter) -> Option<Spread> {
         // Frames in first-seen order, so `first` means first in runs.csv.
-        let mut frames: Vec<((String, String, String), Vec<f64>)> = Vec::new();
+        let mut frames: Vec<((String, String, String), Vec<Spread>)> = Vec::new();
         for row in rows.iter().filter(|r| filter.matches(r)) {
-            let Ok(value) = field_value(row, &self.metric).parse::<f64>() else {
+            let Some(value) = Spread::in_row(row, &self.metric) else {
                 continue;
             };
             let key = (
@@ -193,11 +200,20 @@ impl Measure {
                 None => frames.push((key, vec![value])),
             }
         }
-        let per_frame: Vec<f64> = frames
+        let reduce = |how: Reduce, values: &[Spread]| -> Option<Spread> {
+            let end =
+                |pick: fn(&Spread) -> f64| how.apply(&values.iter().map(pick).collect::<Vec<_>>());
+            Some(Spread {
+                value: end(|s| s.value)?,
+                low: end(|s| s.low)?,
+                high: end(|s| s.high)?,
+            })
+        };
+        let per_frame: Vec<Spread> = frames
             .iter()
-            .filter_map(|(_, values)| self.within_frame.apply(values))
+            .filter_map(|(_, values)| reduce(self.within_frame, values))
             .collect();
-        self.frames.apply(&per_frame).map(|v| v * self.scale)
+        reduce(self.frames, &per_frame).map(|v| v.scaled(self.scale))
     }
 }
 
@@ -249,16 +265,18 @@ pub fn median_of_sorted(sorted: &[f64]) -> f64 {
     }
 }
 
+/// A row of `(column, cell)` pairs, for tests.
+#[cfg(test)]
+pub fn row(cells: &[(&str, &str)]) -> Row {
+    cells
+        .iter()
+        .map(|(k, v)| (k.to_string(), v.to_string()))
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn row(cells: &[(&str, &str)]) -> Row {
-        cells
-            .iter()
-            .map(|(k, v)| (k.to_string(), v.to_string()))
-            .collect()
-    }
 
     fn filter(text: &str) -> Filter {
         #[derive(Deserialize)]

@@ -2,8 +2,10 @@
 //! evidence. A run is stale when it was made from a dirty tree (or one whose state is unknown),
 //! when it has no record of the source it measured, when that source — the shared measured core
 //! and the families of the tracers it ran (`record::provenance`), each area as the run recorded
-//! it — has changed since, or when its experiment file now asks for something else. The rule, not a person, says which runs must
-//! be re-run before their numbers are quoted; `reproduce` redoes exactly those.
+//! it — has changed since, when its experiment file now asks for something else, or when it is
+//! labelled the paper's scale while a setting falls short of the paper's (`record::settings`).
+//! The rule, not a person, says which runs must be re-run before their numbers are quoted;
+//! `reproduce` redoes exactly those.
 
 use std::path::{Path, PathBuf};
 
@@ -12,6 +14,7 @@ use serde_json::Value;
 use crate::error::{Error, Result};
 use crate::experiment::record::files::META_JSON;
 use crate::experiment::record::provenance::{SourceTree, CORE};
+use crate::experiment::record::settings::{label, labelled_paper, Label};
 
 /// A results directory and why it is stale (empty: it is not).
 #[derive(Clone, Debug, PartialEq)]
@@ -99,6 +102,14 @@ pub fn source_reasons(
             reasons.push("its experiment file changed since".to_string());
         }
     }
+    if let Some(now) = experiment_now {
+        if let (true, Label::Reduced(short)) = (labelled_paper(meta), label(meta, now)) {
+            reasons.push(format!(
+                "labelled paper scale, but below the paper's settings: {}",
+                short.join(", ")
+            ));
+        }
+    }
     reasons
 }
 
@@ -118,7 +129,7 @@ pub fn status(reasons: &[String]) -> String {
 
 /// The experiment file the run (`meta`) recorded, as it reads now (from the working directory the
 /// run was made in: `None` when it cannot be read from here).
-fn experiment_now(meta: &Value) -> Option<String> {
+pub fn experiment_now(meta: &Value) -> Option<String> {
     let path = meta
         .pointer("/experiment_file/path")
         .and_then(Value::as_str)?;
@@ -230,6 +241,19 @@ mod tests {
             reasons(&recorded, &now, Some("a = 2")),
             ["its experiment file changed since"]
         );
+        // Labelled the paper's scale (reproduce --scale paper) at 512² where the paper used 1024².
+        let paper = "paper_settings = { width = 1024, height = 1024 }\n";
+        let mut reduced = clean.clone();
+        reduced["experiment_file"] = serde_json::json!({ "path": "e.toml", "contents": paper });
+        reduced["overrides"] = serde_json::json!({ "scale": "paper" });
+        reduced["plan"] = serde_json::json!({ "width": 512, "height": 512, "frames": 1 });
+        assert_eq!(
+            reasons(&reduced, &now, Some(paper)),
+            ["labelled paper scale, but below the paper's settings: width 512 < 1024, height 512 < 1024"]
+        );
+        // Labelled reduced when it ran: honest, not stale.
+        reduced["scale"] = Value::from("reduced");
+        assert!(reasons(&reduced, &now, Some(paper)).is_empty());
         assert_eq!(
             source_reasons(&dirty, &now, None),
             Vec::<String>::new(),

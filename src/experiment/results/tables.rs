@@ -1,15 +1,89 @@
-//! Paper-vs-ours tables, rendered: each `[[tables]]` of an experiment (declared and checked in
-//! `plan::table_spec`) as markdown over the run's rows, written to `tables.md`.
+//! Paper-vs-ours tables: each `[[tables]]` of an experiment (declared and checked in
+//! `plan::table_spec`) computed over the run's rows (`TableModel`: the numbers with their spread,
+//! which claims read) and written as markdown to `tables.md`.
 
 use std::fmt::Write;
 
 use crate::error::{Error, Result};
 use crate::experiment::plan::table_spec::{RowsSpec, TableSpec};
 use crate::experiment::record::selection::{distinct, Filter, Measure, Reduce, Row};
+use crate::experiment::record::spread::Spread;
+
+/// A table computed from a run's rows: what tables.md shows and what claims read (`report::judge`),
+/// numbers at full precision with their spread.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TableModel {
+    pub title: String,
+    pub caption: String,
+    pub row_header: String,
+    pub columns: Vec<String>,
+    /// (label, one cell per column).
+    pub rows: Vec<(String, Vec<Cell>)>,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub enum Cell {
+    /// A measured or derived number, shown with `decimals`.
+    Number {
+        value: Spread,
+        decimals: usize,
+    },
+    /// The paper's number or a field's values, as written.
+    Text(String),
+    Missing,
+}
+
+impl Cell {
+    /// As tables.md shows it.
+    pub fn shown(&self) -> String {
+        match self {
+            Cell::Number { value, decimals } => format!("{:.*}", decimals, value.value),
+            Cell::Text(text) => text.clone(),
+            Cell::Missing => "–".to_string(),
+        }
+    }
+}
+
+impl TableModel {
+    /// The cell of the row labelled `row` in the column headed `column`.
+    pub fn cell(&self, row: &str, column: &str) -> Option<&Cell> {
+        let c = self.columns.iter().position(|h| h == column)?;
+        let (_, cells) = self.rows.iter().find(|(label, _)| label == row)?;
+        cells.get(c)
+    }
+
+    /// The table as tables.md shows it.
+    pub fn markdown(&self) -> String {
+        let mut out = format!("## {}\n\n", self.title);
+        if !self.caption.is_empty() {
+            let _ = writeln!(out, "{}\n", self.caption.trim());
+        }
+        let _ = write!(out, "| {} |", self.row_header);
+        for c in &self.columns {
+            let _ = write!(out, " {c} |");
+        }
+        out.push_str("\n|---|");
+        out.push_str(&"---:|".repeat(self.columns.len()));
+        out.push('\n');
+        for (label, cells) in &self.rows {
+            let _ = write!(out, "| {label} |");
+            for cell in cells {
+                let _ = write!(out, " {} |", cell.shown());
+            }
+            out.push('\n');
+        }
+        out
+    }
+}
 
 impl TableSpec {
     /// The table as markdown over runs.csv `rows`.
     pub fn render(&self, rows: &[Row]) -> String {
+        self.model(rows).markdown()
+    }
+
+    /// The table computed over runs.csv `rows`.
+    pub fn model(&self, rows: &[Row]) -> TableModel {
         let table_rows: Vec<(String, Filter)> = match &self.rows {
             RowsSpec::Field(field) => distinct(rows, &self.filter, field)
                 .into_iter()
@@ -23,48 +97,50 @@ impl TableSpec {
                 .map(|r| (r.label.clone(), r.filter.clone()))
                 .collect(),
         };
-        let mut out = format!("## {}\n\n", self.title);
-        if !self.caption.is_empty() {
-            let _ = writeln!(out, "{}\n", self.caption.trim());
-        }
-        let _ = write!(out, "| {} |", self.row_header);
-        for c in &self.columns {
-            let _ = write!(out, " {} |", c.label);
-        }
-        out.push_str("\n|---|");
-        out.push_str(&"---:|".repeat(self.columns.len()));
-        out.push('\n');
-        for (label, row_filter) in &table_rows {
-            let filter = self.filter.and(row_filter);
-            let values = self.row_values(rows, &filter);
-            let _ = write!(out, "| {label} |");
-            for (c, value) in self.columns.iter().zip(&values) {
-                let text = match (&c.paper, &c.text, value) {
-                    (Some(paper), _, _) => paper.get(label).map_or("–".to_string(), paper_text),
-                    (None, Some(field), _) => {
-                        let shown = distinct(rows, &filter.and(&c.filter), field);
-                        let shown: Vec<String> =
-                            shown.into_iter().filter(|v| !v.is_empty()).collect();
-                        match shown.is_empty() {
-                            true => "–".to_string(),
-                            false => shown.join(" / "),
+        let model_rows = table_rows
+            .iter()
+            .map(|(label, row_filter)| {
+                let filter = self.filter.and(row_filter);
+                let values = self.row_values(rows, &filter);
+                let cells = self
+                    .columns
+                    .iter()
+                    .zip(&values)
+                    .map(|(c, value)| match (&c.paper, &c.text, value) {
+                        (Some(paper), _, _) => paper
+                            .get(label)
+                            .map_or(Cell::Missing, |p| Cell::Text(paper_text(p))),
+                        (None, Some(field), _) => {
+                            let shown = distinct(rows, &filter.and(&c.filter), field);
+                            let shown: Vec<String> =
+                                shown.into_iter().filter(|v| !v.is_empty()).collect();
+                            match shown.is_empty() {
+                                true => Cell::Missing,
+                                false => Cell::Text(shown.join(" / ")),
+                            }
                         }
-                    }
-                    (None, None, Some(v)) => {
-                        format!("{v:.*}", c.decimals.or(self.decimals).unwrap_or(2))
-                    }
-                    (None, None, None) => "–".to_string(),
-                };
-                let _ = write!(out, " {text} |");
-            }
-            out.push('\n');
+                        (None, None, Some(v)) => Cell::Number {
+                            value: *v,
+                            decimals: c.decimals.or(self.decimals).unwrap_or(2),
+                        },
+                        (None, None, None) => Cell::Missing,
+                    })
+                    .collect();
+                (label.clone(), cells)
+            })
+            .collect();
+        TableModel {
+            title: self.title.clone(),
+            caption: self.caption.clone(),
+            row_header: self.row_header.clone(),
+            columns: self.columns.iter().map(|c| c.label.clone()).collect(),
+            rows: model_rows,
         }
-        out
     }
 
     /// Every column's number for one row (paper columns: `None`), derived columns last.
-    fn row_values(&self, rows: &[Row], row_filter: &Filter) -> Vec<Option<f64>> {
-        let mut values: Vec<Option<f64>> = self
+    fn row_values(&self, rows: &[Row], row_filter: &Filter) -> Vec<Option<Spread>> {
+        let mut values: Vec<Option<Spread>> = self
             .columns
             .iter()
             .map(|c| {
@@ -77,7 +153,7 @@ impl TableSpec {
                     frames: c.frames.or(self.frames).unwrap_or(Reduce::Mean),
                     scale: c.scale.or(self.scale).unwrap_or(1.0),
                 };
-                measure.of(rows, &row_filter.and(&c.filter))
+                measure.spread_of(rows, &row_filter.and(&c.filter))
             })
             .collect();
         let index = |label: &str| self.columns.iter().position(|c| c.label == label);
@@ -86,13 +162,19 @@ impl TableSpec {
             for (i, c) in self.columns.iter().enumerate() {
                 let get = |l: &String| index(l).and_then(|j| values[j]);
                 let derived = if let Some([a, b]) = &c.ratio {
-                    get(a).zip(get(b)).map(|(a, b)| a / b)
+                    get(a).zip(get(b)).map(|(a, b)| a.divided_by(b))
                 } else if let Some(parts) = &c.sum {
-                    parts.iter().map(get).sum()
+                    parts
+                        .iter()
+                        .map(get)
+                        .collect::<Option<Vec<Spread>>>()
+                        .and_then(|p| p.into_iter().reduce(Spread::plus))
+                } else if let Some([a, b]) = &c.difference {
+                    get(a).zip(get(b)).map(|(a, b)| a.minus(b))
                 } else if let Some(parts) = &c.min {
-                    parts.iter().filter_map(get).reduce(f64::min)
+                    parts.iter().filter_map(get).reduce(Spread::min)
                 } else if let Some(of) = &c.inverse {
-                    get(of).map(|v| c.scale.unwrap_or(1.0) / v)
+                    get(of).map(|v| Spread::exact(c.scale.unwrap_or(1.0)).divided_by(v))
                 } else {
                     continue;
                 };

@@ -14,6 +14,7 @@ use crate::experiment::plan::shard::ShardMeta;
 use crate::experiment::plan::Plan;
 use crate::experiment::record::files::META_JSON;
 use crate::experiment::record::provenance::{every_area, measured_areas, SourceTree};
+use crate::experiment::record::settings;
 use crate::experiment::record::utc::UtcTime;
 
 #[derive(Debug, Serialize)]
@@ -34,6 +35,10 @@ pub struct Meta<'a> {
     pub versions: BTreeMap<&'static str, String>,
     pub experiment_file: ExperimentFile<'a>,
     pub overrides: &'a RunOverrides,
+    /// The run's scale against the paper settings its experiment file declares
+    /// (`record::settings::label`): `paper`, `reduced`, `quick`; none without a plan.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub scale: Option<&'static str>,
     /// The plan of a scenes × ray kinds run (a stability run has none).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub plan: Option<&'a Plan>,
@@ -95,7 +100,7 @@ pub fn gather<'a>(
     (path, contents): (&Path, &'a str),
     overrides: &'a RunOverrides,
 ) -> Meta<'a> {
-    Meta {
+    let mut meta = Meta {
         experiment,
         run_id,
         date: started.iso8601(),
@@ -121,11 +126,17 @@ pub fn gather<'a>(
             contents,
         },
         overrides,
+        scale: None,
         plan,
         shard: None,
         wall_seconds: None,
         merged_from: Vec::new(),
+    };
+    if plan.is_some() {
+        let recorded = serde_json::to_value(&meta).unwrap_or_default();
+        meta.scale = Some(settings::label(&recorded, contents).name());
     }
+    meta
 }
 
 /// Writes `meta` as meta.json into `dir`.

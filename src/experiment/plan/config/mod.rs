@@ -120,6 +120,8 @@ pub use tracers::{StructureKey, TracerInstance, BASELINE_BEST, EMBREE_BEST};
 
 use rays::RayEntry;
 use soft_shadow::SoftShadowSpec;
+
+use crate::experiment::record::settings::PaperSettings;
 use source::{line_of, Source};
 use stability::StabilitySpec;
 use tracers::TracerTable;
@@ -200,6 +202,10 @@ struct ExperimentFile {
     seed: u64,
     #[serde(default)]
     soft_shadow: Option<Spanned<SoftShadowSpec>>,
+    /// The paper's own settings (`record::settings`): checked here, read from the recorded text
+    /// when a run is labelled and when a report or `report --check` compares a run with them.
+    #[serde(default, rename = "paper_settings")]
+    _paper_settings: Option<PaperSettings>,
     #[serde(default)]
     heatmaps: Vec<Spanned<String>>,
     #[serde(default = "default_output")]

@@ -39,26 +39,59 @@ pub const CLAIMS_TOML: &str = "claims.toml";
 #[serde(deny_unknown_fields)]
 pub struct Claims {
     pub title: String,
+    /// The citation.
     pub paper: String,
+    /// The paper's text, a file name in `../shared/papers/`: every claim's `quote` is in it.
+    pub paper_text: Option<String>,
     /// The paper's experiment files, by name (`experiments/<name>.toml`), in running order.
     pub experiments: Vec<String>,
+    /// The one widening a test may use (`~N`), declared once with its reason.
+    pub tolerance: Option<Tolerance>,
+    /// The paper's quantitative items.
     #[serde(default)]
     pub claims: Vec<Claim>,
+    /// The paper's items a CPU here cannot reproduce, each with the reason.
+    #[serde(default)]
+    pub not_reproducible: Vec<NotReproducible>,
+    /// raylab's own targets (against Embree, tinybvh, …): judged alike, counted apart.
+    #[serde(default)]
+    pub targets: Vec<Claim>,
+}
+
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Tolerance {
+    /// A `~` lower bound is divided by it, a `~` upper bound multiplied.
+    pub factor: f64,
+    pub reason: String,
 }
 
 #[derive(Clone, Debug, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct Claim {
+    /// The paper's item it tests (`O1`, `Bt5`); none for a target.
+    pub item: Option<String>,
     /// The conclusion, in the paper's words or close to them.
     pub claim: String,
     /// The paper's numbers for it, as text.
     pub paper: String,
+    /// The paper's own words for it, verbatim from `paper_text`: every number a test uses is in it.
+    pub quote: Option<String>,
     /// The experiment whose run the references read unless they name another.
     pub experiment: String,
-    /// All pass: holds; some: partly; none: differs.
+    /// All pass: holds; some: partly; none: differs (see `RULE`).
     pub tests: Vec<String>,
     #[serde(default)]
     pub note: String,
+}
+
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct NotReproducible {
+    pub item: String,
+    pub claim: String,
+    pub paper: String,
+    pub reason: String,
 }
 
 /// A claim's verdict: computed from its tests over the committed runs.
@@ -67,15 +100,18 @@ pub enum Verdict {
     Holds,
     Partly,
     Differs,
+    /// Every test's difference lies inside the spread of the values it compares.
+    WithinNoise,
     /// An experiment the claim reads has no run in the paper's directory.
     NotRun,
 }
 
 impl Verdict {
-    pub const ALL: [Verdict; 4] = [
+    pub const ALL: [Verdict; 5] = [
         Verdict::Holds,
         Verdict::Partly,
         Verdict::Differs,
+        Verdict::WithinNoise,
         Verdict::NotRun,
     ];
 }
@@ -86,6 +122,7 @@ impl fmt::Display for Verdict {
             Verdict::Holds => "holds",
             Verdict::Partly => "partly",
             Verdict::Differs => "differs",
+            Verdict::WithinNoise => "within noise",
             Verdict::NotRun => "not run",
         })
     }
@@ -93,25 +130,61 @@ impl fmt::Display for Verdict {
 
 /// How the verdict follows from the tests, printed once in every report.
 pub const RULE: &str =
-    "holds when every test of the claim passes, partly when some do, differs when none does; \
-     not run when an experiment it reads has no run here";
+    "a test is within noise when its outcome changes somewhere inside the spread of the values it \
+     compares (each time from its fastest to its median pass, carried through ratios); a claim \
+     holds when every test passes, is within noise when every test is, differs when none passes, \
+     and partly holds otherwise; not run when an experiment it reads has no run here";
 
 impl Claims {
     /// Reads `path`: invalid TOML, an unknown field, a claim reading an experiment the file does
-    /// not list, or a test that does not parse is an input error naming the file and line.
+    /// not list, a test that does not parse, a paper claim without its item or quote, a test
+    /// number its quote does not state, or a `~` without a declared tolerance is an input error
+    /// naming the file and line.
     pub fn read(path: &Path) -> Result<(Claims, String)> {
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
         let claims: Claims = toml::from_str(&text).map_err(|e| {
             let line = e.span().map(|s| line_of(&text, s.start));
             Error::input(path, line, e.message().to_string())
         })?;
-        for claim in &claims.claims {
-            let fail = |message: String| {
-                let line = claim_line(&text, &claim.claim);
-                Error::input(path, line, format!("{:?}: {message}", claim.claim))
-            };
+        let fail = |claim: &str, message: String| {
+            Error::input(
+                path,
+                claim_line(&text, claim),
+                format!("{claim:?}: {message}"),
+            )
+        };
+        if let Some(t) = &claims.tolerance {
+            if !(t.factor.is_finite() && t.factor >= 1.0) {
+                return Err(Error::input(
+                    path,
+                    None,
+                    format!("tolerance factor {} must be a finite number ≥ 1", t.factor),
+                ));
+            }
+        }
+        for (claim, of_paper) in claims.all() {
+            let fail = |message: String| fail(&claim.claim, message);
             if claim.tests.is_empty() {
                 return Err(fail("no tests: a verdict needs at least one".into()));
+            }
+            match (of_paper, &claim.item, &claim.quote) {
+                (true, None, _) => return Err(fail("a paper's claim names its item".into())),
+                (true, _, None) => {
+                    return Err(fail("a paper's claim quotes the paper (quote)".into()))
+                }
+                (true, _, _) if claims.paper_text.is_none() => {
+                    return Err(fail("quotes need the file's paper_text".into()))
+                }
+                (false, Some(_), _) | (false, _, Some(_)) => {
+                    return Err(fail("a target has no item or quote".into()))
+                }
+                _ => {}
+            }
+            if !claims.experiments.contains(&claim.experiment) {
+                return Err(fail(format!(
+                    "experiment {:?} is not in this file's experiments",
+                    claim.experiment
+                )));
             }
             for test in &claim.tests {
                 let parsed = Test::parse(test).map_err(|m| fail(format!("{test:?}: {m}")))?;
@@ -124,16 +197,83 @@ impl Claims {
                         )));
                     }
                 }
-            }
-            if !claims.experiments.contains(&claim.experiment) {
-                return Err(fail(format!(
-                    "experiment {:?} is not in this file's experiments",
-                    claim.experiment
-                )));
+                if parsed.is_tolerant() && claims.tolerance.is_none() {
+                    return Err(fail(format!(
+                        "{test:?} widens a bound with ~ but the file declares no tolerance"
+                    )));
+                }
+                if let Some(quote) = &claim.quote {
+                    let stated = allowed_numbers(quote);
+                    let unstated = parsed
+                        .numbers()
+                        .into_iter()
+                        .find(|&n| n != 0.0 && n != 1.0 && !stated.iter().any(|&s| same(s, n)));
+                    if let Some(n) = unstated {
+                        return Err(fail(format!(
+                            "{test:?} uses {n}, a number its quote does not state"
+                        )));
+                    }
+                }
             }
         }
         Ok((claims, text))
     }
+
+    /// Every claim, the paper's (true) then the targets (false).
+    pub fn all(&self) -> impl Iterator<Item = (&Claim, bool)> {
+        let paper = self.claims.iter().map(|c| (c, true));
+        paper.chain(self.targets.iter().map(|c| (c, false)))
+    }
+}
+
+fn same(a: f64, b: f64) -> bool {
+    (a - b).abs() <= 1e-9 * a.abs().max(b.abs())
+}
+
+/// The numbers written in `text` (`3.34–6.11×` gives 3.34 and 6.11; `1,024` gives 1024).
+pub fn numbers_in(text: &str) -> Vec<f64> {
+    stated_numbers(text).into_iter().map(|(n, _)| n).collect()
+}
+
+/// The numbers a test may use from its quote: each number as written, and a percentage `p%` also
+/// as the fraction p/100 and the factor 1 + p/100 ("30% faster": × 1.3).
+fn allowed_numbers(quote: &str) -> Vec<f64> {
+    let mut out = Vec::new();
+    for (n, percent) in stated_numbers(quote) {
+        out.push(n);
+        if percent {
+            out.extend([n / 100.0, 1.0 + n / 100.0]);
+        }
+    }
+    out
+}
+
+/// The numbers of `text`, each with whether a `%` follows it.
+fn stated_numbers(text: &str) -> Vec<(f64, bool)> {
+    let mut out = Vec::new();
+    let mut current = String::new();
+    let chars: Vec<char> = text.chars().collect();
+    for (i, &c) in chars.iter().enumerate() {
+        let digit_next = chars.get(i + 1).is_some_and(char::is_ascii_digit);
+        let thousands = c == ',' && !current.is_empty() && digit_next;
+        if c.is_ascii_digit() || (c == '.' && digit_next) {
+            current.push(c);
+        } else if !thousands && !current.is_empty() {
+            let percent = chars[i..].iter().find(|c| **c != ' ') == Some(&'%');
+            out.extend(current.parse::<f64>().ok().map(|n| (n, percent)));
+            current.clear();
+        }
+    }
+    out.extend(current.parse::<f64>().ok().map(|n| (n, false)));
+    out
+}
+
+/// `text` as quotes are matched against the paper: lower case, every run of whitespace one space.
+pub fn normalised(text: &str) -> String {
+    text.split_whitespace()
+        .collect::<Vec<_>>()
+        .join(" ")
+        .to_lowercase()
 }
 
 /// The 1-based line of byte offset `at` in `text`.
@@ -190,9 +330,14 @@ impl fmt::Display for Reference {
     }
 }
 
+/// The row of a reference that stands for every row of its table: the test is run once per row.
+pub const EVERY_ROW: &str = "*";
+
 #[derive(Clone, Debug, PartialEq)]
 pub enum Term {
     Number(f64),
+    /// `~N`: a bound widened by the paper's declared tolerance.
+    Tolerant(f64),
     Cell(Reference),
 }
 
@@ -219,14 +364,22 @@ impl Expression {
                 }
                 None => {
                     let end = rest.find([' ', '*', '/']).unwrap_or(rest.len());
-                    let number = rest[..end]
+                    let (tolerant, literal) = match rest[..end].strip_prefix('~') {
+                        Some(literal) => (true, literal),
+                        None => (false, &rest[..end]),
+                    };
+                    let number = literal
                         .parse::<f64>()
                         .ok()
                         .filter(|n| n.is_finite())
                         .ok_or_else(|| {
                             format!("{:?} is neither a number nor {{{{…}}}}", &rest[..end])
                         })?;
-                    (Term::Number(number), &rest[end..])
+                    let term = match tolerant {
+                        true => Term::Tolerant(number),
+                        false => Term::Number(number),
+                    };
+                    (term, &rest[end..])
                 }
             };
             terms.push(term);
@@ -247,8 +400,12 @@ impl Expression {
         })
     }
 
-    fn terms(&self) -> impl Iterator<Item = &Term> {
+    pub fn terms(&self) -> impl Iterator<Item = &Term> {
         std::iter::once(&self.first).chain(self.rest.iter().map(|(_, t)| t))
+    }
+
+    pub fn terms_mut(&mut self) -> impl Iterator<Item = &mut Term> {
+        std::iter::once(&mut self.first).chain(self.rest.iter_mut().map(|(_, t)| t))
     }
 }
 
@@ -290,13 +447,18 @@ impl Comparison {
 #[derive(Clone, Debug, PartialEq)]
 pub enum Test {
     Compare(Expression, Comparison, Expression),
-    Within(Expression, f64, f64),
+    /// `EXPR in [LOW, HIGH]`, or `in ~[LOW, HIGH]` (true): widened by the tolerance.
+    Within(Expression, f64, f64, bool),
 }
 
 impl Test {
     pub fn parse(text: &str) -> std::result::Result<Test, String> {
         if let Some((value, range)) = text.rsplit_once(" in ") {
             let range = range.trim();
+            let (tolerant, range) = match range.strip_prefix('~') {
+                Some(range) => (true, range),
+                None => (false, range),
+            };
             let inner = range
                 .strip_prefix('[')
                 .and_then(|r| r.strip_suffix(']'))
@@ -320,7 +482,7 @@ impl Test {
             if low > high {
                 return Err(format!("empty range [{low}, {high}]"));
             }
-            return Ok(Test::Within(Expression::parse(value)?, low, high));
+            return Ok(Test::Within(Expression::parse(value)?, low, high, tolerant));
         }
         for (symbol, comparison) in Comparison::ALL {
             if let Some((a, b)) = text.split_once(symbol) {
@@ -334,25 +496,89 @@ impl Test {
         Err("expected EXPR < EXPR (or <=, >, >=) or EXPR in [LOW, HIGH]".into())
     }
 
-    pub fn references(&self) -> Vec<&Reference> {
-        let expressions: Vec<&Expression> = match self {
+    fn expressions(&self) -> Vec<&Expression> {
+        match self {
             Test::Compare(a, _, b) => vec![a, b],
-            Test::Within(a, _, _) => vec![a],
-        };
-        expressions
-            .into_iter()
-            .flat_map(Expression::terms)
+            Test::Within(a, ..) => vec![a],
+        }
+    }
+
+    pub fn references(&self) -> Vec<&Reference> {
+        let terms = self.expressions().into_iter().flat_map(Expression::terms);
+        terms
             .filter_map(|t| match t {
                 Term::Cell(r) => Some(r),
-                Term::Number(_) => None,
+                _ => None,
             })
             .collect()
+    }
+
+    /// Every number literal, bounds included.
+    pub fn numbers(&self) -> Vec<f64> {
+        let terms = self.expressions().into_iter().flat_map(Expression::terms);
+        let mut numbers: Vec<f64> = terms
+            .filter_map(|t| match t {
+                Term::Number(n) | Term::Tolerant(n) => Some(*n),
+                Term::Cell(_) => None,
+            })
+            .collect();
+        if let Test::Within(_, low, high, _) = self {
+            numbers.extend([*low, *high]);
+        }
+        numbers
+    }
+
+    /// Whether a bound is widened by the tolerance.
+    pub fn is_tolerant(&self) -> bool {
+        let mut terms = self.expressions().into_iter().flat_map(Expression::terms);
+        matches!(self, Test::Within(_, _, _, true)) || terms.any(|t| matches!(t, Term::Tolerant(_)))
+    }
+
+    /// One test per row where a reference reads every row (`EVERY_ROW`): the starred references
+    /// take each of `rows` in turn; the test itself when none does.
+    pub fn per_row(&self, rows: &[String]) -> Vec<(Option<String>, Test)> {
+        if !self.references().iter().any(|r| r.row == EVERY_ROW) {
+            return vec![(None, self.clone())];
+        }
+        rows.iter()
+            .map(|row| {
+                let mut test = self.clone();
+                let expressions: Vec<&mut Expression> = match &mut test {
+                    Test::Compare(a, _, b) => vec![a, b],
+                    Test::Within(a, ..) => vec![a],
+                };
+                for term in expressions.into_iter().flat_map(Expression::terms_mut) {
+                    if let Term::Cell(r) = term {
+                        if r.row == EVERY_ROW {
+                            r.row = row.clone();
+                        }
+                    }
+                }
+                (Some(row.clone()), test)
+            })
+            .collect()
+    }
+
+    /// The first reference reading every row: whose table's rows a starred test steps through.
+    pub fn starred(&self) -> Option<&Reference> {
+        self.references().into_iter().find(|r| r.row == EVERY_ROW)
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn numbers_are_read_from_a_quote_as_written() {
+        assert_eq!(
+            numbers_in("3.34–6.11× (1,024² pixels), ~30%."),
+            [3.34, 6.11, 1024.0, 30.0]
+        );
+        assert_eq!(numbers_in("between 3x and 6x"), [3.0, 6.0]);
+        assert_eq!(normalised("Up to\n  2X"), "up to 2x");
+        assert_eq!(allowed_numbers("around 30 %, 2x"), [30.0, 0.3, 1.3, 2.0]);
+    }
 
     #[test]
     fn tests_parse_into_expressions_comparisons_and_ranges() {
@@ -376,7 +602,21 @@ mod tests {
         assert_eq!(refs[1].experiment.as_deref(), Some("fig5"));
         assert_eq!(refs[1].to_string(), "fig5 · Fig. 5 · room · P 16");
         let w = Test::parse("{{T | r | c}} * 2 in [0.5, 4]").unwrap();
-        assert!(matches!(w, Test::Within(_, 0.5, 4.0)), "{w:?}");
+        assert!(matches!(w, Test::Within(_, 0.5, 4.0, false)), "{w:?}");
+        let loose = Test::parse("{{T | * | c}} in ~[3.34, 6.11]").unwrap();
+        assert!(loose.is_tolerant());
+        assert_eq!(loose.numbers(), [3.34, 6.11]);
+        let rows = ["a".to_string(), "b".to_string()];
+        let each = loose.per_row(&rows);
+        assert_eq!(each.len(), 2);
+        assert_eq!(each[1].1.references()[0].row, "b");
+        let bound = Test::parse("{{T | r | c}} >= ~3").unwrap();
+        assert!(bound.is_tolerant());
+        assert_eq!(
+            bound.per_row(&rows).len(),
+            1,
+            "no starred row: the test itself"
+        );
         for (bad, why) in [
             ("{{T | r | c}} = 3", "expected EXPR"),
             ("{{T | r}} < 3", "expected {{table"),
@@ -397,26 +637,53 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("raylab-claims-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let path = dir.join(CLAIMS_TOML);
-        let head = "title = \"t\"\npaper = \"p\"\nexperiments = [\"a\"]\n";
+        let head = "title = \"t\"\npaper = \"p\"\npaper_text = \"p.txt\"\nexperiments = [\"a\"]\n";
+        let quoted = "item = \"X1\"\nquote = \"3.34x to 6.11x faster\"\n";
         for (body, why, line) in [
             (
-                "[[claims]]\nclaim = \"c\"\npaper = \"\"\nexperiment = \"b\"\ntests = [\"1 < 2\"]\n",
+                "[[targets]]\nclaim = \"c\"\npaper = \"\"\nexperiment = \"b\"\ntests = [\"1 < 2\"]\n",
                 "\"b\" is not in",
-                5,
+                6,
             ),
             (
-                "[[claims]]\nclaim = \"c\"\npaper = \"\"\nexperiment = \"a\"\ntests = [\"{{b | T | r | c}} < 2\"]\n",
+                "[[targets]]\nclaim = \"c\"\npaper = \"\"\nexperiment = \"a\"\ntests = [\"{{b | T | r | c}} < 2\"]\n",
                 "\"b\" is not in",
-                5,
+                6,
             ),
             (
-                "[[claims]]\nclaim = \"c\"\npaper = \"\"\nexperiment = \"a\"\ntests = []\n",
+                "[[targets]]\nclaim = \"c\"\npaper = \"\"\nexperiment = \"a\"\ntests = []\n",
                 "no tests",
-                5,
+                6,
             ),
             (
-                "[[claims]]\nclaim = \"c\"\npaper = \"\"\nexperiment = \"a\"\nverdict = \"holds\"\ntests = [\"1 < 2\"]\n",
+                "[[targets]]\nclaim = \"c\"\npaper = \"\"\nexperiment = \"a\"\nverdict = \"holds\"\ntests = [\"1 < 2\"]\n",
                 "unknown field",
+                9,
+            ),
+            (
+                "[[claims]]\nclaim = \"c\"\npaper = \"\"\nexperiment = \"a\"\ntests = [\"1 < 2\"]\n",
+                "names its item",
+                6,
+            ),
+            (
+                "[[claims]]\nitem = \"X1\"\nclaim = \"c\"\npaper = \"\"\nexperiment = \"a\"\ntests = [\"1 < 2\"]\n",
+                "quotes the paper",
+                7,
+            ),
+            // The paper says 3.34–6.11×: a window of 3 widens it.
+            (
+                &format!("[[claims]]\n{quoted}claim = \"c\"\npaper = \"\"\nexperiment = \"a\"\ntests = [\"{{{{T | * | x}}}} in [3, 6.11]\"]\n"),
+                "uses 3, a number its quote does not state",
+                8,
+            ),
+            (
+                &format!("[[claims]]\n{quoted}claim = \"c\"\npaper = \"\"\nexperiment = \"a\"\ntests = [\"{{{{T | * | x}}}} in ~[3.34, 6.11]\"]\n"),
+                "declares no tolerance",
+                8,
+            ),
+            (
+                &format!("[[targets]]\n{quoted}claim = \"c\"\npaper = \"\"\nexperiment = \"a\"\ntests = [\"1 < 2\"]\n"),
+                "a target has no item",
                 8,
             ),
         ] {
@@ -426,6 +693,12 @@ mod tests {
             assert!(e.to_string().contains(why), "{e}");
             assert!(e.to_string().contains(&format!("claims.toml:{line}")), "{e}");
         }
+        let good = format!(
+            "{head}tolerance = {{ factor = 1.5, reason = \"r\" }}\n[[claims]]\n{quoted}claim = \"c\"\npaper = \"\"\nexperiment = \"a\"\ntests = [\"{{{{T | * | x}}}} in ~[3.34, 6.11]\", \"{{{{T | r | x}}}} / 3.34 >= 1\"]\n"
+        );
+        std::fs::write(&path, good).unwrap();
+        let (claims, _) = Claims::read(&path).unwrap();
+        assert_eq!(claims.claims[0].item.as_deref(), Some("X1"));
         let _ = std::fs::remove_dir_all(&dir);
     }
 }

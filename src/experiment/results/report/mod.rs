@@ -31,6 +31,7 @@ use crate::experiment::record::files::META_JSON;
 use crate::experiment::record::files::STABILITY_CSV;
 use crate::experiment::record::files::TABLES_MD;
 use crate::experiment::record::files::{read_text, RUNS_CSV, SUMMARY_MD};
+use crate::experiment::record::settings::RunSettings;
 use blocks::Block;
 use paper::{papers_under, Paper};
 
@@ -174,6 +175,10 @@ impl Results {
             ("ISA compiled for", self.text("/cpu/features_compiled")),
             ("ISA detected", self.text("/cpu/features_detected")),
             ("threads", self.text("/threads")),
+            (
+                "settings",
+                RunSettings::of_run(&self.meta).map_or(String::new(), |s| s.shown()),
+            ),
             ("versions", versions),
             ("merged from shards", shards),
         ]
@@ -319,19 +324,33 @@ mod tests {
 
     fn run_fixture(dir: &Path) {
         fs::create_dir_all(dir).unwrap();
+        // The experiment file lays out the run's tables (`paper::computed_tables`).
+        let experiment = dir.join("toy.toml");
+        fs::write(
+            &experiment,
+            "name = \"toy\"\npaper_settings = { width = 128 }\n[[tables]]\ntitle = \"Table 1: speed\"\n\
+             row_header = \"scene\"\nrows = \"scene\"\nmetric = \"seconds_min\"\n\
+             columns = [{ label = \"ours\" }, { label = \"paper\", paper = { room = 3 } }]\n",
+        )
+        .unwrap();
         let meta = serde_json::json!({
             "experiment": "toy", "run_id": "20260101T000000Z", "date": "2026-01-01T00:00:00Z",
             "commit": { "hash": "abc123", "dirty": false }, "hostname": "node7",
             "cpu": { "model": "Some CPU", "logical_cores": 2, "features_detected": ["avx2", "avx512f"],
                      "features_compiled": ["avx2"] },
             "threads": [1, 2], "versions": { "embree": "3.13.5", "raylab": "0.1.0" },
-            "experiment_file": { "path": "experiments/toy.toml", "contents": "name = \"toy\"\n" },
+            "experiment_file": { "path": experiment.display().to_string(), "contents": "name = \"toy\"\n" },
             "overrides": { "frames": 1, "threads": null },
             "plan": { "description": "a <toy>", "instances": [{ "label": "reference" }],
+                      "width": 64, "height": 64, "frames": 1, "repeats": 5, "threads": [1, 2],
                       "scenes": [{ "name": "room", "size": 3, "triangles": 864, "ray_kinds": ["primary"], "notes": [] }] }
         });
         fs::write(dir.join(META_JSON), meta.to_string()).unwrap();
-        fs::write(dir.join(RUNS_CSV), "scene,rays\nroom,1024\n").unwrap();
+        fs::write(
+            dir.join(RUNS_CSV),
+            "scene,rays,seconds_min,seconds_median\nroom,1024,2.5,2.6\n",
+        )
+        .unwrap();
         fs::write(
             dir.join(TABLES_MD),
             "# toy: paper vs ours\n\n## Table 1: speed\n\n| scene | ours | paper |\n|---|---:|---:|\n| room | 2.50 | 3 |\n",
@@ -349,11 +368,12 @@ mod tests {
         run_fixture(&dir.join("toy"));
         fs::write(
             dir.join(claims::CLAIMS_TOML),
-            "title = \"Toy 2026\"\npaper = \"A. Toy. Toys. 2026.\"\nexperiments = [\"toy\", \"other\"]\n\
-             [[claims]]\nclaim = \"ours is as fast\"\npaper = \"3 on the room\"\nexperiment = \"toy\"\n\
+            "title = \"Toy 2026\"\npaper = \"A. Toy. Toys. 2026.\"\npaper_text = \"toy.txt\"\nexperiments = [\"toy\", \"other\"]\n\
+             [[claims]]\nitem = \"X1\"\nclaim = \"ours is as fast\"\npaper = \"3 on the room\"\nquote = \"between 2 and 4\"\nexperiment = \"toy\"\n\
              tests = [\"{{Table 1 | room | ours}} >= {{Table 1 | room | paper}}\", \"{{Table 1 | room | ours}} in [2, 4]\"]\n\
              note = \"{{Table 1 | room | ours}} against the paper's {{Table 1 | room | paper}}\"\n\
-             [[claims]]\nclaim = \"others agree\"\npaper = \"\"\nexperiment = \"other\"\ntests = [\"{{T | r | c}} > 1\"]\n",
+             [[claims]]\nitem = \"X2\"\nclaim = \"others agree\"\npaper = \"\"\nquote = \"more\"\nexperiment = \"other\"\ntests = [\"{{T | r | c}} > 1\"]\n\
+             [[not_reproducible]]\nitem = \"X10\"\nclaim = \"the toy simulator is fast\"\npaper = \"9 MHz\"\nreason = \"no simulator here\"\n",
         )
         .unwrap();
         root
@@ -372,21 +392,28 @@ mod tests {
         );
         assert!(md.contains("# Toy 2026\n\nA. Toy. Toys. 2026.\n"), "{md}");
         assert!(
-            md.contains("**2 claims: 0 hold, 1 partly, 0 differ, 1 not run.**"),
+            md.contains("**The paper: 2 claims: 0 hold, 1 partly, 0 differ, 0 within noise, 1 not run; 1 not reproducible here.**"),
+            "{md}"
+        );
+        // The item table first, in item order (X2 before X10).
+        let items = md.find("| item | the paper | its numbers").unwrap();
+        assert!(items < md.find("## Runs").unwrap(), "{md}");
+        assert!(
+            md.contains("| X1 | ours is as fast | 3 on the room | 2.5 | **partly** (reduced run: toy) |\n| X2 | others agree |  |  | **not run** |\n| X10 | the toy simulator is fast | 9 MHz | – | **not reproducible here**: no simulator here |\n"),
             "{md}"
         );
         assert!(md.contains("raylab reproduce toy2026 "), "{md}");
         assert!(
-            md.contains("| toy | 20260101T000000Z | 2026-01-01T00:00:00Z | abc123 | node7 | Some CPU | avx2 | stale: no record of the source it measured | `raylab run experiments/toy.toml --frames 1` |"),
+            md.contains(&format!("| toy | 20260101T000000Z | 2026-01-01T00:00:00Z | abc123 | node7 | Some CPU | avx2 | 64×64, 1 spp, 1 frames, 5 repeats, threads 1, 2 | reduced: width 64 < 128 | stale: no record of the source it measured; its experiment file changed since | `raylab run {} --frames 1` |", dir.join("toy").join("toy.toml").display())),
             "{md}"
         );
         assert!(md.contains("| other | not run |"), "{md}");
         assert!(
-            md.contains("| ours is as fast | 3 on the room | **partly** | [Table 1 · room · ours] ≥ [Table 1 · room · paper]: 2.5 ≥ 3 ✗<br>[Table 1 · room · ours] in [2, 4]: 2.5 in [2, 4] ✓ | 2.50 against the paper's 3 |"),
+            md.contains("| X1 | ours is as fast | 3 on the room | **partly** (reduced run: toy) | [Table 1 · room · ours] ≥ [Table 1 · room · paper]: 2.5 ≥ 3 ✗<br>[Table 1 · room · ours] in [2, 4]: 2.5 in [2, 4] ✓ | 2.50 against the paper's 3 |"),
             "{md}"
         );
         assert!(
-            md.contains("| others agree |  | **not run** | [T · r · c] > 1: not run |  |"),
+            md.contains("| X2 | others agree |  | **not run** | [T · r · c] > 1: not run |  |"),
             "{md}"
         );
         assert!(md.contains("#### Table 1: speed\n\n| scene | ours | paper |\n|---|---:|---:|\n| room | 2.50 | 3 |\n"), "{md}");
@@ -394,8 +421,19 @@ mod tests {
         assert!(md.contains("### Summary\n\nAll 1 checks passed.\n"), "{md}");
         // Same files, same report; any change to them, another digest.
         assert_eq!(markdown::report(&Paper::read(&dir).unwrap()), md);
-        fs::write(dir.join("toy").join(RUNS_CSV), "scene,rays\nroom,1025\n").unwrap();
+        fs::write(
+            dir.join("toy").join(RUNS_CSV),
+            "scene,rays,seconds_min,seconds_median\nroom,1025,2.5,2.6\n",
+        )
+        .unwrap();
         assert_ne!(Paper::read(&dir).unwrap().digest, paper.digest);
+        // So is the experiment file that lays out its tables.
+        let layout = dir.join("toy").join("toy.toml");
+        let before = Paper::read(&dir).unwrap().digest;
+        let text = fs::read_to_string(&layout).unwrap();
+        fs::write(&layout, text.replace("Table 1: speed", "Table 1: speed!")).unwrap();
+        assert_ne!(Paper::read(&dir).unwrap().digest, before);
+        fs::write(&layout, text).unwrap();
         let written = write(std::slice::from_ref(&dir), true, None).unwrap();
         assert_eq!(written, dir.join(REPORT_MD));
         // The report itself is not among its sources.
@@ -409,11 +447,11 @@ mod tests {
         assert_eq!(index, root.join(VERDICTS_MD));
         let text = fs::read_to_string(&index).unwrap();
         assert!(
-            text.contains("| report | claims | holds | partly | differs | not run |\n|---|---:|---:|---:|---:|---:|\n"),
+            text.contains("| report | claims | holds | partly | differs | within noise | not run | not reproducible here |\n|---|---:|---:|---:|---:|---:|---:|---:|\n"),
             "{text}"
         );
         assert!(
-            text.contains("](toy2026/REPORT.md) | 2 | 0 | 1 | 0 | 1 |\n"),
+            text.contains("| [Toy 2026](toy2026/REPORT.md) | 2 | 0 | 1 | 0 | 0 | 1 | 1 |\n"),
             "{text}"
         );
         // A run the claims file does not list is an error.
@@ -463,7 +501,7 @@ mod tests {
         let dir = root.join("toy2026");
         fs::write(
             dir.join(claims::CLAIMS_TOML),
-            "title = \"t\"\npaper = \"p\"\nexperiments = [\"toy\"]\n[[claims]]\nclaim = \"c\"\npaper = \"\"\nexperiment = \"toy\"\ntests = [\"{{Table 1 | kitchen | ours}} > 1\"]\n",
+            "title = \"t\"\npaper = \"p\"\nexperiments = [\"toy\"]\n[[targets]]\nclaim = \"c\"\npaper = \"\"\nexperiment = \"toy\"\ntests = [\"{{Table 1 | kitchen | ours}} > 1\"]\n",
         )
         .unwrap();
         let e = Paper::read(&dir).err().unwrap();
