@@ -115,6 +115,15 @@ pub struct DrtSettings {
     /// light sample sets, visibility apart from shading, filter and retrace; `spp` is then the
     /// light samples per pixel. `None`: one light sample per path sample.
     pub soft_shadows: Option<InterleavedShadows>,
+    /// Trace one 32×32 tile in `tiles` (1: all), on diagonals across the image (`(tx + ty) %
+    /// tiles == 0`): a stratified subset at the full resolution and sample count, for a paper's
+    /// settings that would take hours over the whole frame (speed and counts only: no RMSE).
+    pub tiles: u32,
+    /// Path tracing: the camera rays of a wave pass by pass — every pixel's sample 0, then every
+    /// pixel's sample 1, … — so that a stream of S camera rays holds S pixels once each, as
+    /// Gribble & Ramani's input buffer (§4: "M primary rays … tiles of √M × √M pixels"); false:
+    /// a pixel's samples one after another.
+    pub passes: bool,
 }
 
 impl Default for DrtSettings {
@@ -130,19 +139,25 @@ impl Default for DrtSettings {
             max_depth: 2,
             seed: 0x0D57_7ACE,
             soft_shadows: None,
+            tiles: 1,
+            passes: false,
         }
     }
 }
 
 impl DrtSettings {
-    /// The image's camera projection, its 32×32 tiles in row-major order, and how many tiles
-    /// make one wave of about `WAVE_RAYS` camera rays.
+    /// The image's camera projection, its 32×32 tiles traced (`tiles`) in row-major order, and
+    /// how many tiles make one wave of about `WAVE_RAYS` camera rays (pass by pass: of about
+    /// `WAVE_RAYS` pixels, each pass one stream's worth of distinct pixels or more).
     pub(crate) fn tile_waves(&self, camera: &Camera) -> (CameraProjection, Vec<(u32, u32)>, usize) {
         let projection = CameraProjection::new(&self.camera(camera), self.width, self.height);
         let (tiles_x, tiles_y) = projection.tiles();
-        let per_wave = WAVE_RAYS.div_ceil((TILE * TILE * self.spp) as usize).max(1);
+        let samples = if self.passes { 1 } else { self.spp };
+        let per_wave = WAVE_RAYS.div_ceil((TILE * TILE * samples) as usize).max(1);
+        let every = self.tiles;
         let tiles = (0..tiles_y)
             .flat_map(|ty| (0..tiles_x).map(move |tx| (tx, ty)))
+            .filter(|(tx, ty)| (tx + ty) % every == 0)
             .collect();
         (projection, tiles, per_wave)
     }
@@ -163,8 +178,10 @@ impl DrtSettings {
     }
 
     /// The keys of an experiment's distribution `render` table besides `renderer`.
-    pub const KEYS: [&str; 8] = [
+    pub const KEYS: [&str; 10] = [
         "spp",
+        "tiles",
+        "order",
         "aperture",
         "focus",
         "max_depth",
@@ -197,6 +214,18 @@ impl DrtSettings {
             let number = || value.parse::<f32>().map_err(|_| bad());
             match key.as_str() {
                 "spp" => s.spp = value.parse().map_err(|_| bad())?,
+                "tiles" => s.tiles = value.parse().map_err(|_| bad())?,
+                "order" => {
+                    s.passes = match value.as_str() {
+                        "pixels" => false,
+                        "passes" => true,
+                        _ => {
+                            return Err(Error::usage(format!(
+                                "render order = {value:?} is not valid (pixels or passes)"
+                            )))
+                        }
+                    }
+                }
                 "aperture" => s.aperture = Some(number()?),
                 "focus" => s.focus_distance = Some(number()?),
                 "max_depth" => s.max_depth = value.parse().map_err(|_| bad())?,
@@ -280,16 +309,27 @@ impl DrtSettings {
                 )));
             }
         }
+        if self.passes && self.integrator != Integrator::Path {
+            return Err(Error::usage(
+                "render order = \"passes\" is a path tracing order (renderer path)",
+            ));
+        }
+        if self.tiles != 1 && self.soft_shadows.is_some() {
+            return Err(Error::usage(
+                "render tiles: interleaved soft shadows filter across tiles; trace every tile",
+            ));
+        }
         if self.width == 0
             || self.height == 0
             || self.spp == 0
+            || self.tiles == 0
             || self.shade.stream == 0
             || self.shade.width == 0
             || !lens_ok
             || self.max_depth > max_depth
         {
             return Err(Error::usage(format!(
-                "{} settings out of range: width, height, spp ≥ 1, aperture ≥ 0, focus > 0, max_depth ≤ {max_depth} (got {self:?})",
+                "{} settings out of range: width, height, spp, tiles ≥ 1, aperture ≥ 0, focus > 0, max_depth ≤ {max_depth} (got {self:?})",
                 self.integrator.name()
             )));
         }

@@ -480,30 +480,39 @@ pub fn render_path(
     for wave in tiles.chunks(tiles_per_wave) {
         let mut paths = Vec::new();
         let mut current = Generation::new(RayKind::Primary);
-        for (x, y) in settings.wave_pixels(wave) {
+        let pixels: Vec<(u32, u32)> = settings.wave_pixels(wave).collect();
+        // (pixel, sample) in the wave's order: a pixel's samples together, or pass by pass.
+        let camera_samples: Vec<((u32, u32), u64)> = match settings.passes {
+            false => pixels
+                .iter()
+                .flat_map(|&p| (0..spp).map(move |s| (p, s)))
+                .collect(),
+            true => (0..spp)
+                .flat_map(|s| pixels.iter().map(move |&p| (p, s)))
+                .collect(),
+        };
+        for ((x, y), sample) in camera_samples {
             let pixel = y * settings.width + x;
-            for sample in 0..spp {
-                let index = pixel as u64 * spp + sample;
-                let u = |dim: u32| uniform(seed, index, dim);
-                let state = PathState {
-                    pixel,
-                    index,
-                    time: if geometry.is_moving() {
-                        u(DIM_TIME)
-                    } else {
-                        0.0
-                    },
-                    weight: Vec3::ONE,
-                    specular: true,
-                };
-                let ray = projection.ray(
-                    x as f32 + u(DIM_PIXEL),
-                    y as f32 + u(DIM_PIXEL + 1),
-                    (u(DIM_LENS), u(DIM_LENS + 1)),
-                );
-                paths.push(state);
-                current.push(ray, paths.len() - 1, &state);
-            }
+            let index = pixel as u64 * spp + sample;
+            let u = |dim: u32| uniform(seed, index, dim);
+            let state = PathState {
+                pixel,
+                index,
+                time: if geometry.is_moving() {
+                    u(DIM_TIME)
+                } else {
+                    0.0
+                },
+                weight: Vec3::ONE,
+                specular: true,
+            };
+            let ray = projection.ray(
+                x as f32 + u(DIM_PIXEL),
+                y as f32 + u(DIM_PIXEL + 1),
+                (u(DIM_LENS), u(DIM_LENS + 1)),
+            );
+            paths.push(state);
+            current.push(ray, paths.len() - 1, &state);
         }
         let mut colour = vec![Vec3::ZERO; paths.len()];
         for depth in 0..=settings.max_depth {

@@ -121,8 +121,14 @@ impl DistributionWorkload {
                 )))
             }
         };
+        let settings = DrtSettings::from_params(integrator, &settings, &WORKLOAD_KEYS)?;
+        if rmse && settings.tiles != 1 {
+            return Err(Error::usage(
+                "render tiles traces part of the image: its error is not the frame's (set rmse = false)",
+            ));
+        }
         Ok(DistributionWorkload {
-            settings: DrtSettings::from_params(integrator, &settings, &WORKLOAD_KEYS)?,
+            settings,
             shutter,
             rmse,
         })
@@ -164,14 +170,19 @@ impl fmt::Display for RenderWorkload {
             ),
             RenderWorkload::Distribution(w) => write!(
                 f,
-                "renderer={};aperture={};focus={};max_depth={}{};shutter={};spp={}{}",
+                "renderer={};aperture={};focus={};max_depth={}{}{};shutter={};spp={}{}{}",
                 w.settings.integrator.name(),
                 camera(w.settings.aperture),
                 camera(w.settings.focus_distance),
                 w.settings.max_depth,
+                if w.settings.passes { ";order=passes" } else { "" },
                 if w.rmse { "" } else { ";rmse=false" },
                 w.shutter.map_or("none".to_string(), |s| s.to_string()),
                 w.settings.spp,
+                match w.settings.tiles {
+                    1 => String::new(),
+                    n => format!(";tiles={n}"),
+                },
                 w.settings.soft_shadows.map_or(String::new(), |m| format!(
                     ";shadows=interleaved;sets={};filter={};retrace={}",
                     m.sets.name(),

@@ -9,10 +9,12 @@
 
 use std::path::Path;
 
+use raylab::experiment::plan::table_spec::TableSpec;
 use raylab::experiment::results::report::claims::{
-    normalised, Claims, Test, CLAIMS_TOML, EVERY_ROW,
+    normalised, numbers_in, Claims, Test, CLAIMS_TOML, EVERY_ROW,
 };
 use raylab::experiment::results::report::paper::papers_under;
+use raylab::experiment::Experiment;
 
 /// The `[[tables]]` of an experiment file: (title, row labels when listed, column labels).
 fn declared_tables(experiment: &str) -> Vec<(String, Option<Vec<String>>, Vec<String>)> {
@@ -142,4 +144,116 @@ fn every_quote_is_the_papers_own_text() {
         }
     }
     assert!(checked > 0, "no quote was checked");
+}
+
+/// The metrics that are times, or derived from times: their values carry a spread.
+const TIMED: &[&str] = &[
+    "seconds_min",
+    "seconds_median",
+    "mrays_per_s",
+    "build_plus_trace_seconds",
+    "embree_best_seconds",
+    "baseline_best_seconds",
+    "x_embree_best",
+    "x_baseline_best",
+];
+
+/// Whether `column` of `table` is a time or computed from one.
+fn is_timed(table: &TableSpec, column: &str) -> bool {
+    fn timed(table: &TableSpec, column: &str, depth: usize) -> bool {
+        let Some(c) = table.columns.iter().find(|c| c.label == column) else {
+            return false;
+        };
+        if depth > table.columns.len() || c.paper.is_some() || c.text.is_some() {
+            return false;
+        }
+        let parts: Vec<&String> = c.inputs().collect();
+        match parts.is_empty() {
+            true => c
+                .metric
+                .as_ref()
+                .or(table.metric.as_ref())
+                .is_some_and(|m| TIMED.contains(&m.as_str())),
+            false => parts.iter().any(|p| timed(table, p, depth + 1)),
+        }
+    }
+    timed(table, column, 0)
+}
+
+/// A claim that compares times compares their spread too, which needs passes to spread over:
+/// every experiment whose timed cell a claim or target reads runs at least 5 repeats (issue 43).
+#[test]
+fn every_compared_time_comes_from_at_least_five_repeats() {
+    let mut timed_references = 0;
+    for dir in papers_under(Path::new("results")).unwrap() {
+        let (claims, _) = Claims::read(&dir.join(CLAIMS_TOML)).unwrap_or_else(|e| panic!("{e}"));
+        for (claim, _) in claims.all() {
+            for test in &claim.tests {
+                for r in Test::parse(test).unwrap().references() {
+                    let name = r.experiment.as_deref().unwrap_or(&claim.experiment);
+                    let path = Path::new("experiments").join(format!("{name}.toml"));
+                    let exp = Experiment::load(&path).unwrap_or_else(|e| panic!("{e}"));
+                    let exact = exp.tables.iter().find(|t| t.title == r.table);
+                    let table =
+                        exact.or_else(|| exp.tables.iter().find(|t| t.title.starts_with(&r.table)));
+                    let Some(table) = table else { continue };
+                    if is_timed(table, &r.column) {
+                        timed_references += 1;
+                        assert!(
+                            exp.repeats >= 5,
+                            "{}: {:?} compares [{r}], a time, but {name} runs {} repeats",
+                            dir.display(),
+                            claim.claim,
+                            exp.repeats
+                        );
+                    }
+                }
+            }
+        }
+    }
+    assert!(timed_references > 0, "no claim reads a time");
+}
+
+/// The paper's numbers that tables print beside ours (`paper = { … }` columns), which claims
+/// compare with, are numbers the paper's text states.
+#[test]
+fn every_paper_column_number_is_in_the_papers_text() {
+    let Some(papers) = papers_dir() else {
+        eprintln!("no papers directory: paper columns not checked");
+        return;
+    };
+    let mut checked = 0;
+    for dir in papers_under(Path::new("results")).unwrap() {
+        let (claims, _) = Claims::read(&dir.join(CLAIMS_TOML)).unwrap_or_else(|e| panic!("{e}"));
+        let Some(file) = &claims.paper_text else {
+            continue;
+        };
+        let path = papers.join(file);
+        let stated = numbers_in(&std::fs::read_to_string(&path).unwrap());
+        for name in &claims.experiments {
+            let path = Path::new("experiments").join(format!("{name}.toml"));
+            let exp = Experiment::load(&path).unwrap_or_else(|e| panic!("{e}"));
+            for table in &exp.tables {
+                for column in &table.columns {
+                    for (row, value) in column.paper.iter().flatten() {
+                        let text = match value {
+                            toml::Value::String(s) => s.clone(),
+                            other => other.to_string(),
+                        };
+                        for n in numbers_in(&text) {
+                            assert!(
+                                stated.iter().any(|s| (s - n).abs() <= 1e-9 * n.abs().max(1.0)),
+                                "{name}: table {:?}, column {:?}, row {row:?}: {n} is not a number of {}",
+                                table.title,
+                                column.label,
+                                path.display()
+                            );
+                            checked += 1;
+                        }
+                    }
+                }
+            }
+        }
+    }
+    assert!(checked > 0, "no paper column was checked");
 }

@@ -403,3 +403,47 @@ fn shading_filters_are_counted_and_do_not_change_the_image() {
     );
     assert!(lengths[0] <= 16.0, "{lengths:?}");
 }
+
+/// Gribble & Ramani fill their input buffer with one camera ray per pixel (§4); pass by pass
+/// (`order = "passes"`), a wave's camera rays come every pixel's sample 0 first, and the image is
+/// the same, bit for bit. A tile subset (`tiles = 2`: the 32×32 tiles on every second diagonal)
+/// traces those tiles exactly as the whole frame does, and nothing else.
+#[test]
+fn pass_order_and_tile_subsets_change_which_rays_go_together_not_what_they_see() {
+    use raylab::geometry::RayKind;
+    let scene = three_material_room();
+    let settings = path_settings(64, 64, 4, 2);
+    let whole = render(&scene, "reference", &settings);
+    let by_pass = DrtSettings {
+        passes: true,
+        ..settings
+    };
+    let passes = render(&scene, "reference", &by_pass);
+    assert!(passes.image == whole.image);
+    let camera = |f: &DrtFrame| f.totals(RayKind::Primary).rays;
+    assert_eq!(camera(&passes), 64 * 64 * 4);
+    let subset = render(
+        &scene,
+        "reference",
+        &DrtSettings {
+            tiles: 2,
+            ..settings
+        },
+    );
+    assert_eq!(camera(&subset), 2 * 32 * 32 * 4, "tiles (0, 0) and (1, 1)");
+    for (i, (&ours, &all)) in subset
+        .image
+        .pixels
+        .iter()
+        .zip(&whole.image.pixels)
+        .enumerate()
+    {
+        let (x, y) = (i % 64, i / 64);
+        let traced = (x / 32 + y / 32) % 2 == 0;
+        assert_eq!(
+            ours,
+            if traced { all } else { Vec3::ZERO },
+            "pixel ({x}, {y})"
+        );
+    }
+}

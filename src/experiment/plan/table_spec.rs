@@ -96,6 +96,17 @@ pub struct ColumnSpec {
 }
 
 impl ColumnSpec {
+    /// The columns of the row it is computed from (none for a measured column).
+    pub fn inputs(&self) -> impl Iterator<Item = &String> {
+        self.ratio
+            .iter()
+            .flatten()
+            .chain(self.sum.iter().flatten())
+            .chain(self.difference.iter().flatten())
+            .chain(self.min.iter().flatten())
+            .chain(&self.inverse)
+    }
+
     /// Computed from other columns of the row rather than measured.
     pub fn derived(&self) -> bool {
         self.ratio.is_some()
@@ -142,14 +153,7 @@ impl TableSpec {
             if let Some(field) = &c.text {
                 check_field(field, &what)?;
             }
-            let refs = c
-                .ratio
-                .iter()
-                .flatten()
-                .chain(c.sum.iter().flatten())
-                .chain(c.difference.iter().flatten())
-                .chain(c.min.iter().flatten())
-                .chain(&c.inverse);
+            let refs = c.inputs();
             for r in refs {
                 if !labels.contains(&r.as_str()) || *r == c.label {
                     return Err(Error::usage(format!(

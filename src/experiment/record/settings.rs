@@ -27,6 +27,8 @@ pub struct RunSettings {
     pub height: u64,
     /// The largest `spp` of its render workloads (1 without).
     pub spp: u64,
+    /// One 32×32 tile in this many traced (`tiles=` of a render workload; 1: the whole image).
+    pub tiles: u64,
     /// Light samples per point, when it traced soft shadows.
     pub shadow_samples: Option<u64>,
     pub frames: u64,
@@ -62,12 +64,13 @@ impl RunSettings {
     pub fn of_run(meta: &Value) -> Option<RunSettings> {
         let plan = meta.get("plan")?;
         let number = |key: &str| plan.get(key).and_then(Value::as_u64).unwrap_or(0);
-        let spp = match plan.get("renders") {
+        // The largest `key=` of the render workloads.
+        let render = |key: &str| match plan.get("renders") {
             Some(Value::Array(renders)) => renders
                 .iter()
                 .filter_map(Value::as_str)
                 .flat_map(|r| r.split(';'))
-                .filter_map(|kv| kv.strip_prefix("spp="))
+                .filter_map(|kv| kv.strip_prefix(key)?.strip_prefix('='))
                 .filter_map(|n| n.parse::<u64>().ok())
                 .max(),
             _ => None,
@@ -95,7 +98,8 @@ impl RunSettings {
         Some(RunSettings {
             width: number("width"),
             height: number("height"),
-            spp: spp.unwrap_or(1),
+            spp: render("spp").unwrap_or(1),
+            tiles: render("tiles").unwrap_or(1),
             shadow_samples,
             frames: number("frames"),
             repeats: number("repeats"),
@@ -105,10 +109,11 @@ impl RunSettings {
 
     /// "1024×1024, 64 spp, 16 shadow samples, 3 frames, 5 repeats, threads 1, 2".
     pub fn shown(&self) -> String {
-        let mut parts = vec![
-            format!("{}×{}", self.width, self.height),
-            format!("{} spp", self.spp),
-        ];
+        let mut parts = vec![format!("{}×{}", self.width, self.height)];
+        if self.tiles > 1 {
+            parts.push(format!("1 tile in {} traced", self.tiles));
+        }
+        parts.push(format!("{} spp", self.spp));
         if let Some(n) = self.shadow_samples {
             parts.push(format!("{n} shadow samples"));
         }
@@ -209,6 +214,14 @@ mod tests {
             RunSettings::of_run(&full).unwrap().shown(),
             "1024×1024, 64 spp, 1 frames, 5 repeats, threads 1, 2"
         );
+        // A stratified tile subset at the paper's resolution and samples: the paper's settings,
+        // and it says so.
+        let subset = meta(1024, &["renderer=path;order=passes;spp=64;tiles=16"], "");
+        assert_eq!(label(&subset, paper), Label::Paper);
+        assert!(RunSettings::of_run(&subset)
+            .unwrap()
+            .shown()
+            .starts_with("1024×1024, 1 tile in 16 traced, 64 spp"));
         // Soft shadows: the file's samples, or the default when it names none.
         let shadows = "paper_settings = { shadow_samples = 64 }\n";
         let m = meta(

@@ -267,9 +267,8 @@ impl<'de, T: Deserialize<'de> + From<String>> Deserialize<'de> for NameOr<T> {
 }
 
 impl Experiment {
-    /// Reads and checks an experiment file.
     /// The largest ray batch of the run: a frame's camera rays, times the light samples of
-    /// the soft-shadow workload or a distribution render's samples per pixel.
+    /// the soft-shadow workload or a distribution render's samples per pixel (over its tiles).
     pub fn largest_batch(&self) -> u64 {
         let pixels = self.width as u64 * self.height as u64;
         let soft = if self.ray_kinds.contains(&RayKind::SoftShadow) {
@@ -281,7 +280,10 @@ impl Experiment {
             .renders
             .iter()
             .map(|r| match r {
-                RenderWorkload::Distribution(d) => d.settings.spp as u64,
+                // A tile subset traces about one pixel in `tiles`.
+                RenderWorkload::Distribution(d) => {
+                    (d.settings.spp as u64).div_ceil(d.settings.tiles as u64)
+                }
                 RenderWorkload::Whitted(_) => 1,
             })
             .max()
@@ -289,6 +291,7 @@ impl Experiment {
         pixels.saturating_mul(soft.max(spp))
     }
 
+    /// Reads and checks an experiment file.
     pub fn load(path: &Path) -> Result<Experiment> {
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
         Experiment::parse(path, &text)

@@ -248,9 +248,33 @@ fn allowed_numbers(quote: &str) -> Vec<f64> {
     out
 }
 
-/// The numbers of `text`, each with whether a `%` follows it.
+/// Numbers a paper writes as words ("a factor of two").
+const NUMBER_WORDS: [(&str, f64); 12] = [
+    ("two", 2.0),
+    ("three", 3.0),
+    ("four", 4.0),
+    ("five", 5.0),
+    ("six", 6.0),
+    ("seven", 7.0),
+    ("eight", 8.0),
+    ("nine", 9.0),
+    ("ten", 10.0),
+    ("twice", 2.0),
+    ("half", 0.5),
+    ("hundred", 100.0),
+];
+
+/// The numbers of `text`, each with whether a `%` follows it: written in digits, or as a word of
+/// `NUMBER_WORDS`.
 fn stated_numbers(text: &str) -> Vec<(f64, bool)> {
-    let mut out = Vec::new();
+    let words = text.split(|c: char| !c.is_alphabetic()).filter_map(|w| {
+        let w = w.to_lowercase();
+        NUMBER_WORDS
+            .iter()
+            .find(|(name, _)| *name == w)
+            .map(|&(_, n)| (n, false))
+    });
+    let mut out: Vec<(f64, bool)> = words.collect();
     let mut current = String::new();
     let chars: Vec<char> = text.chars().collect();
     for (i, &c) in chars.iter().enumerate() {
@@ -576,6 +600,7 @@ mod tests {
             [3.34, 6.11, 1024.0, 30.0]
         );
         assert_eq!(numbers_in("between 3x and 6x"), [3.0, 6.0]);
+        assert_eq!(numbers_in("the factor of two, a 2x"), [2.0, 2.0]);
         assert_eq!(normalised("Up to\n  2X"), "up to 2x");
         assert_eq!(allowed_numbers("around 30 %, 2x"), [30.0, 0.3, 1.3, 2.0]);
     }
