@@ -110,6 +110,12 @@ fn count(traversal: Traversal, width: usize) -> (Counts, Vec<Hit>) {
     assert_eq!(c.rays, 16);
     assert_eq!(c.get(Event::Packets), 1);
     assert_eq!(c.get(Event::BoxesCulled), 0);
+    // One triangle per leaf, read once by the packet at each leaf it reaches.
+    assert_eq!(
+        c.get(Event::TrianglesAccessed),
+        c.get(Event::LeavesVisited),
+        "{traversal:?}"
+    );
     let counts = Counts {
         nodes: c.nodes_visited,
         box_lanes: c.aabb_tests,

@@ -287,6 +287,9 @@ impl<const L: usize, R: RayTests> Packet<L, R> {
         // largest one (`max_t`) still holds, so its recount over every SIMD ray is skipped.
         let mut found = 0;
         for i in triangles {
+            if S::ENABLED {
+                stats.event(Event::TrianglesAccessed, 1);
+            }
             let tri = &bvh.triangles[i];
             // A moving triangle is not where `tri` says at the rays' times: no triangle culling
             // (boxes are swept, so box culling stays exact).
