@@ -129,7 +129,7 @@ pub fn status(reasons: &[String]) -> String {
 
 /// The experiment file the run (`meta`) recorded, as it reads now (from the working directory the
 /// run was made in: `None` when it cannot be read from here).
-pub fn experiment_now(meta: &Value) -> Option<String> {
+fn experiment_now(meta: &Value) -> Option<String> {
     let path = meta
         .pointer("/experiment_file/path")
         .and_then(Value::as_str)?;

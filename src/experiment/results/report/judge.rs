@@ -68,12 +68,19 @@ pub fn judge(claim: &Claim, runs: &Runs, tolerance: Option<&Tolerance>) -> Resul
             });
             continue;
         }
-        let rows = match written_test.starred() {
-            Some(r) => table(r, claim, runs)?
-                .rows
-                .iter()
-                .map(|(label, _)| label.clone())
-                .collect(),
+        let rows: Vec<String> = match written_test.starred() {
+            Some(r) => {
+                let rows: Vec<String> = table(r, claim, runs)?
+                    .rows
+                    .iter()
+                    .map(|(label, _)| label.clone())
+                    .collect();
+                // No rows would leave the claim without a test: no verdict can follow from that.
+                if rows.is_empty() {
+                    return Err(format!("[{r}] reads every row of a table with none"));
+                }
+                rows
+            }
             None => Vec::new(),
         };
         for (_, test) in written_test.per_row(&rows) {
@@ -420,7 +427,10 @@ mod tests {
     #[test]
     fn verdicts_follow_from_how_many_tests_pass() {
         let a = museum();
-        let b = [table("Fig. 5", &["x"], vec![("room", vec![Cell::Missing])])];
+        let b = [
+            table("Fig. 5", &["x"], vec![("room", vec![Cell::Missing])]),
+            table("Empty", &["x"], vec![]),
+        ];
         let runs: Runs = [("a", &a[..]), ("b", &b[..])].into_iter().collect();
         // Partition faster than Ranged at 2 threads only: partly.
         let partly = judge(
@@ -487,6 +497,7 @@ mod tests {
             ),
             ("{{Table 2 | 3 | benefit}} > 0", "no cell at row \"3\""),
             ("{{Table 2 | 1 | benefit}} / 0 > 0", "is not finite"),
+            ("{{b | Empty | * | x}} > 0", "a table with none"),
         ] {
             let e = judge(&claim(&[test], ""), &runs, None).unwrap_err();
             assert!(e.contains(why), "{test}: {e}");
