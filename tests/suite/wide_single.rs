@@ -44,6 +44,7 @@ fn eight_walls() -> Arc<Bvh> {
     let config = BvhConfig {
         max_leaf_size: 1,
         presplit: 0.0,
+        spatial: 0.0,
         ..BvhConfig::default()
     };
     Arc::new(Bvh::build(&tris, config))
@@ -70,16 +71,17 @@ fn counted(tracer: &dyn Tracer, ray: Ray, any: bool) -> (Hit, bool, [u64; 3]) {
 /// Worked by hand. A ray along +x at (y, z) = (0.75, 0.75) from x = −1 meets every wall's box,
 /// misses the even triangles and hits the odd ones.
 ///
-/// - 8-wide: the root tests its 8 children (8 box tests), pushes them far to near, pops wall 0
-///   (a leaf: its triangle misses), wall 1 (hits at t = 11), then skips walls 2–7, whose entry
-///   (21 … 71) lies beyond the hit, untested: 3 nodes, 8 box tests, 2 triangle tests.
+/// - 8-wide: the root tests its 8 children (8 box tests), pushes 7 far to near and enters the
+///   nearest, wall 0 (a leaf: its triangle misses), pops wall 1 (hits at t = 11), then skips
+///   walls 2–7, whose entry (21 … 71) lies beyond the hit, untested: 3 nodes, 8 box tests, 2
+///   triangle tests.
 /// - 4-wide: the root tests its 4 children (4), enters the nearest (walls 0 and 1: 2 more box
 ///   tests), its two leaves as above, then skips the root's other 3 children: 4 nodes, 6 box
 ///   tests, 2 triangle tests.
 /// - Along −x from x = 101 the order is reversed: wall 7 first, hit at t = 31; in the 8-wide
 ///   tree 2 nodes, 8 box tests, 1 triangle test.
-/// - Occlusion pushes the children met unsorted, in slot order, and stops at the first hit: the
-///   last slot is popped first, wall 7, a hit. 8-wide: 2 nodes, 8 box tests, 1 triangle test
+/// - Occlusion takes the children met unsorted, in slot order, entering the last slot and
+///   stopping at the first hit: wall 7, a hit. 8-wide: 2 nodes, 8 box tests, 1 triangle test
 ///   either way. 4-wide forward: the root's 4 box tests, its last child (walls 6 and 7: 2 box
 ///   tests), wall 7: 3 nodes, 6 box tests, 1 triangle test. With `tmax` = 5 along +x nothing is
 ///   met beyond wall 0: in the 8-wide tree 2 nodes, 8 box tests, 1 triangle test, a miss.

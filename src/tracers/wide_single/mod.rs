@@ -247,11 +247,59 @@ pub fn trace_wide<const W: usize, R: RayTests, S: Stats, const ANY: bool>(
         }
         let (enter, hit) = boxes.test::<R, W>(cell, tmin, tmax);
         let mut hit = hit & slots;
-        if hit != 0 && hit & (hit - 1) == 0 {
-            // One child met (the common case on incoherent rays): straight into it, no stack
-            // round trip. Its entry lies within the closest hit, so nothing is skipped that the
-            // pop below would not skip either.
+        // The child entered at once, without a stack round trip (0: none): a lone one met (the
+        // common case on incoherent rays); for occlusion, the last one met, the others pushed
+        // below in slot order (Embree's any-hit traversal is unsorted too; entering it measured
+        // 3–9% faster than popping it). Its entry lies within the closest hit, so nothing is
+        // skipped that the pop below would not skip either.
+        let entered = if ANY && hit != 0 {
+            let last = 1 << (31 - hit.leading_zeros());
+            hit &= !last;
+            last
+        } else if hit & hit.wrapping_sub(1) == 0 {
+            std::mem::take(&mut hit)
+        } else {
+            0
+        };
+        // Push the other children met, keeping this node's run of the stack sorted far to near
+        // (equal entries: the later slot first, as popped); occlusion's unsorted, in slot order:
+        // any hit ends it, so near-first order buys little and the sort costs every node.
+        let base = top;
+        while hit != 0 {
             let c = hit.trailing_zeros() as usize;
+            hit &= hit - 1;
+            let child = Pending {
+                first: cell.first[c],
+                count: cell.count[c],
+                enter: enter[c],
+            };
+            // Its node or triangles are read soon (the nearest child next): start the loads
+            // now, so the children's misses overlap.
+            if child.count == 0 {
+                prefetch_node(&wide.nodes[child.first as usize]);
+            } else {
+                prefetch_triangles(bvh, child.first, child.count);
+            }
+            let mut at = top;
+            // SAFETY: entries base..top were written by this loop.
+            while !ANY
+                && at > base
+                && unsafe { stack[at - 1].assume_init_ref() }.enter < child.enter
+            {
+                stack[at] = stack[at - 1];
+                if S::ENABLED {
+                    depths[at] = depths[at - 1];
+                }
+                at -= 1;
+            }
+            stack[at].write(child);
+            if S::ENABLED {
+                depths[at].write(depth + 1);
+            }
+            top += 1;
+        }
+        if entered != 0 {
+            let c = entered.trailing_zeros() as usize;
             if cell.count[c] == 0 {
                 (node, slots) = (cell.first[c], u32::MAX);
                 continue;
@@ -263,45 +311,6 @@ pub fn trace_wide<const W: usize, R: RayTests, S: Stats, const ANY: bool>(
             };
             if visit_leaf::<R, S, ANY>(bvh, &ray.leaf, leaf, &mut tmax, &mut best, stats) {
                 return best;
-            }
-        } else {
-            // Push the children met, keeping this node's run of the stack sorted far to near
-            // (equal entries: the later slot first, as popped). Occlusion (`ANY`) pushes them
-            // unsorted, in slot order, as Embree's any-hit traversal does: any hit ends it, so
-            // near-first order buys little and the sort costs every node.
-            let base = top;
-            while hit != 0 {
-                let c = hit.trailing_zeros() as usize;
-                hit &= hit - 1;
-                let child = Pending {
-                    first: cell.first[c],
-                    count: cell.count[c],
-                    enter: enter[c],
-                };
-                // Its node or triangles are read soon (the nearest child next): start the loads
-                // now, so the children's misses overlap.
-                if child.count == 0 {
-                    prefetch_node(&wide.nodes[child.first as usize]);
-                } else {
-                    prefetch_triangles(bvh, child.first, child.count);
-                }
-                let mut at = top;
-                // SAFETY: entries base..top were written by this loop.
-                while !ANY
-                    && at > base
-                    && unsafe { stack[at - 1].assume_init_ref() }.enter < child.enter
-                {
-                    stack[at] = stack[at - 1];
-                    if S::ENABLED {
-                        depths[at] = depths[at - 1];
-                    }
-                    at -= 1;
-                }
-                stack[at].write(child);
-                if S::ENABLED {
-                    depths[at].write(depth + 1);
-                }
-                top += 1;
             }
         }
         // Pop the nearest, skipping children now beyond the closest hit, until an interior node.

@@ -1,7 +1,7 @@
 //! One ray against all `W` child boxes of a wide node (`accel::WideNode`'s structure-of-arrays
 //! lanes) in one SIMD slab test: the conservative slab test of `RayBoxTest::hit` (Ize 2013) with
 //! the boxes in the lanes instead of the rays. Per axis the near and far planes are picked by the
-//! ray's direction sign bit (so −0.0 counts as negative) and every lane runs the scalar test's
+//! ray's direction sign bit (so −0.0 counts as negative), once per ray, as rows of the node's planes, and every lane runs the scalar test's
 //! operations in its order — `(plane − origin) · inverse direction`, far distances scaled by
 //! `FAR_SCALE`, running max/min that ignore a NaN (`0·∞` for an origin on a slab plane) — so each
 //! child's verdict is `RayBoxTest`'s. With `robust = false` (`Fast`) the far distances are not
@@ -29,6 +29,10 @@ use crate::lanes::BroadcastRay;
 #[derive(Clone, Copy)]
 pub struct WideRayTest {
     sse: BroadcastRay<Lanes4>,
+    /// Per axis, the rows of `WideNode::planes` holding the near and far planes: the low planes
+    /// `a` and high `3 + a` for a direction of positive sign, the other way round for a negative
+    /// one (Embree's per-ray `nearX`/`farX` offsets). Each is below 6 (`from_inv`).
+    rows: [[usize; 3]; 2],
     /// Origin and reciprocal direction in AVX lanes; the sign bits are `sse`'s (a second copy
     /// cost every ray its stores: 0.2% more instructions on diffuse rays).
     #[cfg(target_feature = "avx2")]
@@ -44,8 +48,15 @@ impl WideRayTest {
     /// As `new`, from the reciprocal direction `inv = 1 / dir`.
     #[inline(always)]
     pub fn from_inv(origin: Vec3, inv: Vec3) -> Self {
+        let sse = BroadcastRay::from_inv(origin, inv);
+        let near = sse.negative.map(usize::from);
+        let rows = [
+            [3 * near[0], 1 + 3 * near[1], 2 + 3 * near[2]],
+            [3 - 3 * near[0], 4 - 3 * near[1], 5 - 3 * near[2]],
+        ];
         WideRayTest {
-            sse: BroadcastRay::from_inv(origin, inv),
+            sse,
+            rows,
             #[cfg(target_feature = "avx2")]
             avx: [origin, inv].map(|v| v.to_array().map(Avx2::splat)),
         }
@@ -61,25 +72,24 @@ impl WideRayTest {
         tmin: f32,
         tmax: f32,
     ) -> ([f32; W], u32) {
-        let negative = &self.sse.negative;
         #[cfg(target_feature = "avx2")]
         if W.is_multiple_of(8) {
-            return test_in::<R, _, W>(&self.avx, negative, node, tmin, tmax);
+            return test_in::<R, _, W>(&self.avx, &self.rows, node, tmin, tmax);
         }
         let sse = [self.sse.origin, self.sse.inv_dir];
-        test_in::<R, _, W>(&sse, negative, node, tmin, tmax)
+        test_in::<R, _, W>(&sse, &self.rows, node, tmin, tmax)
     }
 }
 
 /// `WideRayTest::test` in groups of `V::WIDTH` children, the ray's origin and reciprocal
-/// direction broadcast to `V`'s lanes (`[origin, inv_dir][axis]`), its direction's sign bits
-/// `negative`. Per lane the operations of `RayBoxTest::hit_with::<R>`: `max`/`min` are
+/// direction broadcast to `V`'s lanes (`[origin, inv_dir][axis]`), its near and far plane rows
+/// `[near, far][axis]` (`WideRayTest::rows`, each below 6). Per lane the operations of `RayBoxTest::hit_with::<R>`: `max`/`min` are
 /// MAXPS/MINPS (`Vector`), which return their second operand when either is NaN, and `le` is
 /// ordered (false on NaN).
 #[inline(always)]
 fn test_in<R: RayTests, V: Vector, const W: usize>(
     [origin, inv_dir]: &[[V; 3]; 2],
-    negative: &[bool; 3],
+    [near_rows, far_rows]: &[[usize; 3]; 2],
     node: &WideNode<W>,
     tmin: f32,
     tmax: f32,
@@ -93,14 +103,17 @@ fn test_in<R: RayTests, V: Vector, const W: usize>(
     let mut enter = [0.0f32; W];
     let mut hit = 0u32;
     let far_scale = V::splat(R::FAR_SCALE);
+    let planes = node.planes();
     for group in (0..W).step_by(V::WIDTH) {
         let mut near_max = V::splat(tmin);
         let mut far_min = V::splat(tmax);
         for a in 0..3 {
-            let (near, far) = if negative[a] {
-                (&node.hi[a], &node.lo[a])
-            } else {
-                (&node.lo[a], &node.hi[a])
+            // SAFETY: both rows are below 6 (`WideRayTest::rows`): no bounds check per node.
+            let (near, far) = unsafe {
+                (
+                    planes.get_unchecked(near_rows[a]),
+                    planes.get_unchecked(far_rows[a]),
+                )
             };
             let (o, inv) = (origin[a], inv_dir[a]);
             let t_near = (V::load(near, group) - o) * inv;
@@ -144,21 +157,21 @@ mod tests {
         vec![
             ("test", true, |r, n, t0, t1| r.test::<Robust, 8>(n, t0, t1)),
             ("sse", true, |r, n, t0, t1| {
-                test_in::<Robust, _, 8>(&sse(r), &r.sse.negative, n, t0, t1)
+                test_in::<Robust, _, 8>(&sse(r), &r.rows, n, t0, t1)
             }),
             #[cfg(target_feature = "avx2")]
             ("avx2", true, |r, n, t0, t1| {
-                test_in::<Robust, _, 8>(&r.avx, &r.sse.negative, n, t0, t1)
+                test_in::<Robust, _, 8>(&r.avx, &r.rows, n, t0, t1)
             }),
             ("fast test", false, |r, n, t0, t1| {
                 r.test::<Fast, 8>(n, t0, t1)
             }),
             ("fast sse", false, |r, n, t0, t1| {
-                test_in::<Fast, _, 8>(&sse(r), &r.sse.negative, n, t0, t1)
+                test_in::<Fast, _, 8>(&sse(r), &r.rows, n, t0, t1)
             }),
             #[cfg(target_feature = "avx2")]
             ("fast avx2", false, |r, n, t0, t1| {
-                test_in::<Fast, _, 8>(&r.avx, &r.sse.negative, n, t0, t1)
+                test_in::<Fast, _, 8>(&r.avx, &r.rows, n, t0, t1)
             }),
         ]
     }
