@@ -2,8 +2,8 @@
 //! hierarchies"). Leaf size and maximum depth are configurable because later work compares deep
 //! and shallow trees; every node knows its depth for the per-depth histograms. Beyond the papers'
 //! plain SAH (`presplit = 0`, `spatial = 0`): early split clipping before the build (`presplit`,
-//! on by default) and spatial splits during it (`spatial_split`, the SBVH, off by default); with
-//! either, a triangle may be referenced by several leaves, each holding the box of its part only.
+//! off by default) and spatial splits during it (`spatial_split`, the SBVH, on by default: with 32
+//! bins it gave the fewest visits of the settings measured, docs/REFERENCE.md); with either, a triangle may be referenced by several leaves, each holding the box of its part only.
 //! `sah_cost` measures the result. `builder = "embree"` builds the same layout with Embree's own
 //! builder instead (`accel::embree::build_bvh`), to tell tree quality from traversal speed.
 //!
@@ -25,7 +25,13 @@ use crate::params::Params;
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum BvhBuilder {
     Raylab,
+    /// Embree's builder with our leaf policy: leaves priced per triangle, of 1 to `leaf_size`.
     Embree,
+    /// Embree's builder with the leaf policy of Embree's own triangle scenes
+    /// (`BVH8Triangle4SceneBuilderSAH`): leaves priced per block of 4 triangles and never split
+    /// at 4 or fewer (`sahBlockSize 4, minLeafSize 4`), of up to `leaf_size` (28 for Embree's 7
+    /// blocks), so that the tree Embree's kernel walks can be walked by ours.
+    EmbreeBlocks,
 }
 
 impl BvhBuilder {
@@ -33,7 +39,13 @@ impl BvhBuilder {
         match self {
             BvhBuilder::Raylab => "raylab",
             BvhBuilder::Embree => "embree",
+            BvhBuilder::EmbreeBlocks => "embree-blocks",
         }
+    }
+
+    /// Whether Embree's `rtcBuildBVH` builds the tree.
+    pub fn is_embree(self) -> bool {
+        self != BvhBuilder::Raylab
     }
 }
 
@@ -62,9 +74,9 @@ impl Default for BvhConfig {
             builder: BvhBuilder::Raylab,
             max_leaf_size: 4,
             max_depth: 48,
-            bins: 16,
-            presplit: 0.5,
-            spatial: 0.0,
+            bins: 32,
+            presplit: 0.0,
+            spatial: 1e-5,
         }
     }
 }
@@ -87,19 +99,23 @@ impl BvhConfig {
     pub const RAYLAB_ONLY: &'static [&'static str] = &["bins", "presplit", "spatial"];
     /// Embree's `RTC_BUILD_MAX_PRIMITIVES_PER_LEAF`: its builder's largest leaf.
     pub const EMBREE_LEAF_LIMIT: usize = 32;
+    /// Triangles per leaf block of Embree's triangle scenes (`Triangle4`): `embree-blocks`
+    /// prices leaves in these and never splits this many or fewer.
+    pub const EMBREE_BLOCK: usize = 4;
 
     pub fn from_params(p: &Params) -> Result<Self> {
         let d = BvhConfig::default();
         let builder = match p.0.get("builder").map(String::as_str) {
             None | Some("raylab") => BvhBuilder::Raylab,
             Some("embree") => BvhBuilder::Embree,
+            Some("embree-blocks") => BvhBuilder::EmbreeBlocks,
             Some(other) => {
                 return Err(Error::usage(format!(
-                    "parameter builder = {other:?} is not a BVH builder (raylab or embree)"
+                    "parameter builder = {other:?} is not a BVH builder (raylab, embree or embree-blocks)"
                 )))
             }
         };
-        if builder == BvhBuilder::Embree {
+        if builder.is_embree() {
             if let Some(key) = Self::RAYLAB_ONLY.iter().find(|k| p.0.contains_key(**k)) {
                 return Err(Error::usage(format!(
                     "parameter {key} is not used by builder = \"embree\" (Embree's builder bins and \
@@ -117,10 +133,18 @@ impl BvhConfig {
         };
         let presplit_ok = c.presplit.is_finite() && (0.0..=16.0).contains(&c.presplit);
         let spatial_ok = c.spatial.is_finite() && (0.0..=1.0).contains(&c.spatial);
-        if builder == BvhBuilder::Embree && c.max_leaf_size > Self::EMBREE_LEAF_LIMIT {
+        if builder.is_embree() && c.max_leaf_size > Self::EMBREE_LEAF_LIMIT {
             return Err(Error::usage(format!(
-                "builder = \"embree\" makes leaves of at most {} triangles (got leaf_size = {})",
+                "builder = \"{}\" makes leaves of at most {} triangles (got leaf_size = {})",
+                builder.name(),
                 Self::EMBREE_LEAF_LIMIT,
+                c.max_leaf_size
+            )));
+        }
+        if builder == BvhBuilder::EmbreeBlocks && c.max_leaf_size < Self::EMBREE_BLOCK {
+            return Err(Error::usage(format!(
+                "builder = \"embree-blocks\" never splits {0} or fewer triangles: leaf_size must be at least {0} (got {1})",
+                Self::EMBREE_BLOCK,
                 c.max_leaf_size
             )));
         }
@@ -143,9 +167,10 @@ impl BvhConfig {
     pub fn for_moving(self) -> Result<Self> {
         match self.builder {
             BvhBuilder::Raylab => Ok(self),
-            BvhBuilder::Embree => Err(Error::usage(
-                "builder = \"embree\" has no motion blur: a moving mesh needs builder = \"raylab\"",
-            )),
+            BvhBuilder::Embree | BvhBuilder::EmbreeBlocks => Err(Error::usage(format!(
+                "builder = \"{}\" has no motion blur: a moving mesh needs builder = \"raylab\"",
+                self.builder.name()
+            ))),
         }
     }
 }
@@ -317,7 +342,9 @@ impl Bvh {
     pub fn build_with(triangles: &[Triangle], config: BvhConfig) -> Result<Bvh> {
         match config.builder {
             BvhBuilder::Raylab => Ok(Self::build(triangles, config)),
-            BvhBuilder::Embree => super::embree::build_bvh(triangles, config),
+            BvhBuilder::Embree | BvhBuilder::EmbreeBlocks => {
+                super::embree::build_bvh(triangles, config)
+            }
         }
     }
 
@@ -601,6 +628,7 @@ mod tests {
         let tris = grid_of_triangles(5000);
         let unsplit = BvhConfig {
             presplit: 0.0,
+            spatial: 0.0,
             ..BvhConfig::default()
         };
         for config in [

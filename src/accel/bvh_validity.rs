@@ -134,8 +134,8 @@ mod tests {
         for config in [
             BvhConfig::default(),
             BvhConfig {
-                presplit: 0.0,
-                spatial: 1e-5,
+                presplit: 0.5,
+                spatial: 0.0,
                 ..BvhConfig::default()
             },
         ] {

@@ -527,9 +527,11 @@ fn longer_streams_fill_more_lanes_on_camera_rays() {
         let (long, long_len) = measure(width, 4096);
         assert!(long_len > 2.0 * short_len, "width {width}");
         assert!(long[0] > short[0] && long[1] > short[1], "width {width}");
+        // 0.77 on the default tree (with spatial splits since issue 45), above 0.8 on the
+        // unsplit tree this bound was first set on.
         if width == 16 {
             assert!(
-                long[0] > 0.8,
+                long[0] > 0.75,
                 "16-wide traversal of 64×64 streams: {:?}",
                 long
             );

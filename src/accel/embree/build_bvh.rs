@@ -8,6 +8,9 @@
 //! default, `max_spatial_split_replications`), branching factor 2 (our binary layout, so the wide
 //! collapse works unchanged), and our SAH constants: traversal 1, intersection 1 per triangle
 //! (`sahBlockSize` 1), `minLeafSize` 1, `maxLeafSize` = `leaf_size`, `maxDepth` from `max_depth`.
+//! `builder = "embree-blocks"` takes the leaf policy of Embree's own triangle scenes instead
+//! (`sahBlockSize` 4, `minLeafSize` 4: leaves priced in blocks of 4 triangles, a node of 4 or fewer
+//! never split), so the tree Embree's kernel walks can be walked by ours too (issue 45).
 //! A straddling triangle is split by our SBVH's own splitter (`spatial_split::split_reference`), so
 //! each part keeps the box of the part of the triangle on its side, as in our spatial splits.
 //!
@@ -28,7 +31,7 @@ use super::ffi::{
     RTCThreadLocalAllocator, RTCBVH,
 };
 use super::Device;
-use crate::accel::bvh::{Bvh, BvhConfig, BvhNode};
+use crate::accel::bvh::{Bvh, BvhBuilder, BvhConfig, BvhNode};
 use crate::accel::presplit::Reference;
 use crate::accel::spatial_split::split_reference;
 use crate::error::{Error, Result};
@@ -263,6 +266,11 @@ fn build_in(
         };
     }
     let context = Context { triangles };
+    // Leaves priced per triangle (ours) or per block of 4, never split at 4 or fewer (Embree's).
+    let block = match config.builder {
+        BvhBuilder::EmbreeBlocks => BvhConfig::EMBREE_BLOCK,
+        _ => 1,
+    };
     // SAFETY: a valid device.
     let handle = BvhHandle(unsafe { ffi::rtcNewBVH(device.raw()) });
     device.check("creating a BVH for rtcBuildBVH")?;
@@ -273,8 +281,8 @@ fn build_in(
         maxBranchingFactor: 2,
         // Embree counts the root as depth 1, we count it as 0.
         maxDepth: (config.max_depth + 1) as c_uint,
-        sahBlockSize: 1,
-        minLeafSize: 1,
+        sahBlockSize: block as c_uint,
+        minLeafSize: block as c_uint,
         maxLeafSize: config.max_leaf_size as c_uint,
         traversalCost: 1.0,
         intersectionCost: 1.0,
@@ -377,7 +385,6 @@ unsafe fn lay_out(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::accel::bvh::BvhBuilder;
     use crate::accel::bvh_validity;
     use crate::accel::wide_bvh::WideBvh;
     use crate::geometry::{RayBoxTest, WatertightRay};
@@ -575,6 +582,45 @@ mod tests {
         .unwrap_err();
         assert_eq!(err.exit_code(), 1);
         assert!(err.to_string().contains("depth"), "{err}");
+    }
+
+    /// Embree's own leaf policy: no interior node holds 4 or fewer triangle references (such a
+    /// node is a leaf), the leaves stay within `leaf_size`, and the tree is valid; our policy on
+    /// the same mesh does split small nodes, so the test tells the two apart.
+    #[test]
+    fn embree_blocks_never_split_four_or_fewer() {
+        let tris = slivers_over_small_triangles(8);
+        let interior_with_few = |bvh: &Bvh| {
+            // References under each node, children before parents (children follow parents).
+            let mut under = vec![0usize; bvh.nodes.len()];
+            for i in (0..bvh.nodes.len()).rev() {
+                let n = &bvh.nodes[i];
+                under[i] = if n.is_leaf() {
+                    n.count as usize
+                } else {
+                    under[n.first as usize] + under[n.first as usize + 1]
+                };
+            }
+            (0..bvh.nodes.len())
+                .filter(|&i| !bvh.nodes[i].is_leaf() && under[i] <= BvhConfig::EMBREE_BLOCK)
+                .count()
+        };
+        let blocks = BvhConfig {
+            builder: BvhBuilder::EmbreeBlocks,
+            max_leaf_size: 28,
+            ..BvhConfig::default()
+        };
+        let bvh = build_bvh(&tris, blocks).unwrap();
+        check_tree(&tris, &bvh);
+        assert_eq!(interior_with_few(&bvh), 0);
+        assert!(interior_with_few(&build_bvh(&tris, embree(28)).unwrap()) > 0);
+        let err = BvhConfig::from_params(
+            &Params::new()
+                .with("builder", "embree-blocks")
+                .with("leaf_size", 3),
+        )
+        .unwrap_err();
+        assert_eq!(err.exit_code(), 2, "{err}");
     }
 
     #[test]
