@@ -6,6 +6,7 @@
 
 #![cfg(tinybvh)]
 
+use std::process::Command;
 use std::time::Duration;
 
 use raylab::render::rays::primary_rays;
@@ -104,5 +105,85 @@ fn tinybvh_answers_every_stiff_case_without_a_crash() {
                 o.tracer, o.kind, o.variant, o.magnitude, o.leaks, o.missed, o.false_hits, o.rays
             );
         }
+    }
+}
+
+/// `tools/tinybvh-direct.cpp`, the independent check of the tinybvh rows (docs/REFERENCE.md,
+/// Kernel work), builds with the shim's flags against the same header and, on the scene and rays
+/// `raylab run --dump-rays` wrote, hits the same triangles as raylab's `tinybvh-8` on those rays
+/// (their count and the sum of their ids): the two call the same tinybvh on the same work, so a
+/// tool that read the dump wrongly (a field out of place) would differ.
+#[test]
+fn the_direct_check_finds_the_hits_of_the_tinybvh_rows() {
+    let dir = common::scratch_in("tinybvh", "direct");
+    let cache = std::env::var_os("RAYLAB_TINYBVH_DIR")
+        .map(std::path::PathBuf::from)
+        .unwrap_or_else(|| {
+            std::path::Path::new(&std::env::var_os("HOME").unwrap()).join(".cache/raylab/tinybvh")
+        });
+    let tool = dir.join("tinybvh-direct");
+    let source = concat!(env!("CARGO_MANIFEST_DIR"), "/tools/tinybvh-direct.cpp");
+    let compiled = Command::new(std::env::var("CXX").unwrap_or_else(|_| "c++".into()))
+        .args(["-std=c++20", "-O2", "-march=native", "-I"])
+        .arg(cache.join("include"))
+        .arg("-o")
+        .arg(&tool)
+        .arg(source)
+        .output()
+        .unwrap();
+    assert!(
+        compiled.status.success(),
+        "{}",
+        String::from_utf8_lossy(&compiled.stderr)
+    );
+    std::fs::write(
+        dir.join("dump.toml"),
+        "name = \"dump\"\nscenes = [\"room\"]\ntracers = [\"reference\"]\n\
+         rays = [\"primary\", \"diffuse\"]\nresolution = { width = 48, height = 48 }\n\
+         warmup = 0\nrepeats = 1\n",
+    )
+    .unwrap();
+    let run = Command::new(env!("CARGO_BIN_EXE_raylab"))
+        .args(["run", "dump.toml", "--dump-rays", "--quiet"])
+        .current_dir(&dir)
+        .env_remove("RAYLAB_SCENES")
+        .output()
+        .unwrap();
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let dumped = common::only_run(&dir.join("results"), "dump").join("rays");
+    let scene = load_scene("room", None).unwrap();
+    let frame = scene.frame(0, 1);
+    let raylab_tinybvh = tracer_for_frame("tinybvh-8", &Params::new(), &frame).unwrap();
+    for kind in ["primary", "diffuse"] {
+        let rays = dumped.join(format!("room-f0-{kind}.rays"));
+        let batch = raylab::geometry::ray_file::read_rays(&rays).unwrap();
+        let found = trace_hits(&*raylab_tinybvh, &batch);
+        let met: Vec<u64> = found
+            .iter()
+            .filter(|h| h.is_hit())
+            .map(|h| h.prim as u64)
+            .collect();
+        let expected = format!(
+            "{} hit, triangle ids summing to {}",
+            met.len(),
+            met.iter().sum::<u64>()
+        );
+        let out = Command::new(&tool)
+            .arg(dumped.join("room-f0.tris"))
+            .arg(&rays)
+            .args(["--repeats", "1"])
+            .output()
+            .unwrap();
+        let line = String::from_utf8_lossy(&out.stdout).into_owned();
+        assert!(out.status.success(), "{line}");
+        assert!(met.len() > batch.len() / 2, "{kind}: {expected}");
+        assert!(
+            line.trim_end().ends_with(&expected),
+            "{kind}: {line} (raylab: {expected})"
+        );
     }
 }
