@@ -1,11 +1,12 @@
 //! One ray against all `W` child boxes of a wide node (`accel::WideNode`'s structure-of-arrays
 //! lanes) in one SIMD slab test: the conservative slab test of `RayBoxTest::hit` (Ize 2013) with
 //! the boxes in the lanes instead of the rays. Per axis the near and far planes are picked by the
-//! ray's direction sign bit (so −0.0 counts as negative), once per ray, as rows of the node's planes, and every lane runs the scalar test's
-//! operations in its order — `(plane − origin) · inverse direction`, far distances scaled by
-//! `FAR_SCALE`, running max/min that ignore a NaN (`0·∞` for an origin on a slab plane) — so each
-//! child's verdict is `RayBoxTest`'s. With `robust = false` (`Fast`) the far distances are not
-//! scaled: plain slabs, each verdict `RayBoxTest::hit_with::<Fast>`'s.
+//! ray's direction sign bit (so −0.0 counts as negative), once per ray as rows of the node's
+//! planes, and every lane runs the scalar test's operations in its order — `(plane − origin) ·
+//! inverse direction`, far distances scaled by `FAR_SCALE`, running max/min that ignore a NaN
+//! (`0·∞` for an origin on a slab plane) — so each child's verdict is `RayBoxTest`'s. With
+//! `robust = false` (`Fast`) the far distances are not scaled: plain slabs, each verdict
+//! `RayBoxTest::hit_with::<Fast>`'s.
 //!
 //! Written with explicit vectors (`lanes::vector`) on groups of children, not as lane loops over
 //! `[f32; W]`: LLVM's SLP vectorizer split those loops' far-plane half into scalar loads and
@@ -83,9 +84,9 @@ impl WideRayTest {
 
 /// `WideRayTest::test` in groups of `V::WIDTH` children, the ray's origin and reciprocal
 /// direction broadcast to `V`'s lanes (`[origin, inv_dir][axis]`), its near and far plane rows
-/// `[near, far][axis]` (`WideRayTest::rows`, each below 6). Per lane the operations of `RayBoxTest::hit_with::<R>`: `max`/`min` are
-/// MAXPS/MINPS (`Vector`), which return their second operand when either is NaN, and `le` is
-/// ordered (false on NaN).
+/// `[near, far][axis]` (`WideRayTest::rows`, each below 6). Per lane the operations of
+/// `RayBoxTest::hit_with::<R>`: `max`/`min` are MAXPS/MINPS (`Vector`), which return their second
+/// operand when either is NaN, and `le` is ordered (false on NaN).
 #[inline(always)]
 fn test_in<R: RayTests, V: Vector, const W: usize>(
     [origin, inv_dir]: &[[V; 3]; 2],
