@@ -107,16 +107,12 @@ fn papers_dir() -> Option<std::path::PathBuf> {
     candidates.into_iter().flatten().find(|d| d.is_dir())
 }
 
-/// Each paper claim's `quote` is in its paper's text, matched without regard to case, line breaks
-/// or runs of spaces: the range a test uses is the paper's own. A quote typed from memory, or a
-/// number moved, fails here.
-#[test]
-fn every_quote_is_the_papers_own_text() {
-    let Some(papers) = papers_dir() else {
-        eprintln!("no papers directory (RAYLAB_PAPERS, RAYLAB_SCENES/../papers, ../shared/papers): quotes not checked");
-        return;
-    };
-    let mut checked = 0;
+/// Each paper report's claims, its paper's text file and that text (a report with paper claims
+/// names its text).
+fn claims_and_paper_texts(
+    papers: &Path,
+) -> Vec<(std::path::PathBuf, Claims, std::path::PathBuf, String)> {
+    let mut out = Vec::new();
     for dir in papers_under(Path::new("results")).unwrap() {
         let (claims, _) = Claims::read(&dir.join(CLAIMS_TOML)).unwrap_or_else(|e| panic!("{e}"));
         let Some(file) = &claims.paper_text else {
@@ -128,9 +124,25 @@ fn every_quote_is_the_papers_own_text() {
             continue;
         };
         let path = papers.join(file);
-        let text = normalised(
-            &std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display())),
-        );
+        let text =
+            std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        out.push((dir, claims, path, text));
+    }
+    out
+}
+
+/// Each paper claim's `quote` is in its paper's text, matched without regard to case, line breaks
+/// or runs of spaces: the range a test uses is the paper's own. A quote typed from memory, or a
+/// number moved, fails here.
+#[test]
+fn every_quote_is_the_papers_own_text() {
+    let Some(papers) = papers_dir() else {
+        eprintln!("no papers directory (RAYLAB_PAPERS, RAYLAB_SCENES/../papers, ../shared/papers): quotes not checked");
+        return;
+    };
+    let mut checked = 0;
+    for (dir, claims, path, text) in claims_and_paper_texts(&papers) {
+        let text = normalised(&text);
         for claim in &claims.claims {
             let quote = normalised(claim.quote.as_deref().unwrap());
             assert!(
@@ -223,13 +235,8 @@ fn every_paper_column_number_is_in_the_papers_text() {
         return;
     };
     let mut checked = 0;
-    for dir in papers_under(Path::new("results")).unwrap() {
-        let (claims, _) = Claims::read(&dir.join(CLAIMS_TOML)).unwrap_or_else(|e| panic!("{e}"));
-        let Some(file) = &claims.paper_text else {
-            continue;
-        };
-        let path = papers.join(file);
-        let stated = numbers_in(&std::fs::read_to_string(&path).unwrap());
+    for (_, claims, paper, text) in claims_and_paper_texts(&papers) {
+        let stated = numbers_in(&text);
         for name in &claims.experiments {
             let path = Path::new("experiments").join(format!("{name}.toml"));
             let exp = Experiment::load(&path).unwrap_or_else(|e| panic!("{e}"));
@@ -246,7 +253,7 @@ fn every_paper_column_number_is_in_the_papers_text() {
                                 "{name}: table {:?}, column {:?}, row {row:?}: {n} is not a number of {}",
                                 table.title,
                                 column.label,
-                                path.display()
+                                paper.display()
                             );
                             checked += 1;
                         }

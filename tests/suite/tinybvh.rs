@@ -123,18 +123,13 @@ fn the_direct_check_finds_the_hits_of_the_tinybvh_rows() {
         });
     let tool = dir.join("tinybvh-direct");
     let source = concat!(env!("CARGO_MANIFEST_DIR"), "/tools/tinybvh-direct.cpp");
-    let compiled = Command::new(std::env::var("CXX").unwrap_or_else(|_| "c++".into()))
-        .args(["-std=c++20", "-O2", "-march=native", "-I"])
-        .arg(cache.join("include"))
-        .arg("-o")
-        .arg(&tool)
-        .arg(source)
-        .output()
-        .unwrap();
-    assert!(
-        compiled.status.success(),
-        "{}",
-        String::from_utf8_lossy(&compiled.stderr)
+    succeeded(
+        Command::new(std::env::var("CXX").unwrap_or_else(|_| "c++".into()))
+            .args(["-std=c++20", "-O2", "-march=native", "-I"])
+            .arg(cache.join("include"))
+            .arg("-o")
+            .arg(&tool)
+            .arg(source),
     );
     std::fs::write(
         dir.join("dump.toml"),
@@ -143,16 +138,11 @@ fn the_direct_check_finds_the_hits_of_the_tinybvh_rows() {
          warmup = 0\nrepeats = 1\n",
     )
     .unwrap();
-    let run = Command::new(env!("CARGO_BIN_EXE_raylab"))
-        .args(["run", "dump.toml", "--dump-rays", "--quiet"])
-        .current_dir(&dir)
-        .env_remove("RAYLAB_SCENES")
-        .output()
-        .unwrap();
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
+    succeeded(
+        Command::new(env!("CARGO_BIN_EXE_raylab"))
+            .args(["run", "dump.toml", "--dump-rays", "--quiet"])
+            .current_dir(&dir)
+            .env_remove("RAYLAB_SCENES"),
     );
     let dumped = common::only_run(&dir.join("results"), "dump").join("rays");
     let scene = load_scene("room", None).unwrap();
@@ -172,18 +162,27 @@ fn the_direct_check_finds_the_hits_of_the_tinybvh_rows() {
             met.len(),
             met.iter().sum::<u64>()
         );
-        let out = Command::new(&tool)
-            .arg(dumped.join("room-f0.tris"))
-            .arg(&rays)
-            .args(["--repeats", "1"])
-            .output()
-            .unwrap();
-        let line = String::from_utf8_lossy(&out.stdout).into_owned();
-        assert!(out.status.success(), "{line}");
+        let line = succeeded(
+            Command::new(&tool)
+                .arg(dumped.join("room-f0.tris"))
+                .arg(&rays)
+                .args(["--repeats", "1"]),
+        );
         assert!(met.len() > batch.len() / 2, "{kind}: {expected}");
         assert!(
             line.trim_end().ends_with(&expected),
             "{kind}: {line} (raylab: {expected})"
         );
     }
+}
+
+/// `command`'s standard output, once it has run and exited with success (else its errors).
+fn succeeded(command: &mut Command) -> String {
+    let out = command.output().unwrap();
+    assert!(
+        out.status.success(),
+        "{command:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout).into_owned()
 }
