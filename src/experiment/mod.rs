@@ -176,10 +176,7 @@ fn write_outputs(
     plots::write_plots(dir, plan, &records.runs, &records.histograms)?;
     error_plot::write_error_plots(dir, exp, plan, &records.runs)?;
     let rows: Vec<Row> = records.runs.iter().map(RunRow::fields).collect();
-    if !exp.tables.is_empty() {
-        let path = dir.join(TABLES_MD);
-        tables::write_tables(&path, &exp.name, &exp.tables, &rows)?;
-    }
+    tables::write_tables(&dir.join(TABLES_MD), &exp.name, &exp.tables, &rows)?;
     let histograms: Vec<Row> = records
         .histograms
         .iter()

@@ -122,7 +122,7 @@ fn a_quick_reproduction_runs_reports_and_resumes() {
     let report = fs::read_to_string(paper.join(REPORT_MD)).unwrap();
     assert!(report.contains("**Quick scale (`raylab reproduce --scale quick`), a smoke test and not evidence:** tiny."), "{report}");
     assert!(
-        report.contains("**The paper: 1 claims: 0 hold, 1 partly, 0 differ, 0 within noise, 0 not run; 0 not reproducible here.**"),
+        report.contains("**The paper: 1 claims: 0 hold, 1 partly, 0 differ, 0 within noise, 0 not run; 0 of the 1 that differ or partly hold explained by a rule that stands; 0 not reproducible here.**"),
         "{report}"
     );
     assert!(
@@ -133,7 +133,7 @@ fn a_quick_reproduction_runs_reports_and_resumes() {
     );
     let index = fs::read_to_string(results.join(QUICK_DIR).join(VERDICTS_MD)).unwrap();
     assert!(
-        index.contains("toy2026/REPORT.md) | 1 | 0 | 1 | 0 | 0 | 0 | 0 |"),
+        index.contains("toy2026/REPORT.md) | 1 | 0 | 1 | 0 | 0 | 0 | 0 of 1 | 0 |"),
         "{index}"
     );
 

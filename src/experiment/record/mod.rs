@@ -3,11 +3,12 @@
 //! (`histogram_row`), per sampled check (`check_row`) and per case of the stability suite
 //! (`stability_row`) — the file names of a results
 //! directory, how rows are selected and reduced for tables and figures, and how a results
-//! directory is written all at once or not at all, and the spread of a timed number over its
-//! passes (`spread`). `plan`, `run` and `results` all import it; it
-//! imports none of them.
+//! directory is written all at once or not at all, the spread of a timed number over its
+//! passes (`spread`), and the unit costs fitted over a run's rows (`cost_model`). `plan`, `run`
+//! and `results` all import it; it imports none of them.
 
 pub mod check_row;
+pub mod cost_model;
 pub mod csv_file;
 pub mod digest;
 pub mod files;

@@ -20,6 +20,7 @@ use serde::Deserialize;
 use crate::error::{Error, Result};
 use crate::tracers::registry::canonical_name;
 
+use crate::experiment::record::cost_model;
 use crate::experiment::record::files::{read_text, RUNS_CSV};
 use crate::experiment::record::run_row::runs_columns;
 use crate::experiment::record::spread::Spread;
@@ -146,9 +147,13 @@ pub fn field_value(row: &Row, field: &str) -> String {
     row.get(field).cloned().unwrap_or_default()
 }
 
-/// A usage error unless `field` is a runs.csv column, `param:<key>` or `render:<key>`.
+/// A usage error unless `field` is a runs.csv column, a column the cost model adds
+/// (`cost_model::columns`), `param:<key>` or `render:<key>`.
 pub fn check_field(field: &str, what: &str) -> Result<()> {
-    check_field_of(field, what, RUNS_CSV, &runs_columns())
+    let priced = cost_model::columns();
+    let mut known = runs_columns();
+    known.extend(priced.iter().map(String::as_str));
+    check_field_of(field, what, RUNS_CSV, &known)
 }
 
 /// A usage error unless `field` is one of the `known` columns of `file`, `param:<key>` or

@@ -6,7 +6,9 @@ use std::fmt::Write;
 
 use crate::error::{Error, Result};
 use crate::experiment::plan::table_spec::{RowsSpec, TableSpec};
+use crate::experiment::record::cost_model::{self, Fit, Operation};
 use crate::experiment::record::selection::{distinct, Filter, Measure, Reduce, Row};
+
 use crate::experiment::record::spread::Spread;
 
 /// A table computed from a run's rows: what tables.md shows and what claims read (`report::judge`),
@@ -192,16 +194,92 @@ fn paper_text(value: &toml::Value) -> String {
     }
 }
 
-/// Writes every table, one after the other, to `path`.
+/// The tables of a run over its runs.csv `rows`: the experiment's, computed over the rows priced
+/// by the cost model (so a column may read `box_test_seconds`), then the unit costs themselves
+/// when some tracer configuration has a fit.
+pub fn run_tables(tables: &[TableSpec], rows: &[Row]) -> Vec<TableModel> {
+    let fits = cost_model::fits(rows);
+    let priced = cost_model::priced(rows, &fits);
+    let mut models: Vec<TableModel> = tables.iter().map(|t| t.model(&priced)).collect();
+    models.extend(unit_costs(&fits));
+    models
+}
+
+/// The title of the table of unit costs.
+pub const UNIT_COSTS: &str = "Unit costs fitted over this run's rows";
+
+/// The fits as a table: one row per tracer configuration, ns per operation.
+fn unit_costs(fits: &[Fit]) -> Option<TableModel> {
+    if fits.is_empty() {
+        return None;
+    }
+    let ops: Vec<Operation> = cost_model::OPERATIONS
+        .into_iter()
+        .filter(|o| fits.iter().any(|f| f.costs.iter().any(|(c, _)| c == o)))
+        .collect();
+    let number = |value: f64, decimals: usize| Cell::Number {
+        value: Spread::exact(value),
+        decimals,
+    };
+    let rows = fits
+        .iter()
+        .map(|f| {
+            let g = &f.group;
+            let mut label = [&g.tracer, &g.parameters]
+                .iter()
+                .filter(|s| !s.is_empty())
+                .map(|s| s.as_str())
+                .collect::<Vec<_>>()
+                .join(" ");
+            if g.threads != "1" {
+                label.push_str(&format!(", {} threads", g.threads));
+            }
+            if g.frames {
+                label.push_str(", whole frames");
+            }
+            let mut cells = vec![number(f.rows as f64, 0)];
+            cells.extend(ops.iter().map(|o| {
+                f.costs
+                    .iter()
+                    .find(|(c, _)| c == o)
+                    .map_or(Cell::Missing, |(_, cost)| number(cost * 1e9, 2))
+            }));
+            cells.push(number(f.error * 100.0, 1));
+            (label, cells)
+        })
+        .collect();
+    let mut columns = vec!["rows".to_string()];
+    columns.extend(ops.iter().map(|o| format!("ns per {}", o.label)));
+    columns.push("rms error %".to_string());
+    Some(TableModel {
+        title: UNIT_COSTS.to_string(),
+        caption: "Each tracer configuration's fastest passes, row by row, modelled as the sum of \
+            its counted operations times their unit costs: non-negative least squares of the \
+            relative error over the run's rows (a regression, not a calibrated kernel; \
+            `record::cost_model`). A box test's cost includes its node's fetch and stack work; \
+            \"rms error\" is how far the model is from the measured time of a row, in rms."
+            .to_string(),
+        row_header: "tracer, parameters".to_string(),
+        columns,
+        rows,
+    })
+}
+
+/// Writes the run's tables (`run_tables`), one after the other, to `path`; nothing when there
+/// are none.
 pub fn write_tables(
     path: &std::path::Path,
     title: &str,
     tables: &[TableSpec],
     rows: &[Row],
 ) -> Result<()> {
+    let models = run_tables(tables, rows);
+    if models.is_empty() {
+        return Ok(());
+    }
     let mut out = format!("# {title}: paper vs ours\n\n");
-    for table in tables {
-        out.push_str(&table.render(rows));
+    for table in models {
+        out.push_str(&table.markdown());
         out.push('\n');
     }
     std::fs::write(path, out).map_err(|e| Error::io(path, e))

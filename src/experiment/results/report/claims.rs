@@ -25,6 +25,16 @@
 //! `{{table | row | column}}` in the claim's experiment or `{{experiment | table | row | column}}`
 //! in another of the paper's (a table by its title or a unique prefix of it, a row by its first
 //! cell, a column by its heading); the cell's leading number is its value.
+//!
+//! A claim that differs or partly holds may carry its `explanation`: tests of the same grammar
+//! over the run's counts and unit costs (the cost model, `record::cost_model`) and a text that
+//! says what they show. The explanation stands when every one of its tests passes; the report
+//! prints it beside the verdict and counts the claims that differ with none that stands.
+//!
+//! ```toml
+//! explanation = { tests = ["{{Table 1 | * | bound from box tests}} < 3.34"],
+//!                 text = "box tests are {{Table 1 | conference | box share}} of a packet's time" }
+//! ```
 
 use std::fmt;
 use std::path::Path;
@@ -83,6 +93,18 @@ pub struct Claim {
     pub tests: Vec<String>,
     #[serde(default)]
     pub note: String,
+    /// Why it differs or partly holds, by rule.
+    pub explanation: Option<Explanation>,
+}
+
+/// A rule over the run's counts and unit costs that explains a gap, and what it shows.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Explanation {
+    /// Tests like a claim's: the explanation stands when all pass.
+    pub tests: Vec<String>,
+    /// What the rule shows; `{{references}}` are filled from the tables.
+    pub text: String,
 }
 
 #[derive(Clone, Debug, Deserialize, PartialEq)]
@@ -186,7 +208,18 @@ impl Claims {
                     claim.experiment
                 )));
             }
-            for test in &claim.tests {
+            if claim
+                .explanation
+                .as_ref()
+                .is_some_and(|e| e.tests.is_empty())
+            {
+                return Err(fail("an explanation without tests: it needs a rule".into()));
+            }
+            // (test, whether it is the explanation's: its bounds are the model's arithmetic, not
+            // the paper's numbers, so its quote does not state them).
+            let explaining = claim.explanation.iter().flat_map(|e| &e.tests);
+            let all = (claim.tests.iter().map(|t| (t, false))).chain(explaining.map(|t| (t, true)));
+            for (test, explains) in all {
                 let parsed = Test::parse(test).map_err(|m| fail(format!("{test:?}: {m}")))?;
                 for reference in parsed.references() {
                     let experiment = reference.experiment.as_deref();
@@ -202,7 +235,7 @@ impl Claims {
                         "{test:?} widens a bound with ~ but the file declares no tolerance"
                     )));
                 }
-                if let Some(quote) = &claim.quote {
+                if let Some(quote) = claim.quote.as_ref().filter(|_| !explains) {
                     let stated = allowed_numbers(quote);
                     let unstated = parsed
                         .numbers()
@@ -711,6 +744,16 @@ mod tests {
                 "a target has no item",
                 8,
             ),
+            (
+                "[[targets]]\nclaim = \"c\"\npaper = \"\"\nexperiment = \"a\"\ntests = [\"1 < 2\"]\nexplanation = { tests = [], text = \"t\" }\n",
+                "an explanation without tests",
+                6,
+            ),
+            (
+                "[[targets]]\nclaim = \"c\"\npaper = \"\"\nexperiment = \"a\"\ntests = [\"1 < 2\"]\nexplanation = { tests = [\"{{b | T | r | c}} < 2\"], text = \"t\" }\n",
+                "\"b\" is not in",
+                6,
+            ),
         ] {
             std::fs::write(&path, format!("{head}{body}")).unwrap();
             let e = Claims::read(&path).unwrap_err();
@@ -719,11 +762,16 @@ mod tests {
             assert!(e.to_string().contains(&format!("claims.toml:{line}")), "{e}");
         }
         let good = format!(
-            "{head}tolerance = {{ factor = 1.5, reason = \"r\" }}\n[[claims]]\n{quoted}claim = \"c\"\npaper = \"\"\nexperiment = \"a\"\ntests = [\"{{{{T | * | x}}}} in ~[3.34, 6.11]\", \"{{{{T | r | x}}}} / 3.34 >= 1\"]\n"
+            "{head}tolerance = {{ factor = 1.5, reason = \"r\" }}\n[[claims]]\n{quoted}claim = \"c\"\npaper = \"\"\nexperiment = \"a\"\ntests = [\"{{{{T | * | x}}}} in ~[3.34, 6.11]\", \"{{{{T | r | x}}}} / 3.34 >= 1\"]\nexplanation = {{ tests = [\"{{{{T | * | y}}}} < 2.5\"], text = \"t\" }}\n"
         );
         std::fs::write(&path, good).unwrap();
         let (claims, _) = Claims::read(&path).unwrap();
         assert_eq!(claims.claims[0].item.as_deref(), Some("X1"));
+        // The explanation's 2.5 is the model's bound, not a number the quote must state.
+        assert_eq!(
+            claims.claims[0].explanation.as_ref().unwrap().tests.len(),
+            1
+        );
         let _ = std::fs::remove_dir_all(&dir);
     }
 }

@@ -46,15 +46,43 @@ pub struct Judged {
     pub note: String,
     /// What the tests read on their left-hand sides: one number, or the smallest to the largest.
     pub ours: String,
+    /// The claim's explanation, checked (none when it has none or its runs are missing).
+    pub explanation: Option<Explained>,
 }
 
-/// The verdict on `claim` over `runs`, a `~` bound widened by `tolerance`; a reference to a
-/// missing table, row or column of a run that exists is an error (the message names it).
-pub fn judge(claim: &Claim, runs: &Runs, tolerance: Option<&Tolerance>) -> Result<Judged, String> {
+/// An explanation's rule over the runs, and its text filled.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Explained {
+    /// Every test passed.
+    pub stands: bool,
+    pub tests: Vec<Checked>,
+    pub text: String,
+}
+
+impl Judged {
+    /// A verdict that needs an explanation: the claim differs or partly holds.
+    pub fn needs_explanation(&self) -> bool {
+        matches!(self.verdict, Verdict::Differs | Verdict::Partly)
+    }
+
+    /// Whether it needs one and has one that stands.
+    pub fn is_explained(&self) -> bool {
+        self.needs_explanation() && self.explanation.as_ref().is_some_and(|e| e.stands)
+    }
+}
+
+/// Every test of `texts` (a starred one once per row of its table) checked over `runs`, the
+/// left-hand values read, and whether some test's run is missing.
+fn check(
+    texts: &[String],
+    claim: &Claim,
+    runs: &Runs,
+    tolerance: Option<&Tolerance>,
+) -> Result<(Vec<Checked>, Vec<f64>, bool), String> {
     let mut tests = Vec::new();
     let mut read = Vec::new();
     let mut missing = false;
-    for text in &claim.tests {
+    for text in texts {
         let written_test = Test::parse(text)?;
         let ran = written_test
             .references()
@@ -92,6 +120,13 @@ pub fn judge(claim: &Claim, runs: &Runs, tolerance: Option<&Tolerance>) -> Resul
             });
         }
     }
+    Ok((tests, read, missing))
+}
+
+/// The verdict on `claim` over `runs`, a `~` bound widened by `tolerance`; a reference to a
+/// missing table, row or column of a run that exists is an error (the message names it).
+pub fn judge(claim: &Claim, runs: &Runs, tolerance: Option<&Tolerance>) -> Result<Judged, String> {
+    let (tests, read, missing) = check(&claim.tests, claim, runs, tolerance)?;
     let count = |o: Outcome| {
         tests
             .iter()
@@ -121,11 +156,24 @@ pub fn judge(claim: &Claim, runs: &Runs, tolerance: Option<&Tolerance>) -> Resul
         _ if low == high => number(low),
         _ => format!("{}–{}", number(low), number(high)),
     };
+    let explanation = match &claim.explanation {
+        Some(e) if verdict != Verdict::NotRun => {
+            let (tests, _, missing) = check(&e.tests, claim, runs, None)?;
+            let passed = |t: &Checked| matches!(t.outcome, Some((_, Outcome::Passed)));
+            Some(Explained {
+                stands: !missing && tests.iter().all(passed),
+                tests,
+                text: fill(&e.text, claim, runs)?,
+            })
+        }
+        _ => None,
+    };
     Ok(Judged {
         verdict,
         tests,
         note,
         ours,
+        explanation,
     })
 }
 
@@ -371,6 +419,7 @@ fn lookup<'a>(reference: &Reference, claim: &Claim, runs: &Runs<'a>) -> Result<&
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::experiment::results::report::claims::Explanation;
 
     fn claim(tests: &[&str], note: &str) -> Claim {
         Claim {
@@ -381,6 +430,7 @@ mod tests {
             experiment: "a".into(),
             tests: tests.iter().map(|t| t.to_string()).collect(),
             note: note.into(),
+            explanation: None,
         }
     }
 
@@ -502,6 +552,47 @@ mod tests {
             let e = judge(&claim(&[test], ""), &runs, None).unwrap_err();
             assert!(e.contains(why), "{test}: {e}");
         }
+    }
+
+    /// The museum's benefit 1.2 at 2 threads fails "≥ 3"; an explanation stands only when every
+    /// one of its tests passes, on a claim that differs or partly holds.
+    #[test]
+    fn an_explanation_stands_when_its_rule_passes_and_fills_its_text() {
+        let a = museum();
+        let runs: Runs = [("a", &a[..])].into_iter().collect();
+        let explained = |tests: &[&str], claim_tests: &[&str]| {
+            let mut c = claim(claim_tests, "");
+            c.explanation = Some(Explanation {
+                tests: tests.iter().map(|t| t.to_string()).collect(),
+                text: "P takes {{Table 2 | 2 | P ms}} ms".into(),
+            });
+            judge(&c, &runs, None).unwrap()
+        };
+        let differs = ["{{Table 2 | 2 | benefit}} >= 3"];
+        let stands = explained(&["{{Table 2 | * | P ms}} / 100 > 2"], &differs);
+        assert_eq!(stands.verdict, Verdict::Differs);
+        let e = stands.explanation.as_ref().unwrap();
+        assert!(e.stands && stands.is_explained());
+        assert_eq!(e.text, "P takes 285.7 ms");
+        assert_eq!(e.tests.len(), 2, "one test per row");
+        // Row 2 (285.7 ms) passes, row 1 (451.3) fails "< 300": the rule does not stand.
+        let fails = explained(&["{{Table 2 | * | P ms}} < 300"], &differs);
+        assert!(!fails.explanation.as_ref().unwrap().stands);
+        assert!(fails.needs_explanation() && !fails.is_explained());
+        // A claim that holds needs none, whatever its explanation says.
+        let holds = explained(
+            &["{{Table 2 | 2 | P ms}} < 300"],
+            &["{{Table 2 | 2 | benefit}} > 1"],
+        );
+        assert_eq!(holds.verdict, Verdict::Holds);
+        assert!(!holds.needs_explanation() && !holds.is_explained());
+        // An explanation that reads a table the run lacks is an error naming it.
+        let mut c = claim(&differs, "");
+        c.explanation = Some(Explanation {
+            tests: vec!["{{Table 9 | 1 | x}} > 0".into()],
+            text: String::new(),
+        });
+        assert!(judge(&c, &runs, None).unwrap_err().contains("Table 9"));
     }
 
     fn outcomes(judged: &Judged) -> Vec<Outcome> {

@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 
 use super::blocks::{self, Block};
 use super::claims::{Claim, Verdict, RULE};
-use super::judge::Judged;
+use super::judge::{Checked, Judged};
 use super::paper::Paper;
 use crate::experiment::record::provenance::SourceTree;
 use crate::experiment::record::settings::Label;
@@ -26,9 +26,48 @@ const HEADER_END: &str = "; regenerate it, do not edit -->";
 fn counted(judged: &[Judged], what: &str) -> String {
     let [holds, partly, differs, noise, not_run] = Paper::counts(judged);
     format!(
-        "{} {what}: {holds} hold, {partly} partly, {differs} differ, {noise} within noise, {not_run} not run",
-        judged.len()
+        "{} {what}: {holds} hold, {partly} partly, {differs} differ, {noise} within noise, {not_run} not run; {}",
+        judged.len(),
+        explained(judged)
     )
+}
+
+/// (explained by a rule that stands, differ or partly hold) among `judged`.
+fn explained_of(judged: &[Judged]) -> (usize, usize) {
+    let needing = judged.iter().filter(|j| j.needs_explanation()).count();
+    (judged.iter().filter(|j| j.is_explained()).count(), needing)
+}
+
+/// "2 of the 5 that differ or partly hold explained by a rule that stands".
+fn explained(judged: &[Judged]) -> String {
+    let (explained, needing) = explained_of(judged);
+    format!(
+        "{explained} of the {needing} that differ or partly hold explained by a rule that stands"
+    )
+}
+
+/// The explanation column of a claims table: the rule's text and tests, or why there is none.
+fn explanation(judged: &Judged) -> String {
+    if !judged.needs_explanation() {
+        return String::new();
+    }
+    let Some(e) = &judged.explanation else {
+        return "**none**".to_string();
+    };
+    let mut lines = vec![match e.stands {
+        true => format!("**explained**: {}", e.text),
+        false => format!("**not explained** (a test of the rule fails): {}", e.text),
+    }];
+    lines.extend(e.tests.iter().map(tested));
+    lines.join("<br>")
+}
+
+/// A test as written, then the values it read and its outcome.
+fn tested(t: &Checked) -> String {
+    match &t.outcome {
+        None => format!("{}: not run", t.rule),
+        Some((values, outcome)) => format!("{}: {values} {}", t.rule, outcome.mark()),
+    }
 }
 
 /// The paper's items in order (`O2` before `O10`), each claim's and each declared one's.
@@ -89,29 +128,23 @@ fn judged_table(out: &mut String, paper: &Paper, claims: &[Claim], judged: &[Jud
     let (item_header, item_rule) = if items { ("| item ", "|---") } else { ("", "") };
     let _ = writeln!(
         out,
-        "{item_header}| claim | the paper | verdict | tests: as written, then the values read (✓ passed, ✗ failed, ≈ within noise) | note |\n{item_rule}|---|---|---|---|---|"
+        "{item_header}| claim | the paper | verdict | tests: as written, then the values read (✓ passed, ✗ failed, ≈ within noise) | note | why it differs: a rule over the run's counts and unit costs |\n{item_rule}|---|---|---|---|---|---|"
     );
     for (claim, judged) in claims.iter().zip(judged) {
-        let tests: Vec<String> = judged
-            .tests
-            .iter()
-            .map(|t| match &t.outcome {
-                None => format!("{}: not run", t.rule),
-                Some((values, outcome)) => format!("{}: {values} {}", t.rule, outcome.mark()),
-            })
-            .collect();
+        let tests: Vec<String> = judged.tests.iter().map(tested).collect();
         if items {
             let _ = write!(out, "| {} ", claim.item.as_deref().unwrap_or(""));
         }
         let _ = writeln!(
             out,
-            "| {} | {} | **{}**{} | {} | {} |",
+            "| {} | {} | **{}**{} | {} | {} | {} |",
             cell(&claim.claim),
             cell(&claim.paper),
             judged.verdict,
             reduced(paper, claim),
             cell(&tests.join("<br>")),
-            cell(&judged.note)
+            cell(&judged.note),
+            cell(&explanation(judged))
         );
     }
 }
@@ -258,14 +291,16 @@ pub fn index(root: &Path, papers: &[Paper]) -> String {
     }
     let _ = writeln!(
         out,
-        " not reproducible here |\n|---|{}",
-        "---:|".repeat(Verdict::ALL.len() + 2)
+        " differs or partly: explained by a rule | not reproducible here |\n|---|{}",
+        "---:|".repeat(Verdict::ALL.len() + 3)
     );
     let counts = |out: &mut String, judged: &[Judged]| {
         let _ = write!(out, " {} |", judged.len());
         for n in Paper::counts(judged) {
             let _ = write!(out, " {n} |");
         }
+        let (explained, needing) = explained_of(judged);
+        let _ = write!(out, " {explained} of {needing} |");
     };
     for paper in papers.iter().filter(|p| !p.claims.claims.is_empty()) {
         // Relative to VERDICTS.md, which lies in `root` (the README rebases them to its place).

@@ -392,7 +392,7 @@ mod tests {
         );
         assert!(md.contains("# Toy 2026\n\nA. Toy. Toys. 2026.\n"), "{md}");
         assert!(
-            md.contains("**The paper: 2 claims: 0 hold, 1 partly, 0 differ, 0 within noise, 1 not run; 1 not reproducible here.**"),
+            md.contains("**The paper: 2 claims: 0 hold, 1 partly, 0 differ, 0 within noise, 1 not run; 0 of the 1 that differ or partly hold explained by a rule that stands; 1 not reproducible here.**"),
             "{md}"
         );
         // The item table first, in item order (X2 before X10).
@@ -447,11 +447,13 @@ mod tests {
         assert_eq!(index, root.join(VERDICTS_MD));
         let text = fs::read_to_string(&index).unwrap();
         assert!(
-            text.contains("| report | claims | holds | partly | differs | within noise | not run | not reproducible here |\n|---|---:|---:|---:|---:|---:|---:|---:|\n"),
+            text.contains("| report | claims | holds | partly | differs | within noise | not run | differs or partly: explained by a rule | not reproducible here |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|\n"),
             "{text}"
         );
         assert!(
-            text.contains("| [Toy 2026](toy2026/REPORT.md) | 2 | 0 | 1 | 0 | 0 | 1 | 1 |\n"),
+            text.contains(
+                "| [Toy 2026](toy2026/REPORT.md) | 2 | 0 | 1 | 0 | 0 | 1 | 0 of 1 | 1 |\n"
+            ),
             "{text}"
         );
         // A run the claims file does not list is an error.

@@ -13,7 +13,7 @@ use crate::experiment::record::digest::digest;
 use crate::experiment::record::files::{META_JSON, RUNS_CSV};
 use crate::experiment::record::selection::read_rows;
 use crate::experiment::record::settings::{label, Label};
-use crate::experiment::results::tables::{Cell, TableModel};
+use crate::experiment::results::tables::{run_tables, Cell, TableModel};
 
 use super::blocks::{self, Block};
 use super::claims::{claim_line, Claim, Claims, Test, Verdict, CLAIMS_TOML};
@@ -207,8 +207,7 @@ fn computed_tables(run: &Results) -> Result<(Vec<TableModel>, String)> {
             .map_err(|e| Error::input(&path, None, e.to_string()))?;
     }
     let rows = read_rows(&run.dir.join(RUNS_CSV))?;
-    let models = layout.tables.iter().map(|t| t.model(&rows)).collect();
-    Ok((models, text))
+    Ok((run_tables(&layout.tables, &rows), text))
 }
 
 /// The tables of a tables.md, their cells as written.
