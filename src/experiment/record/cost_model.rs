@@ -1,15 +1,18 @@
 //! What a tracer's unit operations cost on the machine that ran it, fitted over the run's own rows
 //! (the cost model of issue 44): a regression, not a calibrated kernel.
 //!
-//! Per tracer configuration (tracer, parameters, structure and threads; traced batches and whole
-//! rendered frames apart), every row's fastest pass is modelled as the sum, over the operations
-//! the row counts, of count × unit cost: rays, ray–box tests, ray–triangle tests, frustum–box
-//! tests, grid cells visited, grid slices stepped, shading points. The unit costs are the
-//! non-negative least-squares fit of the rows' relative errors, so a short batch weighs as much as
-//! a long one. A unit cost is the operation's whole average price in its traversal, memory
-//! traffic included: a BVH's node fetches and stack work fall on its box tests (`nodes_visited`
-//! is priced only where no box test is counted, a grid's cells). `cost_fit_error`, the rms
-//! relative residual, says how well the sum explains each row's time.
+//! Per tracer configuration (tracer, parameters, structure and threads) and ray kind (whole
+//! rendered frames are the kind `frame`), every row's fastest pass is modelled as the sum, over
+//! the operations the row counts, of count × unit cost: rays, ray–box tests, ray–triangle tests,
+//! frustum–box tests, grid cells visited, grid slices stepped, shading points. The unit costs are
+//! the non-negative least-squares fit of the rows' relative errors, so a short batch weighs as
+//! much as a long one. A unit cost is the operation's whole average price in its traversal,
+//! memory traffic included: a BVH's node fetches and stack work fall on its box tests
+//! (`nodes_visited` is priced only where no box test is counted, a grid's cells). The ray kind is
+//! part of the group because an operation costs more on incoherent rays: fitted per configuration
+//! alone, the committed runs' rows were missed by more. The traced batches of the kinds that have
+//! too few rows apart (one frame of a few workloads) are fitted together, per configuration.
+//! `cost_fit_error`, the rms relative residual, says how well the sum explains each row's time.
 //!
 //! A priced row gains, per operation its model has, `ns_per_<op>` and `<op>_seconds` (count ×
 //! unit cost: the part of the row's time the model gives the operation), and `cost_fit_error`.
@@ -59,8 +62,10 @@ pub struct Group {
     pub parameters: String,
     pub structure: String,
     pub threads: String,
-    /// Whole rendered frames (`ray_kind = frame`: shading and assembly included), not batches.
-    pub frames: bool,
+    /// The ray kinds fitted together: one, or a configuration's traced batches whose kinds have
+    /// too few rows apart (`frame`: whole rendered frames, shading and assembly included, is
+    /// always alone).
+    pub ray_kinds: Vec<String>,
 }
 
 impl Group {
@@ -70,8 +75,27 @@ impl Group {
             parameters: field_value(row, "parameters"),
             structure: field_value(row, "structure"),
             threads: field_value(row, "threads"),
-            frames: field_value(row, "ray_kind") == "frame",
+            ray_kinds: vec![field_value(row, "ray_kind")],
         }
+    }
+
+    fn same_configuration(&self, other: &Group) -> bool {
+        (
+            &self.tracer,
+            &self.parameters,
+            &self.structure,
+            &self.threads,
+        ) == (
+            &other.tracer,
+            &other.parameters,
+            &other.structure,
+            &other.threads,
+        )
+    }
+
+    fn holds(&self, row: &Row) -> bool {
+        let of_row = Group::of(row);
+        self.same_configuration(&of_row) && self.ray_kinds.contains(&of_row.ray_kinds[0])
     }
 }
 
@@ -90,20 +114,49 @@ pub struct Fit {
 
 /// The fit of every group of `rows` that counts its operations and has at least two rows more
 /// than its model has costs (distinct rows: frames repeating one row add nothing), in first-seen
-/// order.
+/// order: each configuration's ray kinds apart, then, together, the traced batches of the kinds
+/// that could not be fitted apart.
 pub fn fits(rows: &[Row]) -> Vec<Fit> {
+    let apart: Vec<Fit> = grouped(rows.iter(), Group::of)
+        .into_iter()
+        .filter_map(|(group, members)| fit(group, &members))
+        .collect();
+    let left = rows.iter().filter(|r| {
+        !apart.iter().any(|f| f.group.holds(r)) && field_value(r, "ray_kind") != "frame"
+    });
+    let pooled = grouped(left, |r| Group {
+        ray_kinds: Vec::new(),
+        ..Group::of(r)
+    });
+    let together = pooled.into_iter().filter_map(|(mut group, members)| {
+        for row in &members {
+            let kind = field_value(row, "ray_kind");
+            if !group.ray_kinds.contains(&kind) {
+                group.ray_kinds.push(kind);
+            }
+        }
+        fit(group, &members)
+    });
+    apart
+        .into_iter()
+        .chain(together.collect::<Vec<_>>())
+        .collect()
+}
+
+/// `rows` by `key`, in first-seen order.
+fn grouped<'a>(
+    rows: impl Iterator<Item = &'a Row>,
+    key: impl Fn(&Row) -> Group,
+) -> Vec<(Group, Vec<&'a Row>)> {
     let mut groups: Vec<(Group, Vec<&Row>)> = Vec::new();
     for row in rows {
-        let group = Group::of(row);
+        let group = key(row);
         match groups.iter_mut().find(|(g, _)| *g == group) {
             Some((_, members)) => members.push(row),
             None => groups.push((group, vec![row])),
         }
     }
     groups
-        .into_iter()
-        .filter_map(|(group, members)| fit(group, &members))
-        .collect()
 }
 
 fn number(row: &Row, field: &str) -> Option<f64> {
@@ -233,8 +286,7 @@ pub fn priced(rows: &[Row], fits: &[Fit]) -> Vec<Row> {
     rows.iter()
         .map(|row| {
             let mut row = row.clone();
-            let group = Group::of(&row);
-            if let Some(fit) = fits.iter().find(|f| f.group == group) {
+            if let Some(fit) = fits.iter().find(|f| f.group.holds(&row)) {
                 for (o, cost) in &fit.costs {
                     let count = number(&row, o.count).unwrap_or(0.0);
                     row.insert(format!("ns_per_{}", o.name), (cost * 1e9).to_string());
@@ -356,6 +408,34 @@ mod tests {
             .collect();
         assert!(fits(&embree).is_empty());
         assert_eq!(priced(&embree, &[])[0], embree[0]);
+    }
+
+    #[test]
+    fn kinds_with_too_few_rows_apart_are_fitted_together() {
+        // Five primary rows fit alone; three shadow and two reflection rows only together.
+        let mut rows = exact_rows();
+        let mut other = |kind: &str, r: f64, b: f64, t: f64| {
+            let mut row = batch("packet", r, b, t, (10.0 * r + b + 4.0 * t) * 1e-9);
+            row.insert("ray_kind".into(), kind.into());
+            rows.push(row);
+        };
+        other("shadow", 1e6, 2e7, 1e6);
+        other("shadow", 2e6, 7e7, 3e6);
+        other("shadow", 4e6, 5e7, 2e6);
+        other("reflection", 3e6, 3e7, 8e6);
+        other("reflection", 1e6, 6e7, 2e6);
+        let fits = fits(&rows);
+        let kinds: Vec<&[String]> = fits.iter().map(|f| &f.group.ray_kinds[..]).collect();
+        assert_eq!(
+            kinds,
+            [
+                &["primary".to_string()][..],
+                &["shadow".into(), "reflection".into()]
+            ]
+        );
+        assert!(fits[1].error < 1e-9);
+        let priced = priced(&rows, &fits);
+        assert!(priced.iter().all(|r| r.contains_key(FIT_ERROR)));
     }
 
     #[test]

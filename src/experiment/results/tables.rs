@@ -234,9 +234,7 @@ fn unit_costs(fits: &[Fit]) -> Option<TableModel> {
             if g.threads != "1" {
                 label.push_str(&format!(", {} threads", g.threads));
             }
-            if g.frames {
-                label.push_str(", whole frames");
-            }
+            label.push_str(&format!(", {}", g.ray_kinds.join(" + ")));
             let mut cells = vec![number(f.rows as f64, 0)];
             cells.extend(ops.iter().map(|o| {
                 f.costs
