@@ -842,8 +842,8 @@ fn the_wald06_experiments_parse_with_their_tables_and_figures() {
 fn the_boulos07_experiments_parse_and_select_their_own_workloads() {
     for (file, instances, renders, tables, figures) in [
         // Plus baseline-best's baselines (below).
-        ("boulos07.toml", 5, 12, 6, 1),
-        ("boulos07-drt.toml", 2, 8, 3, 1),
+        ("boulos07.toml", 5, 12, 8, 1),
+        ("boulos07-drt.toml", 2, 8, 4, 1),
         ("boulos07-fig8.toml", 1, 2, 4, 2),
     ] {
         let exp = Experiment::load(
