@@ -8,7 +8,6 @@ use crate::error::{Error, Result};
 use crate::experiment::plan::table_spec::{RowsSpec, TableSpec};
 use crate::experiment::record::cost_model::{self, Fit, Operation};
 use crate::experiment::record::selection::{distinct, Filter, Measure, Reduce, Row};
-
 use crate::experiment::record::spread::Spread;
 
 /// A table computed from a run's rows: what tables.md shows and what claims read (`report::judge`),
@@ -206,9 +205,9 @@ pub fn run_tables(tables: &[TableSpec], rows: &[Row]) -> Vec<TableModel> {
 }
 
 /// The title of the table of unit costs.
-pub const UNIT_COSTS: &str = "Unit costs fitted over this run's rows";
+const UNIT_COSTS: &str = "Unit costs fitted over this run's rows";
 
-/// The fits as a table: one row per tracer configuration, ns per operation.
+/// The fits as a table: one row per tracer configuration and ray kinds, ns per operation.
 fn unit_costs(fits: &[Fit]) -> Option<TableModel> {
     if fits.is_empty() {
         return None;
@@ -251,8 +250,9 @@ fn unit_costs(fits: &[Fit]) -> Option<TableModel> {
     columns.push("rms error %".to_string());
     Some(TableModel {
         title: UNIT_COSTS.to_string(),
-        caption: "Each tracer configuration's fastest passes, row by row, modelled as the sum of \
-            its counted operations times their unit costs: non-negative least squares of the \
+        caption: "Each tracer configuration's fastest passes, per ray kind (kinds with too few \
+            rows apart together), row by row, modelled as the sum of its counted operations times \
+            their unit costs: non-negative least squares of the \
             relative error over the run's rows (a regression, not a calibrated kernel; \
             `record::cost_model`). A box test's cost includes its node's fetch and stack work; \
             \"rms error\" is how far the model is from the measured time of a row, in rms."
