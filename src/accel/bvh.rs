@@ -3,7 +3,8 @@
 //! and shallow trees; every node knows its depth for the per-depth histograms. Beyond the papers'
 //! plain SAH (`presplit = 0`, `spatial = 0`): early split clipping before the build (`presplit`,
 //! off by default) and spatial splits during it (`spatial_split`, the SBVH, on by default: with 32
-//! bins it gave the fewest visits of the settings measured, docs/REFERENCE.md); with either, a triangle may be referenced by several leaves, each holding the box of its part only.
+//! bins it gave the fewest visits of the settings measured, docs/REFERENCE.md); with either, a
+//! triangle may be referenced by several leaves, each holding the box of its part only.
 //! `sah_cost` measures the result. `builder = "embree"` builds the same layout with Embree's own
 //! builder instead (`accel::embree::build_bvh`), to tell tree quality from traversal speed.
 //!
@@ -118,8 +119,9 @@ impl BvhConfig {
         if builder.is_embree() {
             if let Some(key) = Self::RAYLAB_ONLY.iter().find(|k| p.0.contains_key(**k)) {
                 return Err(Error::usage(format!(
-                    "parameter {key} is not used by builder = \"embree\" (Embree's builder bins and \
-                     splits by its own rules; it reads leaf_size and max_depth only)"
+                    "parameter {key} is not used by builder = \"{}\" (Embree's builder bins and \
+                     splits by its own rules; it reads leaf_size and max_depth only)",
+                    builder.name()
                 )));
             }
         }
