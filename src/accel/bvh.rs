@@ -67,6 +67,11 @@ pub struct BvhConfig {
     /// children overlap by more than this fraction of the root's surface area (the paper's α;
     /// 0 disables them).
     pub spatial: f32,
+    /// Triangles per leaf block: the SAH prices a leaf's triangles in whole blocks (`leaf_price`)
+    /// and never splits a node of this many or fewer, so leaves fill the 4-triangle blocks the
+    /// wide single-ray walk tests at once (Embree's `sahBlockSize` and `minLeafSize`). 1: per
+    /// triangle, the plain SAH.
+    pub leaf_block: usize,
 }
 
 impl Default for BvhConfig {
@@ -78,6 +83,7 @@ impl Default for BvhConfig {
             bins: 32,
             presplit: 0.0,
             spatial: 1e-5,
+            leaf_block: 1,
         }
     }
 }
@@ -94,10 +100,11 @@ impl BvhConfig {
         "bins",
         "presplit",
         "spatial",
+        "leaf_block",
     ];
     /// The parameters only our builder reads: setting one with `builder = "embree"` is an error
     /// rather than a silent no-op (Embree bins and splits by its own rules).
-    pub const RAYLAB_ONLY: &'static [&'static str] = &["bins", "presplit", "spatial"];
+    pub const RAYLAB_ONLY: &'static [&'static str] = &["bins", "presplit", "spatial", "leaf_block"];
     /// Embree's `RTC_BUILD_MAX_PRIMITIVES_PER_LEAF`: its builder's largest leaf.
     pub const EMBREE_LEAF_LIMIT: usize = 32;
     /// Triangles per leaf block of Embree's triangle scenes (`Triangle4`): `embree-blocks`
@@ -132,6 +139,7 @@ impl BvhConfig {
             bins: p.get_or("bins", d.bins)?,
             presplit: p.get_or("presplit", d.presplit)?,
             spatial: p.get_or("spatial", d.spatial)?,
+            leaf_block: p.get_or("leaf_block", d.leaf_block)?,
         };
         let presplit_ok = c.presplit.is_finite() && (0.0..=16.0).contains(&c.presplit);
         let spatial_ok = c.spatial.is_finite() && (0.0..=1.0).contains(&c.spatial);
@@ -151,13 +159,14 @@ impl BvhConfig {
             )));
         }
         if c.max_leaf_size == 0
+            || !(1..=c.max_leaf_size).contains(&c.leaf_block)
             || !(2..=Self::BINS_LIMIT).contains(&c.bins)
             || c.max_depth > Self::DEPTH_LIMIT
             || !presplit_ok
             || !spatial_ok
         {
             return Err(Error::usage(format!(
-                "BVH parameters out of range: leaf_size ≥ 1, bins in [2, {}], max_depth ≤ {}, presplit in [0, 16], spatial in [0, 1] (got {c:?})",
+                "BVH parameters out of range: leaf_size ≥ 1, leaf_block in [1, leaf_size], bins in [2, {}], max_depth ≤ {}, presplit in [0, 16], spatial in [0, 1] (got {c:?})",
                 Self::BINS_LIMIT,
                 Self::DEPTH_LIMIT
             )));
@@ -269,12 +278,14 @@ impl Builder<'_> {
     ) -> Option<(Vec<Reference>, Vec<Reference>)> {
         let count = refs.len();
         let config = self.config;
-        if count > 1 && (self.depth[index] as usize) < config.max_depth.min(BvhConfig::DEPTH_LIMIT)
+        if count > config.leaf_block
+            && (self.depth[index] as usize) < config.max_depth.min(BvhConfig::DEPTH_LIMIT)
         {
             let centre_bounds = refs
                 .iter()
                 .fold(Aabb::EMPTY, |b, r| b.grow(r.bounds.center()));
-            let object = best_split(&refs, &centre_bounds, &mut self.bins);
+            let price = |n: usize| leaf_price(n, config.leaf_block);
+            let object = best_split(&refs, &centre_bounds, &mut self.bins, price);
             let must_split = count > config.max_leaf_size;
             let spatial = object
                 .as_ref()
@@ -286,10 +297,10 @@ impl Builder<'_> {
                 })
                 .and_then(|o| {
                     let bounds = self.nodes[index].bounds;
-                    best_spatial_split(&refs, self.triangles, &bounds, config.bins)
+                    best_spatial_split(&refs, self.triangles, &bounds, config.bins, price)
                         .filter(|s| s.cost < o.cost)
                 });
-            let leaf_cost = count as f32;
+            let leaf_cost = price(count);
             if let Some(s) = spatial.filter(|s| must_split || s.cost < leaf_cost) {
                 let (left, right) = apply_spatial_split(refs, self.triangles, &s);
                 let added = (left.len() + right.len()).saturating_sub(count);
@@ -493,13 +504,26 @@ impl Bvh {
     }
 }
 
+/// The SAH's intersection cost of `count` triangles tested in blocks of `block`: whole blocks, a
+/// block costing as many triangles as it holds (Embree's `sahBlockSize`); `block = 1`: the count.
+#[inline(always)]
+pub fn leaf_price(count: usize, block: usize) -> f32 {
+    count.div_ceil(block.max(1)) as f32 * block.max(1) as f32
+}
+
 #[inline(always)]
 fn bin_of(c: f32, lo: f32, extent: f32, bins: usize) -> usize {
     (((c - lo) / extent * bins as f32) as usize).min(bins - 1)
 }
 
 /// The cheapest SAH plane over all axes and bins, or `None` when every centroid is the same point.
-fn best_split(refs: &[Reference], centre_bounds: &Aabb, bins: &mut [[Bin; 3]]) -> Option<Split> {
+/// `price`: a side's intersection cost from its triangle count (`leaf_price`).
+fn best_split(
+    refs: &[Reference],
+    centre_bounds: &Aabb,
+    bins: &mut [[Bin; 3]],
+    price: impl Fn(usize) -> f32,
+) -> Option<Split> {
     let nb = bins.len();
     let extent = centre_bounds.extent();
     bins.fill([EMPTY_BIN; 3]);
@@ -537,10 +561,11 @@ fn best_split(refs: &[Reference], centre_bounds: &Aabb, bins: &mut [[Bin; 3]]) -
             if cnt == 0 || right_count[k] == 0 {
                 continue;
             }
-            // Traversal cost 1, intersection cost 1 per triangle, relative to the parent's area.
+            // Traversal cost 1, intersection cost `price`, relative to the parent's area.
             let right = right_bounds[k];
             let cost = 1.0
-                + (acc.surface_area() * cnt as f32 + right.surface_area() * right_count[k] as f32)
+                + (acc.surface_area() * price(cnt as usize)
+                    + right.surface_area() * price(right_count[k] as usize))
                     / parent_area;
             if best.as_ref().is_none_or(|b| cost < b.cost) {
                 best = Some(Split {
@@ -900,12 +925,69 @@ mod tests {
             ("bins", "100000"),
             ("leaf_size", "0"),
             ("presplit", "17"),
+            ("leaf_block", "0"),
+            ("leaf_block", "5"),
         ] {
             let err = BvhConfig::from_params(&Params::new().with(key, value)).unwrap_err();
             assert_eq!(err.exit_code(), 2, "{key} = {value}: {err}");
         }
         let ok = BvhConfig::from_params(&Params::new().with("spatial", 1e-5)).unwrap();
         assert_eq!(ok.spatial, 1e-5);
+    }
+
+    /// Block pricing by hand: a side costs its triangles rounded up to whole blocks. Eight far
+    /// apart triangles in two clusters of four: per triangle, SAH splits down to single
+    /// triangles; priced in blocks of 4, a node of 4 or fewer is never split, so the tree is the
+    /// two clusters as two full leaves. In a random soup no node of 4 or fewer is split.
+    #[test]
+    fn leaves_priced_in_blocks_fill_them() {
+        assert_eq!(leaf_price(5, 4), 8.0);
+        assert_eq!(leaf_price(4, 4), 4.0);
+        assert_eq!(leaf_price(3, 1), 3.0);
+        let tris: Vec<Triangle> = (0..8)
+            .map(|i| {
+                let p = Vec3::new((i / 4) as f32 * 100.0 + (i % 4) as f32 * 3.0, 0.0, 0.0);
+                Triangle::new(p, p + Vec3::X, p + Vec3::Y)
+            })
+            .collect();
+        let plain = BvhConfig {
+            spatial: 0.0,
+            ..BvhConfig::default()
+        };
+        let blocks = BvhConfig {
+            leaf_block: 4,
+            ..plain
+        };
+        let leaves = |config| {
+            let bvh = Bvh::build(&tris, config);
+            let mut counts: Vec<u32> = bvh
+                .nodes
+                .iter()
+                .filter(|n| n.is_leaf())
+                .map(|n| n.count)
+                .collect();
+            counts.sort_unstable();
+            counts
+        };
+        assert_eq!(leaves(plain), [1; 8]);
+        assert_eq!(leaves(blocks), [4, 4]);
+        let soup = grid_of_triangles(3000);
+        let bvh = Bvh::build(&soup, blocks);
+        check_invariants(&soup, &bvh);
+        fn below(bvh: &Bvh, i: usize) -> u32 {
+            let node = &bvh.nodes[i];
+            match node.is_leaf() {
+                true => node.count,
+                false => below(bvh, node.first as usize) + below(bvh, node.first as usize + 1),
+            }
+        }
+        for i in (0..bvh.nodes.len()).filter(|&i| !bvh.nodes[i].is_leaf()) {
+            assert!(
+                below(&bvh, i) > 4,
+                "node {i} of {} was split",
+                below(&bvh, i)
+            );
+        }
     }
 
     #[test]

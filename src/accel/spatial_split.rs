@@ -20,7 +20,7 @@ use crate::geometry::{Aabb, Triangle};
 pub struct SpatialSplit {
     pub axis: usize,
     pub plane: f32,
-    /// SAH cost in the builder's units: 1 + (A_L·N_L + A_R·N_R) / A_parent.
+    /// SAH cost in the builder's units: 1 + (A_L·price(N_L) + A_R·price(N_R)) / A_parent.
     pub cost: f32,
     /// Box of the left side's pieces and its reference count (straddling ones counted on both).
     pub left: Aabb,
@@ -105,6 +105,7 @@ pub fn best_spatial_split(
     triangles: &[Triangle],
     bounds: &Aabb,
     bins: usize,
+    price: impl Fn(usize) -> f32,
 ) -> Option<SpatialSplit> {
     let parent_area = bounds.surface_area().max(f32::MIN_POSITIVE);
     let n = refs.len();
@@ -147,7 +148,7 @@ pub fn best_spatial_split(
                 continue;
             }
             let cost = 1.0
-                + (acc.surface_area() * cnt as f32 + rb.surface_area() * rc as f32) / parent_area;
+                + (acc.surface_area() * price(cnt) + rb.surface_area() * price(rc)) / parent_area;
             if best.as_ref().is_none_or(|b| cost < b.cost) {
                 best = Some(SpatialSplit {
                     axis,
@@ -292,7 +293,8 @@ mod tests {
             })
             .collect();
         let bounds = refs.iter().fold(Aabb::EMPTY, |b, r| b.union(r.bounds));
-        let split = best_spatial_split(&refs, &tris, &bounds, 16).expect("a spatial split");
+        let split =
+            best_spatial_split(&refs, &tris, &bounds, 16, |n| n as f32).expect("a spatial split");
         assert_eq!(split.axis, 0, "{split:?}");
         assert_eq!((split.left_count, split.right_count), (3, 3), "{split:?}");
         assert!((0.5..=7.5).contains(&split.plane), "{split:?}");

@@ -5,8 +5,11 @@
 //! Collapse: each wide node starts from a binary interior node's two children and repeatedly
 //! replaces the interior child of largest surface area by its two children until it has `W`
 //! children or only leaves are left (the usual greedy collapse). Leaves are the binary tree's
-//! leaves, unchanged: their triangle ranges index the binary tree's `triangles`, so the wide tree
-//! adds only nodes and shares every triangle with the tree it came from.
+//! leaves, their triangles also copied into runs of 4-triangle blocks (`TriangleBlock`, Embree's
+//! `Triangle4`), each leaf's run allocated as its wide node is made, so a node's leaf blocks lie
+//! together: the wide single-ray walk tests a block's four triangles at once, and the tracers that
+//! test triangles one at a time read the leaf's range of the binary tree's `triangles`
+//! (`WideBvh::triangles`), which each block records.
 //!
 //! Layout: child boxes in structure-of-arrays lanes (`lo[axis][child]`, `hi[axis][child]`), so a
 //! slab test of one ray interval against all children is a handful of W-wide vector operations.
@@ -20,15 +23,19 @@
 //! collapse took it in and the child slots below it — so a traversal that reached a binary node
 //! (the stream tracer's single-ray hand-off) can go on in the wide tree from there.
 
-use super::bvh::Bvh;
+use std::ops::Range;
 
-/// One child slot: an interior wide node, a leaf's triangle range, or nothing.
+use super::bvh::Bvh;
+use crate::lanes::triangle_block::{TriangleBlock, BLOCK};
+
+/// One child slot: an interior wide node, a leaf, or nothing.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum WideChild {
     Node(u32),
-    /// Triangles `first .. first + count` of the binary tree's `triangles`.
+    /// `count` triangles in blocks `block .. block + ⌈count / 4⌉` of the wide tree's `blocks`
+    /// (`WideBvh::triangles`: their range of the binary tree's `triangles`).
     Leaf {
-        first: u32,
+        block: u32,
         count: u32,
     },
     Empty,
@@ -36,7 +43,7 @@ pub enum WideChild {
 
 /// A wide node: its children's boxes in structure-of-arrays lanes and their references.
 ///
-/// A child's reference is `(first, count)`: a leaf is `(first triangle, count ≥ 1)`, an interior
+/// A child's reference is `(first, count)`: a leaf is `(first block, count ≥ 1)`, an interior
 /// child `(node index, 0)`, an empty slot `(0, 0)`. Node 0 is the root, nobody's child, so an
 /// interior child's index is never 0 and the three kinds never meet. Both lanes are u32: a leaf
 /// is usually at most `BvhConfig::max_leaf_size` triangles, but one cut at `max_depth` holds
@@ -67,7 +74,7 @@ impl<const W: usize> WideNode<W> {
         match (self.first[c], self.count[c]) {
             (0, 0) => WideChild::Empty,
             (node, 0) => WideChild::Node(node),
-            (first, count) => WideChild::Leaf { first, count },
+            (block, count) => WideChild::Leaf { block, count },
         }
     }
 
@@ -79,9 +86,9 @@ impl<const W: usize> WideNode<W> {
                 assert_ne!(node, 0, "the root is nobody's child");
                 (node, 0)
             }
-            WideChild::Leaf { first, count } => {
+            WideChild::Leaf { block, count } => {
                 assert_ne!(count, 0, "a leaf holds at least one triangle");
-                (first, count)
+                (block, count)
             }
             WideChild::Empty => (0, 0),
         };
@@ -143,6 +150,8 @@ pub struct WideBvh<const W: usize> {
     /// node a wide node was made from (the root among them) is all of that node's slots, so its
     /// box is not tested again; any other is the slots it was opened into, or its own slot.
     pub entry: Vec<WideEntry>,
+    /// The leaves' triangles, four to a block, each leaf's run of blocks starting a new block.
+    pub blocks: Vec<TriangleBlock>,
 }
 
 impl<const W: usize> WideBvh<W> {
@@ -154,6 +163,7 @@ impl<const W: usize> WideBvh<W> {
             nodes: Vec::new(),
             depth: Vec::new(),
             entry: vec![WideEntry::default(); bvh.nodes.len()],
+            blocks: Vec::new(),
         };
         if bvh.is_empty() {
             return wide;
@@ -170,7 +180,7 @@ impl<const W: usize> WideBvh<W> {
                 let binary = &bvh.nodes[b];
                 let child = if binary.is_leaf() {
                     WideChild::Leaf {
-                        first: binary.first,
+                        block: wide.add_blocks(bvh, binary.first, binary.count),
                         count: binary.count,
                     }
                 } else {
@@ -191,6 +201,26 @@ impl<const W: usize> WideBvh<W> {
 
     pub fn is_empty(&self) -> bool {
         self.nodes.is_empty()
+    }
+
+    /// The range of the binary tree's `triangles` that the leaf of `count` triangles in blocks
+    /// from `block` holds.
+    #[inline(always)]
+    pub fn triangles(&self, block: u32, count: u32) -> Range<usize> {
+        let first = self.blocks[block as usize].triangle[0] as usize;
+        first..first + count as usize
+    }
+
+    /// Appends the blocks of `bvh`'s triangles `first .. first + count`; returns the first's index.
+    fn add_blocks(&mut self, bvh: &Bvh, first: u32, count: u32) -> u32 {
+        let at = self.blocks.len() as u32;
+        let range = first as usize..(first + count) as usize;
+        let (tris, prims) = (&bvh.triangles[range.clone()], &bvh.prim_ids[range]);
+        for (i, (tris, prims)) in tris.chunks(BLOCK).zip(prims.chunks(BLOCK)).enumerate() {
+            let index = first + (i * BLOCK) as u32;
+            self.blocks.push(TriangleBlock::new(tris, prims, index));
+        }
+        at
     }
 }
 
@@ -294,8 +324,16 @@ mod tests {
     ) -> Aabb {
         match child {
             WideChild::Empty => Aabb::EMPTY,
-            WideChild::Leaf { first, count } => {
+            WideChild::Leaf { block, count } => {
+                let first = wide.triangles(block, count).start as u32;
                 ranges.push((first, count));
+                // Its blocks hold its triangles, in order, with their ids.
+                for (i, t) in wide.triangles(block, count).enumerate() {
+                    let b = &wide.blocks[block as usize + i / BLOCK];
+                    assert_eq!(b.triangle(i % BLOCK), bvh.triangles[t]);
+                    assert_eq!(b.prim[i % BLOCK], bvh.prim_ids[t]);
+                    assert_eq!(b.triangle[i % BLOCK] as usize, t);
+                }
                 // The binary leaf's box: with early split clipping or spatial splits a triangle may
                 // stick out of it (only its clipped piece is inside), so the triangles' own boxes
                 // are checked only on unsplit trees.
@@ -415,14 +453,14 @@ mod tests {
         let kinds = [
             WideChild::Node(1),
             WideChild::Node(u32::MAX),
-            WideChild::Leaf { first: 0, count: 1 },
+            WideChild::Leaf { block: 0, count: 1 },
             WideChild::Leaf {
-                first: 7,
+                block: 7,
                 count: BvhConfig::default().max_leaf_size as u32,
             },
             // Beyond any u8 or u16 count: a leaf cut at `max_depth` may hold this many.
             WideChild::Leaf {
-                first: u32::MAX - 70_000,
+                block: u32::MAX - 70_000,
                 count: 70_000,
             },
             WideChild::Empty,
@@ -525,7 +563,7 @@ mod tests {
         assert_eq!(wide.nodes.len(), 1);
         assert_eq!(
             wide.nodes[0].child(0),
-            WideChild::Leaf { first: 0, count: 1 }
+            WideChild::Leaf { block: 0, count: 1 }
         );
         assert!(WideBvh::<4>::collapse(&spaced_leaves(0)).is_empty());
     }

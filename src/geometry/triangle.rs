@@ -87,7 +87,7 @@ pub fn axis_component(x: [f32; 3], k: usize) -> f32 {
 /// and Embree's robust test agree to 10⁻⁹; the stability suite's slivers were off by up to
 /// 2·10⁻⁴ relative, or on the wrong side of the origin, at 2⁻¹⁰. f64 edge functions from the
 /// same sheared coordinates are accurate to ~10⁻⁸.
-const ILL_CONDITIONED: f32 = 1.0 / 16.0;
+pub const ILL_CONDITIONED: f32 = 1.0 / 16.0;
 
 /// |cx·by| + |ax·cy| + |bx·ay|: one product of each edge function (U = cx·by − cy·bx, …). Where
 /// an edge function cancels, its two products are nearly equal, so this is half the scale of

@@ -25,6 +25,8 @@
 //! - `stream`: in-place compaction and partition of a stream of rays in SoA columns by a lane
 //!   predicate — what coherent grid traversal drops finished rays with, and what stream filtering
 //!   (Gribble & Ramani 2008) is built on.
+//! - `triangle_block`: four triangles of a leaf in one SoA block, and one ray's test against all
+//!   four, bit for bit the scalar leaf (the wide single-ray walk's leaves).
 //! - `prefetch`: cache prefetch hints (an instruction on x86-64, nothing elsewhere).
 //! - `min_max`: running per-lane bounds of a stream (the frusta's extremes); `lowest` and
 //!   `highest` of one lane array.
@@ -44,6 +46,7 @@ mod shared_frame;
 mod simd_ray;
 pub mod slab;
 pub mod stream;
+pub mod triangle_block;
 pub mod vector;
 pub mod watertight;
 

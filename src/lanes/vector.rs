@@ -47,6 +47,8 @@ pub trait Vector:
     fn lt(self, y: Self) -> Self::Mask;
     fn le(self, y: Self) -> Self::Mask;
     fn gt(self, y: Self) -> Self::Mask;
+    /// `self == y` (false where either is NaN, as `==`).
+    fn eq(self, y: Self) -> Self::Mask;
     /// `a` where `m`, else `b`.
     fn select(m: Self::Mask, a: Self, b: Self) -> Self;
     /// Lane `l`'s boolean as bit `l`.
@@ -265,6 +267,10 @@ mod portable {
             self.test(y, |a, b| a > b)
         }
         #[inline(always)]
+        fn eq(self, y: Self) -> BitMask {
+            self.test(y, |a, b| a == b)
+        }
+        #[inline(always)]
         fn select(m: BitMask, a: Self, b: Self) -> Self {
             Portable(std::array::from_fn(|l| {
                 if m.0 >> l & 1 == 1 {
@@ -355,6 +361,10 @@ mod avx512 {
         #[inline(always)]
         fn gt(self, y: Self) -> __mmask16 {
             unsafe { _mm512_cmp_ps_mask::<_CMP_GT_OQ>(self.0, y.0) }
+        }
+        #[inline(always)]
+        fn eq(self, y: Self) -> __mmask16 {
+            unsafe { _mm512_cmp_ps_mask::<_CMP_EQ_OQ>(self.0, y.0) }
         }
         #[inline(always)]
         fn select(m: __mmask16, a: Self, b: Self) -> Self {
@@ -488,6 +498,10 @@ mod avx2 {
         #[inline(always)]
         fn gt(self, y: Self) -> LaneMask {
             LaneMask(unsafe { _mm256_cmp_ps::<_CMP_GT_OQ>(self.0, y.0) })
+        }
+        #[inline(always)]
+        fn eq(self, y: Self) -> LaneMask {
+            LaneMask(unsafe { _mm256_cmp_ps::<_CMP_EQ_OQ>(self.0, y.0) })
         }
         #[inline(always)]
         fn select(m: LaneMask, a: Self, b: Self) -> Self {
@@ -636,6 +650,10 @@ mod sse {
         fn gt(self, y: Self) -> SseMask {
             SseMask(unsafe { _mm_cmpgt_ps(self.0, y.0) })
         }
+        #[inline(always)]
+        fn eq(self, y: Self) -> SseMask {
+            SseMask(unsafe { _mm_cmpeq_ps(self.0, y.0) })
+        }
         #[cfg(target_feature = "sse4.1")]
         #[inline(always)]
         fn select(m: SseMask, a: Self, b: Self) -> Self {
@@ -737,6 +755,7 @@ mod tests {
             assert_eq!(mask(vx.lt(vy)), reference(px.lt(py)));
             assert_eq!(mask(vx.le(vy)), reference(px.le(py)));
             assert_eq!(mask(vx.gt(vy)), reference(px.gt(py)));
+            assert_eq!(mask(vx.eq(vy)), reference(px.eq(py)));
             let (vm, pm) = (vx.lt(vz), px.lt(pz));
             assert_eq!(mask(vm & vx.gt(vy)), reference(pm & px.gt(py)));
             assert_eq!(mask(vm | vx.gt(vy)), reference(pm | px.gt(py)));
@@ -768,6 +787,8 @@ mod tests {
             [2.0, 1.0, 0.0, f32::NAN].map(f32::to_bits)
         );
         assert_eq!(Portable::<4>::bits(p.lt(q)), 0b0001);
+        // -0 equals +0, NaN equals nothing.
+        assert_eq!(Portable::<4>::bits(p.eq(q)), 0b0100);
         assert_eq!(Portable::<4>::bits(!p.lt(q)), 0b1110);
         assert_eq!(
             Portable::new([1.0, 2.0, 3.0, 4.0]).swap_halves().0,

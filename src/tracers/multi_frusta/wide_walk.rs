@@ -40,10 +40,10 @@ impl<const W: usize> FrustumTree for WideBvh<W> {
                 node: child,
                 depth: depth(child),
             },
-            WideChild::Leaf { first, count } => {
+            WideChild::Leaf { block, count } => {
                 let (lo, hi) = node.child_box(slot);
                 Step::Leaf(Leaf {
-                    first,
+                    first: self.triangles(block, count).start as u32,
                     count,
                     bounds: Aabb {
                         min: lo.into(),

@@ -107,13 +107,13 @@ pub fn traverse_wide<const W: usize, const L: usize, R: RayTests, S: Stats, cons
                     (node, ia) = (child, first);
                     break;
                 }
-                WideChild::Leaf { first: tri, count } => {
+                WideChild::Leaf { block, count } => {
                     // Only the SIMD rays that meet the leaf's box test its triangles (Masked's
                     // leaf step, Fig. 2): one box test saves a SIMD ray the triangle tests of
                     // every triangle of the leaf, where Ranged's `getLastHit` range would test
                     // every SIMD ray between the first and the last that meet it.
                     packet.keep_hitting(first, lo, hi, depth, stats);
-                    let triangles = tri as usize..(tri + count) as usize;
+                    let triangles = wide.triangles(block, count);
                     let active = ActiveRays::Alive;
                     if packet.leaf::<S, ANY>(tree, triangles, depth, active, stats) {
                         return;

@@ -7,7 +7,8 @@
 use std::sync::Arc;
 
 use crate::accel::{Bvh, BvhOfWidth, WideNodes, WideTree};
-use crate::geometry::{Hit, RayTests, Rays};
+use crate::geometry::{Hit, Rays};
+use crate::lanes::triangle_block::BlockTests;
 use crate::stats::Stats;
 use crate::tracers::reference::trace_subtree;
 use crate::tracers::wide_single::trace_wide;
@@ -34,7 +35,7 @@ impl Handoff {
     /// `input`'s eight columns at its index, scattered by the filters' reordering; the binary
     /// one needs the direction, which only `input` keeps. `R`: the box and triangle tests.
     #[inline(always)]
-    pub fn trace<R: RayTests, S: Stats, const ANY: bool, const L: usize>(
+    pub fn trace<R: BlockTests, S: Stats, const ANY: bool, const L: usize>(
         &self,
         bvh: &Bvh,
         node: u32,

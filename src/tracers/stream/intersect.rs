@@ -6,13 +6,14 @@
 //! dropped from the stream after the leaf; a group stops early once all its rays have hit.
 
 use crate::accel::BvhNode;
-use crate::geometry::{Hit, RayTests};
+use crate::geometry::Hit;
+use crate::lanes::triangle_block::BlockTests;
 use crate::stats::{Event, Owners, Stats};
 
 use super::traverse::{Answer, Walk};
 use super::width::Width;
 
-impl<const L: usize, const N: usize, A: Answer, R: RayTests> Walk<'_, L, N, A, R> {
+impl<const L: usize, const N: usize, A: Answer, R: BlockTests> Walk<'_, L, N, A, R> {
     /// Intersects the rays `0..len` with the triangles of `leaf` (at depth `depth`). Returns how
     /// many rays are still live, moved to the front.
     pub fn leaf<S: Stats>(

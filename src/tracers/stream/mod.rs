@@ -57,7 +57,8 @@ use std::sync::Arc;
 use crate::accel::{Bvh, BvhOfWidth, WideNodes};
 use crate::error::{Error, Result};
 use crate::geometry::robustness::robust_param;
-use crate::geometry::{Fast, Hit, RayTests, Rays, Robust};
+use crate::geometry::{Fast, Hit, Rays, Robust};
+use crate::lanes::triangle_block::BlockTests;
 use crate::lanes::{with_width, SimdRay};
 use crate::params::Params;
 use crate::stats::Stats;
@@ -198,7 +199,7 @@ impl StreamTracer {
 
     /// Traces `rays` stream by stream with width `N` on `L` lanes and the tests `R`, recording
     /// each ray's answer.
-    fn run<const L: usize, const N: usize, R: RayTests, S: Stats, A: Answer>(
+    fn run<const L: usize, const N: usize, R: BlockTests, S: Stats, A: Answer>(
         &self,
         rays: Rays<'_>,
         answers: &mut [A],

@@ -13,6 +13,7 @@ use std::marker::PhantomData;
 
 use crate::geometry::{Hit, RayTests, Rays, Triangle};
 use crate::lanes::stream::{partition_by, SoaRays};
+use crate::lanes::triangle_block::BlockTests;
 use crate::lanes::LaneMask;
 use crate::lanes::SimdRay;
 use crate::stats::{Owners, Stats};
@@ -41,7 +42,7 @@ pub trait Answer {
     /// One ray's traversal of the subtree under `node` for this query (`Handoff::trace::<ANY>`;
     /// `ray`: the stream, the ray's position in it, the chunk).
     #[inline(always)]
-    fn trace_single<R: RayTests, S: Stats, const L: usize>(
+    fn trace_single<R: BlockTests, S: Stats, const L: usize>(
         handoff: &Handoff,
         bvh: &Bvh,
         node: u32,
@@ -75,7 +76,7 @@ impl Answer for bool {
 
 /// One stream's walk through the tree: the tree, the chunk's rays, the stream, the leaf stage's
 /// lane groups, and the answers by ray index. `R`: the box and triangle tests (`robust`).
-pub struct Walk<'a, const L: usize, const N: usize, A: Answer, R: RayTests> {
+pub struct Walk<'a, const L: usize, const N: usize, A: Answer, R: BlockTests> {
     pub bvh: &'a Bvh,
     pub order: &'a ChildOrder,
     pub input: Rays<'a>,
@@ -91,7 +92,7 @@ pub struct Walk<'a, const L: usize, const N: usize, A: Answer, R: RayTests> {
     pub tests: PhantomData<R>,
 }
 
-impl<const L: usize, const N: usize, A: Answer, R: RayTests> Walk<'_, L, N, A, R> {
+impl<const L: usize, const N: usize, A: Answer, R: BlockTests> Walk<'_, L, N, A, R> {
     /// Fig. 3 `traverse(node, in_stream)` with the stream's rays `0..len` (`len > 0`). Returns
     /// how many of them are still live, moved to the front (all of them, but for occlusion).
     pub fn visit<S: Stats>(&mut self, node: u32, len: usize, stats: &mut S) -> usize {
@@ -125,7 +126,7 @@ impl<const L: usize, const N: usize, A: Answer, R: RayTests> Walk<'_, L, N, A, R
     }
 }
 
-impl<const L: usize, const N: usize, A: Answer, R: RayTests> Walk<'_, L, N, A, R> {
+impl<const L: usize, const N: usize, A: Answer, R: BlockTests> Walk<'_, L, N, A, R> {
     /// The rays `0..len`, which meet `node`'s box, each traverse its subtree alone, depth first
     /// (`handoff`: the reference tracer's traversal or the wide tree's, with the same hits). Returns how many are still
     /// live, moved to the front.

@@ -14,10 +14,12 @@
 //!   child whose entry lies beyond the closest hit found meanwhile is skipped untested. A pushed
 //!   child's node or leaf triangles are prefetched (a wide node spans four cache lines and the
 //!   walk is bound by their loads: the siblings' misses overlap).
-//! - **Leaves**: the reference tracer's leaf stage (`reference::intersect_leaf`: the watertight
-//!   test, in the leaf's order, moving triangles at the ray's time), and the slab verdicts are the
-//!   reference's, so every ray gets the reference's closest hit (up to the order in which
-//!   triangles at exactly equal distance are met). Occlusion stops at the first hit.
+//! - **Leaves**: blocks of four triangles, each tested against the ray at once (`leaf`; Embree's
+//!   `Triangle4`), finding bit for bit what the reference tracer's leaf stage finds
+//!   (`reference::intersect_leaf`: the watertight test, in the leaf's order; moving triangles at
+//!   the ray's time, by that stage itself), and the slab verdicts are the reference's, so every
+//!   ray gets the reference's closest hit (up to the order in which triangles at exactly equal
+//!   distance are met). Occlusion stops at the first hit.
 //! - **`robust`**: `true` (default) as above; `false` (`R = Fast`) plain slabs and Möller–Trumbore,
 //!   as Embree's non-robust mode, for a like-for-like comparison with it (`geometry::robustness`):
 //!   then the hits are `reference`'s with `robust = false`.
@@ -26,6 +28,7 @@
 //! whose triangles are; `aabb_test(depth)` per child slot tested (the children's depth);
 //! `triangle_test(depth)` per triangle tested.
 
+mod leaf;
 mod slab;
 
 use std::marker::PhantomData;
@@ -34,12 +37,14 @@ use std::sync::Arc;
 
 use crate::accel::{Bvh, BvhConfig, WideBvh, WideEntry, WideNode, WideNodes, WideTree};
 use crate::error::{Error, Result};
-use crate::geometry::{Hit, Ray, RayTests, Robust, Triangle};
+use crate::geometry::{Hit, Ray, RayTests, Robust};
 use crate::lanes::prefetch::{self, Level};
+use crate::lanes::triangle_block::BlockTests;
 use crate::params::Params;
 use crate::stats::Stats;
 use crate::tracers::kernel::SingleRayKernel;
-use crate::tracers::reference::{intersect_leaf, LeafRange, LeafRay};
+use crate::tracers::reference::LeafRay;
+use leaf::WideLeaf;
 
 pub use slab::WideRayTest;
 
@@ -93,7 +98,7 @@ impl Width {
     }
 }
 
-impl<R: RayTests> SingleRayKernel for WideSingleTracer<R> {
+impl<R: BlockTests> SingleRayKernel for WideSingleTracer<R> {
     #[inline(always)]
     fn trace<S: Stats, const ANY: bool>(&self, ray: &Ray, stats: &mut S) -> Hit {
         if S::ENABLED {
@@ -109,7 +114,7 @@ impl<R: RayTests> SingleRayKernel for WideSingleTracer<R> {
 
 /// `ray` from the root of `wide` (a miss for an empty tree).
 #[inline(always)]
-fn trace_from_root<const W: usize, R: RayTests, S: Stats, const ANY: bool>(
+fn trace_from_root<const W: usize, R: BlockTests, S: Stats, const ANY: bool>(
     bvh: &Bvh,
     wide: &WideBvh<W>,
     ray: &Ray,
@@ -142,8 +147,9 @@ impl<R: RayTests> WideRay<R> {
     }
 }
 
-/// A child waiting on the stack: an interior wide node (`count = 0`: node `first`) or a leaf's
-/// triangles, and the distance at which the ray enters its box. 12 bytes: its depth (counters
+/// A child waiting on the stack: an interior wide node (`count = 0`: node `first`) or a leaf
+/// (`count` triangles in the blocks from `first`), and the distance at which the ray enters its
+/// box. 12 bytes: its depth (counters
 /// only) waits beside it in an array the uncounted traversal never touches.
 #[derive(Clone, Copy)]
 struct Pending {
@@ -161,42 +167,6 @@ fn prefetch_node<const W: usize>(node: &WideNode<W>) {
     }
 }
 
-/// Asks for the cache lines of a leaf's triangles `first .. first + count` (at most
-/// `LEAF_PREFETCH_LINES`: a leaf is usually a few triangles, one cut at `max_depth` may be many).
-#[inline(always)]
-fn prefetch_triangles(bvh: &Bvh, first: u32, count: u32) {
-    let tris = &bvh.triangles[first as usize..];
-    let base = tris.as_ptr() as *const u8;
-    let bytes = (count as usize).min(tris.len()) * std::mem::size_of::<Triangle>();
-    // From the line holding the first byte to the one holding the last.
-    let (start, end) = (base as usize & !63, (base as usize + bytes - 1) & !63);
-    for line in (start..=end)
-        .step_by(prefetch::LINE)
-        .take(LEAF_PREFETCH_LINES)
-    {
-        prefetch::line(line as *const u8, Level::Near);
-    }
-}
-
-/// Lines of a leaf's triangles asked for ahead (four 36-byte triangles span at most 3).
-const LEAF_PREFETCH_LINES: usize = 3;
-
-/// A leaf's triangles (`intersect_leaf`), counted as a node at its depth: whether to stop.
-#[inline(always)]
-fn visit_leaf<R: RayTests, S: Stats, const ANY: bool>(
-    bvh: &Bvh,
-    ray: &LeafRay<R>,
-    leaf: LeafRange,
-    tmax: &mut f32,
-    best: &mut Hit,
-    stats: &mut S,
-) -> bool {
-    if S::ENABLED {
-        stats.node(leaf.depth);
-    }
-    intersect_leaf::<R, S, ANY>(bvh, ray, leaf, tmax, best, stats)
-}
-
 /// The widest node this traversal takes.
 const MAX_WIDTH: usize = 8;
 
@@ -210,7 +180,7 @@ const STACK: usize = MAX_WIDTH * (BvhConfig::DEPTH_LIMIT + 2);
 /// ray.tmax]`, or a miss. `wide` was collapsed from `bvh`, whose triangles the leaves index.
 /// `R`: the box and triangle tests.
 #[inline(always)]
-pub fn trace_wide<const W: usize, R: RayTests, S: Stats, const ANY: bool>(
+pub fn trace_wide<const W: usize, R: BlockTests, S: Stats, const ANY: bool>(
     bvh: &Bvh,
     wide: &WideBvh<W>,
     start: WideEntry,
@@ -278,7 +248,7 @@ pub fn trace_wide<const W: usize, R: RayTests, S: Stats, const ANY: bool>(
             if child.count == 0 {
                 prefetch_node(&wide.nodes[child.first as usize]);
             } else {
-                prefetch_triangles(bvh, child.first, child.count);
+                leaf::prefetch(wide, child.first);
             }
             let mut at = top;
             // SAFETY: entries base..top were written by this loop.
@@ -304,12 +274,13 @@ pub fn trace_wide<const W: usize, R: RayTests, S: Stats, const ANY: bool>(
                 (node, slots) = (cell.first[c], u32::MAX);
                 continue;
             }
-            let leaf = LeafRange {
-                first: cell.first[c],
+            let leaf = WideLeaf {
+                block: cell.first[c],
                 count: cell.count[c],
                 depth: depth as usize + 1,
             };
-            if visit_leaf::<R, S, ANY>(bvh, &ray.leaf, leaf, &mut tmax, &mut best, stats) {
+            if leaf::visit::<W, R, S, ANY>(bvh, wide, &ray.leaf, leaf, &mut tmax, &mut best, stats)
+            {
                 return best;
             }
         }
@@ -329,8 +300,8 @@ pub fn trace_wide<const W: usize, R: RayTests, S: Stats, const ANY: bool>(
                 (node, slots) = (next.first, u32::MAX);
                 break;
             }
-            let leaf = LeafRange {
-                first: next.first,
+            let leaf = WideLeaf {
+                block: next.first,
                 count: next.count,
                 depth: if S::ENABLED {
                     unsafe { depths[top].assume_init() as usize }
@@ -338,7 +309,8 @@ pub fn trace_wide<const W: usize, R: RayTests, S: Stats, const ANY: bool>(
                     0
                 },
             };
-            if visit_leaf::<R, S, ANY>(bvh, &ray.leaf, leaf, &mut tmax, &mut best, stats) {
+            if leaf::visit::<W, R, S, ANY>(bvh, wide, &ray.leaf, leaf, &mut tmax, &mut best, stats)
+            {
                 return best;
             }
         }
