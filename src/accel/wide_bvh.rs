@@ -152,6 +152,11 @@ pub struct WideBvh<const W: usize> {
     pub entry: Vec<WideEntry>,
     /// The leaves' triangles, four to a block, each leaf's run of blocks starting a new block.
     pub blocks: Vec<TriangleBlock>,
+    /// Each block's first triangle in the binary tree's `triangles` (`blocks[b].triangle[0]`),
+    /// in an array of its own: 4 bytes a block, so the tracers that read a leaf's triangles one
+    /// at a time find its range without loading its 176-byte block (packets with `width = 8`
+    /// on conference's camera rays were 13% slower reading it from the block).
+    first_triangle: Vec<u32>,
 }
 
 impl<const W: usize> WideBvh<W> {
@@ -164,6 +169,7 @@ impl<const W: usize> WideBvh<W> {
             depth: Vec::new(),
             entry: vec![WideEntry::default(); bvh.nodes.len()],
             blocks: Vec::new(),
+            first_triangle: Vec::new(),
         };
         if bvh.is_empty() {
             return wide;
@@ -207,7 +213,7 @@ impl<const W: usize> WideBvh<W> {
     /// from `block` holds.
     #[inline(always)]
     pub fn triangles(&self, block: u32, count: u32) -> Range<usize> {
-        let first = self.blocks[block as usize].triangle[0] as usize;
+        let first = self.first_triangle[block as usize] as usize;
         first..first + count as usize
     }
 
@@ -219,6 +225,7 @@ impl<const W: usize> WideBvh<W> {
         for (i, (tris, prims)) in tris.chunks(BLOCK).zip(prims.chunks(BLOCK)).enumerate() {
             let index = first + (i * BLOCK) as u32;
             self.blocks.push(TriangleBlock::new(tris, prims, index));
+            self.first_triangle.push(index);
         }
         at
     }
