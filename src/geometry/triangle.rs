@@ -191,23 +191,36 @@ impl WatertightRay {
             return None;
         }
         let t_scaled = u * sz * a[kz] + v * sz * b[kz] + w * sz * c[kz];
-        // Compare before dividing: t = t_scaled / det lies in [tmin, tmax].
-        let (t_scaled, abs_det) = if det < 0.0 {
-            (-t_scaled, -det)
-        } else {
-            (t_scaled, det)
-        };
-        if t_scaled < tmin * abs_det || t_scaled > tmax * abs_det {
-            return None;
-        }
-        let inv = 1.0 / det;
-        let t = t_scaled / abs_det;
-        if !t.is_finite() {
-            return None;
-        }
-        // Embree convention: u weights v1, v weights v2.
-        Some((t, v * inv, w * inv))
+        watertight_hit(u, v, w, t_scaled, tmin, tmax)
     }
+}
+
+/// The watertight test's last stage, from the edge functions `u, v, w` of a ray inside the
+/// triangle with `u + v + w ≠ 0` and its scaled distance `t_scaled`: `(t, u, v)` if
+/// `t = t_scaled / (u + v + w)` lies in `[tmin, tmax]`, compared before dividing. Shared with the
+/// 4-triangle block test (`lanes::triangle_block`), which finishes its hitting lanes here.
+#[inline(always)]
+pub fn watertight_hit(
+    u: f32,
+    v: f32,
+    w: f32,
+    t_scaled: f32,
+    tmin: f32,
+    tmax: f32,
+) -> Option<(f32, f32, f32)> {
+    let det = u + v + w;
+    let (t_scaled, abs_det) = if det < 0.0 {
+        (-t_scaled, -det)
+    } else {
+        (t_scaled, det)
+    };
+    if t_scaled < tmin * abs_det || t_scaled > tmax * abs_det {
+        return None;
+    }
+    let inv = 1.0 / det;
+    let t = t_scaled / abs_det;
+    // Embree convention: u weights v1, v weights v2.
+    t.is_finite().then_some((t, v * inv, w * inv))
 }
 
 #[cfg(test)]
