@@ -44,14 +44,17 @@ pub fn child_pairs(nodes: &[BvhNode]) -> Vec<ChildPair> {
         .collect()
 }
 
-/// A ray prepared for child-pair tests. Per axis, a negative direction (sign bit, so −0.0 counts)
-/// swaps the min/max halves so lanes come out as `[near_l, near_r, far_l, far_r]`; far lanes are
-/// then scaled by `−FAR_SCALE` (`RayTests::FAR_SCALE`: 1 for plain slabs) so that one running
-/// `max` computes both the entry distance and the (negated) exit distance.
+/// A ray prepared for child-pair tests. Per axis, the plane lanes `[min_l, min_r, max_l, max_r]`
+/// are multiplied by the reciprocal direction in the near lanes and by its negated far scaling
+/// (`−inv·FAR_SCALE`, `RayTests::FAR_SCALE`: 1 for plain slabs) in the far ones, so that one
+/// running `max` computes both the entry distance and the (negated) exit distance; a negative
+/// direction (sign bit, so −0.0 counts) has its near planes in the max lanes, so its factors are
+/// the other way round and its halves are swapped after the product, giving
+/// `[near_l, near_r, −far_l, −far_r]` either way.
 #[derive(Clone, Copy)]
 pub struct PairRayTest {
     ray: BroadcastRay<Lanes4>,
-    far_sign: Lanes4,
+    factor: [Lanes4; 3],
 }
 
 impl PairRayTest {
@@ -64,10 +67,17 @@ impl PairRayTest {
     /// The test with `R`'s slabs: conservative (`Robust`) or plain (`Fast`).
     #[inline(always)]
     pub fn with<R: RayTests>(origin: Vec3, dir: Vec3) -> Self {
-        PairRayTest {
-            ray: BroadcastRay::new(origin, dir),
-            far_sign: Lanes4::new([1.0, 1.0, -R::FAR_SCALE, -R::FAR_SCALE]),
-        }
+        let inv = Vec3::ONE / dir;
+        let ray = BroadcastRay::from_inv(origin, inv);
+        let factor = [0, 1, 2].map(|a| {
+            let (near, far) = (inv[a], -(inv[a] * R::FAR_SCALE));
+            Lanes4::new(if ray.negative[a] {
+                [far, far, near, near]
+            } else {
+                [near, near, far, far]
+            })
+        });
+        PairRayTest { ray, factor }
     }
 
     /// Entry distances into the left and right child and which of them the ray hits within
@@ -80,13 +90,13 @@ impl PairRayTest {
     pub fn test(&self, pair: &ChildPair, tmin: f32, tmax: f32) -> ([f32; 2], u32) {
         let mut acc = Lanes4::new([tmin, tmin, -tmax, -tmax]);
         for (axis, planes) in [&pair.x, &pair.y, &pair.z].into_iter().enumerate() {
-            let t = (Lanes4::load(planes, 0) - self.ray.origin[axis]) * self.ray.inv_dir[axis];
+            let t = (Lanes4::load(planes, 0) - self.ray.origin[axis]) * self.factor[axis];
             let t = if self.ray.negative[axis] {
                 t.swap_halves()
             } else {
                 t
             };
-            acc = (t * self.far_sign).max(acc);
+            acc = t.max(acc);
         }
         let exit = Lanes4::splat(0.0) - acc.swap_halves();
         let hit = (Lanes4::bits(acc.le(exit)) & 0b11) as u32;

@@ -87,7 +87,12 @@ impl Aabb {
 }
 
 /// `1 + 2γ(3)`, γ(n) = nε/(1 − nε) with ε = 2⁻²⁴: scaling the far slab distance by it makes the
-/// slab test conservative under f32 rounding (Ize 2013, §3; pbrt-v4 `Bounds3::IntersectP`).
+/// slab test conservative under f32 rounding (Ize 2013, §3; pbrt-v4 `Bounds3::IntersectP`). The
+/// scale is applied to the ray's reciprocal direction, once per ray (`(plane − o)·(inv·scale)`,
+/// as Embree's robust `rdir_far`), rather than to every far distance (`(plane − o)·inv·scale`):
+/// both put the same four roundings (reciprocal, difference, two products) between the exact
+/// distance times the scale and the computed one, so Ize's bound covers both, and the per-ray
+/// form takes a multiplication off every box test's dependent chain.
 pub const FAR_SCALE: f32 =
     1.0 + 2.0 * (3.0 * (f32::EPSILON * 0.5) / (1.0 - 3.0 * (f32::EPSILON * 0.5)));
 
@@ -125,8 +130,8 @@ impl RayBoxTest {
         self.hit_with::<Robust>(b, tmin, tmax)
     }
 
-    /// `hit` with the far distances scaled by `R::FAR_SCALE`: conservative (`Robust`) or plain
-    /// (`Fast`, `robust = false`).
+    /// `hit` with the far distances taken by the reciprocal direction scaled by `R::FAR_SCALE`
+    /// (`FAR_SCALE`'s doc): conservative (`Robust`) or plain (`Fast`, `robust = false`).
     #[inline(always)]
     pub fn hit_with<R: RayTests>(&self, b: &Aabb, tmin: f32, tmax: f32) -> Option<f32> {
         let (nx, fx) = if self.neg[0] {
@@ -146,14 +151,15 @@ impl RayBoxTest {
         };
         let o = self.origin;
         let i = self.inv_dir;
+        let f = i * R::FAR_SCALE;
         let enter = tmin
             .max((nx - o.x) * i.x)
             .max((ny - o.y) * i.y)
             .max((nz - o.z) * i.z);
         let exit = tmax
-            .min((fx - o.x) * i.x * R::FAR_SCALE)
-            .min((fy - o.y) * i.y * R::FAR_SCALE)
-            .min((fz - o.z) * i.z * R::FAR_SCALE);
+            .min((fx - o.x) * f.x)
+            .min((fy - o.y) * f.y)
+            .min((fz - o.z) * f.z);
         (enter <= exit).then_some(enter)
     }
 }

@@ -1,6 +1,7 @@
 //! The ray–box slab test (as `RayBoxTest::hit_with`) for `L` rays at once: near and far planes
-//! chosen by the sign bit of each lane's direction, far distances scaled by the tests' `FAR_SCALE`
-//! (`R = Robust`: the conservative test of Ize 2013; `Fast`: plain slabs), and running max/min written `if t > acc { t } else { acc }`, which ignores a NaN
+//! chosen by the sign bit of each lane's direction, far distances taken by the reciprocal
+//! direction scaled by the tests' `FAR_SCALE` (`R = Robust`: the conservative test of Ize 2013;
+//! `Fast`: plain slabs), and running max/min written `if t > acc { t } else { acc }`, which ignores a NaN
 //! `t` like `f32::max` does (0·∞ when an origin lies on a slab plane). Each lane performs the
 //! scalar test's operations in its order, so each lane's verdict is the scalar test's.
 
@@ -34,14 +35,13 @@ impl<const L: usize> SlabRays<'_, L> {
             let (mut en, mut ex) = (self.tmin[l], self.tmax[l]);
             for a in 0..3 {
                 let (o, inv) = (self.origin[a][l], self.inv_dir[a][l]);
-                let t_lo = (lo[a] - o) * inv;
-                let t_hi = (hi[a] - o) * inv;
                 let (near, far) = if self.negative[a][l] != 0 {
-                    (t_hi, t_lo)
+                    (hi[a], lo[a])
                 } else {
-                    (t_lo, t_hi)
+                    (lo[a], hi[a])
                 };
-                let far = far * R::FAR_SCALE;
+                let near = (near - o) * inv;
+                let far = (far - o) * (inv * R::FAR_SCALE);
                 en = if near > en { near } else { en };
                 ex = if far < ex { far } else { ex };
             }

@@ -4,8 +4,9 @@
 //! slab test run on intervals gives a range of entry and exit distances that contains every ray's.
 //! When even the earliest possible entry lies beyond the latest possible exit, no ray hits the box.
 //!
-//! Exactness: the slab test's rounded operations (`(plane − o)·inv`, then `·FAR_SCALE`) are
-//! monotone in each argument, so the rounded products at the corners of the intervals bound each
+//! Exactness: the slab test's rounded operations (`(plane − o)·inv`, and `(plane − o)·(inv·FAR_SCALE)`
+//! for the far plane) are monotone in each argument, so the rounded products at the corners of
+//! the intervals (the far ones with each reciprocal bound scaled as the ray's is) bound each
 //! ray's own rounded values, and the cull never rejects a box the ray's `RayBoxTest` would accept.
 //! An axis is used only when every ray's reciprocal direction on it is finite and has the same sign
 //! bit (mixed signs or zero components: that axis does not restrict the packet).
@@ -135,19 +136,14 @@ impl IntervalPacket {
             } else {
                 (lo[a], hi[a])
             };
-            let corners = |plane: f32| {
+            let corners = |plane: f32, scale: f32| {
                 let (x0, x1) = (plane - self.origin_hi[a], plane - self.origin_lo[a]);
-                [
-                    x0 * self.inv_lo[a],
-                    x0 * self.inv_hi[a],
-                    x1 * self.inv_lo[a],
-                    x1 * self.inv_hi[a],
-                ]
+                let (i0, i1) = (self.inv_lo[a] * scale, self.inv_hi[a] * scale);
+                [x0 * i0, x0 * i1, x1 * i0, x1 * i1]
             };
-            let near_min = corners(near).into_iter().fold(f32::INFINITY, f32::min);
-            let far_max = corners(far)
+            let near_min = corners(near, 1.0).into_iter().fold(f32::INFINITY, f32::min);
+            let far_max = corners(far, FAR_SCALE)
                 .into_iter()
-                .map(|t| t * FAR_SCALE)
                 .fold(f32::NEG_INFINITY, f32::max);
             enter = enter.max(near_min);
             exit = exit.min(far_max);
@@ -184,6 +180,7 @@ impl IntervalPacket {
                 self.inv_lo[a],
                 self.inv_hi[a],
             );
+            let (f_lo, f_hi) = (i_lo * FAR_SCALE, i_hi * FAR_SCALE);
             for b in 0..W {
                 let (x0, x1) = (near[b] - o_hi, near[b] - o_lo);
                 let near_min = f32::INFINITY
@@ -193,10 +190,10 @@ impl IntervalPacket {
                     .min(x1 * i_hi);
                 let (y0, y1) = (far[b] - o_hi, far[b] - o_lo);
                 let far_max = f32::NEG_INFINITY
-                    .max(y0 * i_lo * FAR_SCALE)
-                    .max(y0 * i_hi * FAR_SCALE)
-                    .max(y1 * i_lo * FAR_SCALE)
-                    .max(y1 * i_hi * FAR_SCALE);
+                    .max(y0 * f_lo)
+                    .max(y0 * f_hi)
+                    .max(y1 * f_lo)
+                    .max(y1 * f_hi);
                 enter[b] = enter[b].max(near_min);
                 exit[b] = exit[b].min(far_max);
             }

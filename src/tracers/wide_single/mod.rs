@@ -131,7 +131,7 @@ fn trace_from_root<const W: usize, R: BlockTests, S: Stats, const ANY: bool>(
 /// reads, and its segment's end.
 #[derive(Clone, Copy)]
 pub struct WideRay<R: RayTests = Robust> {
-    pub boxes: WideRayTest,
+    pub boxes: WideRayTest<R>,
     pub leaf: LeafRay<R>,
     pub tmax: f32,
 }
@@ -215,7 +215,7 @@ pub fn trace_wide<const W: usize, R: BlockTests, S: Stats, const ANY: bool>(
             let tested = (slots & cell.used()).count_ones();
             (0..tested).for_each(|_| stats.aabb_test(depth as usize + 1));
         }
-        let (enter, hit) = boxes.test::<R, W>(cell, tmin, tmax);
+        let (enter, hit) = boxes.test::<W>(cell, tmin, tmax);
         let mut hit = hit & slots;
         // The child entered at once, without a stack round trip (0: none): a lone one met (the
         // common case on incoherent rays); for occlusion, the last one met, the others pushed

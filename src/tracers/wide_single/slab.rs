@@ -3,10 +3,10 @@
 //! the boxes in the lanes instead of the rays. Per axis the near and far planes are picked by the
 //! ray's direction sign bit (so −0.0 counts as negative), once per ray as rows of the node's
 //! planes, and every lane runs the scalar test's operations in its order — `(plane − origin) ·
-//! inverse direction`, far distances scaled by `FAR_SCALE`, running max/min that ignore a NaN
-//! (`0·∞` for an origin on a slab plane) — so each child's verdict is `RayBoxTest`'s. With
-//! `robust = false` (`Fast`) the far distances are not scaled: plain slabs, each verdict
-//! `RayBoxTest::hit_with::<Fast>`'s.
+//! inverse direction`, the far planes' by the inverse direction scaled by `FAR_SCALE` once per
+//! ray, running max/min that ignore a NaN (`0·∞` for an origin on a slab plane) — so each child's
+//! verdict is `RayBoxTest`'s. With `robust = false` (`Fast`) the far distances are not scaled:
+//! plain slabs, each verdict `RayBoxTest::hit_with::<Fast>`'s.
 //!
 //! Written with explicit vectors (`lanes::vector`) on groups of children, not as lane loops over
 //! `[f32; W]`: LLVM's SLP vectorizer split those loops' far-plane half into scalar loads and
@@ -15,6 +15,8 @@
 //! over `Vector`: groups of 8 children in `Avx2` where the build has AVX2 (`target-cpu=native` on
 //! the AVX2 and AVX-512 machines the project runs on), so an 8-wide node is one pass; otherwise
 //! groups of 4 in `Lanes4` (the x86-64 baseline, as `child_pairs`).
+
+use std::marker::PhantomData;
 
 use glam::Vec3;
 
@@ -25,22 +27,26 @@ use crate::lanes::vector::Avx2;
 use crate::lanes::vector::{Lanes4, Vector};
 use crate::lanes::BroadcastRay;
 
-/// A ray prepared for wide-node tests: origin and reciprocal direction broadcast per axis, in SSE
-/// lanes and (AVX2 builds) AVX lanes.
+/// A ray prepared for wide-node tests with `R`'s slabs (conservative or plain): origin,
+/// reciprocal direction and the far planes' scaled reciprocal broadcast per axis, in SSE lanes
+/// and (AVX2 builds) AVX lanes.
 #[derive(Clone, Copy)]
-pub struct WideRayTest {
+pub struct WideRayTest<R: RayTests> {
     sse: BroadcastRay<Lanes4>,
+    /// `inv_dir · R::FAR_SCALE` per axis (`geometry::aabb::FAR_SCALE`'s doc).
+    sse_far: [Lanes4; 3],
     /// Per axis, the rows of `WideNode::planes` holding the near and far planes: the low planes
     /// `a` and high `3 + a` for a direction of positive sign, the other way round for a negative
     /// one (Embree's per-ray `nearX`/`farX` offsets). Each is below 6 (`from_inv`).
     rows: [[usize; 3]; 2],
-    /// Origin and reciprocal direction in AVX lanes; the sign bits are `sse`'s (a second copy
-    /// cost every ray its stores: 0.2% more instructions on diffuse rays).
+    /// Origin, reciprocal direction and its far scaling in AVX lanes; the sign bits are `sse`'s
+    /// (a second copy cost every ray its stores: 0.2% more instructions on diffuse rays).
     #[cfg(target_feature = "avx2")]
-    avx: [[Avx2; 3]; 2],
+    avx: [[Avx2; 3]; 3],
+    tests: PhantomData<R>,
 }
 
-impl WideRayTest {
+impl<R: RayTests> WideRayTest<R> {
     #[inline(always)]
     pub fn new(origin: Vec3, dir: Vec3) -> Self {
         Self::from_inv(origin, Vec3::ONE / dir)
@@ -50,6 +56,7 @@ impl WideRayTest {
     #[inline(always)]
     pub fn from_inv(origin: Vec3, inv: Vec3) -> Self {
         let sse = BroadcastRay::from_inv(origin, inv);
+        let far = inv * R::FAR_SCALE;
         let near = sse.negative.map(usize::from);
         let rows = [
             [3 * near[0], 1 + 3 * near[1], 2 + 3 * near[2]],
@@ -57,17 +64,19 @@ impl WideRayTest {
         ];
         WideRayTest {
             sse,
+            sse_far: far.to_array().map(Lanes4::splat),
             rows,
             #[cfg(target_feature = "avx2")]
-            avx: [origin, inv].map(|v| v.to_array().map(Avx2::splat)),
+            avx: [origin, inv, far].map(|v| v.to_array().map(Avx2::splat)),
+            tests: PhantomData,
         }
     }
 
     /// Each child's entry distance (clipped to `tmin`) and which children the ray meets within
     /// `[tmin, tmax]` (bit `c`: child `c`; empty slots never). `W` is a multiple of 4; a multiple
-    /// of 8 is tested 8 children at a time on AVX2 builds. `R`: conservative or plain slabs.
+    /// of 8 is tested 8 children at a time on AVX2 builds.
     #[inline(always)]
-    pub fn test<R: RayTests, const W: usize>(
+    pub fn test<const W: usize>(
         &self,
         node: &WideNode<W>,
         tmin: f32,
@@ -75,21 +84,26 @@ impl WideRayTest {
     ) -> ([f32; W], u32) {
         #[cfg(target_feature = "avx2")]
         if W.is_multiple_of(8) {
-            return test_in::<R, _, W>(&self.avx, &self.rows, node, tmin, tmax);
+            return test_in::<_, W>(&self.avx, &self.rows, node, tmin, tmax);
         }
-        let sse = [self.sse.origin, self.sse.inv_dir];
-        test_in::<R, _, W>(&sse, &self.rows, node, tmin, tmax)
+        test_in::<_, W>(&self.sse_lanes(), &self.rows, node, tmin, tmax)
+    }
+
+    /// The ray's SSE lanes as `test_in` reads them.
+    #[inline(always)]
+    fn sse_lanes(&self) -> [[Lanes4; 3]; 3] {
+        [self.sse.origin, self.sse.inv_dir, self.sse_far]
     }
 }
 
-/// `WideRayTest::test` in groups of `V::WIDTH` children, the ray's origin and reciprocal
-/// direction broadcast to `V`'s lanes (`[origin, inv_dir][axis]`), its near and far plane rows
-/// `[near, far][axis]` (`WideRayTest::rows`, each below 6). Per lane the operations of
-/// `RayBoxTest::hit_with::<R>`: `max`/`min` are MAXPS/MINPS (`Vector`), which return their second
+/// `WideRayTest::test` in groups of `V::WIDTH` children, the ray's origin, reciprocal direction
+/// and its far scaling broadcast to `V`'s lanes (`[origin, inv_dir, inv_far][axis]`), its near and
+/// far plane rows `[near, far][axis]` (`WideRayTest::rows`, each below 6). Per lane the operations
+/// of `RayBoxTest::hit_with`: `max`/`min` are MAXPS/MINPS (`Vector`), which return their second
 /// operand when either is NaN, and `le` is ordered (false on NaN).
 #[inline(always)]
-fn test_in<R: RayTests, V: Vector, const W: usize>(
-    [origin, inv_dir]: &[[V; 3]; 2],
+fn test_in<V: Vector, const W: usize>(
+    [origin, inv_dir, inv_far]: &[[V; 3]; 3],
     [near_rows, far_rows]: &[[usize; 3]; 2],
     node: &WideNode<W>,
     tmin: f32,
@@ -103,7 +117,6 @@ fn test_in<R: RayTests, V: Vector, const W: usize>(
     );
     let mut enter = [0.0f32; W];
     let mut hit = 0u32;
-    let far_scale = V::splat(R::FAR_SCALE);
     let planes = node.planes();
     for group in (0..W).step_by(V::WIDTH) {
         let mut near_max = V::splat(tmin);
@@ -116,12 +129,12 @@ fn test_in<R: RayTests, V: Vector, const W: usize>(
                     planes.get_unchecked(far_rows[a]),
                 )
             };
-            let (o, inv) = (origin[a], inv_dir[a]);
-            let t_near = (V::load(near, group) - o) * inv;
-            let t_far = (V::load(far, group) - o) * inv;
+            let o = origin[a];
+            let t_near = (V::load(near, group) - o) * inv_dir[a];
+            let t_far = (V::load(far, group) - o) * inv_far[a];
             // The new plane first, so a NaN leaves the interval as it was.
             near_max = t_near.max(near_max);
-            far_min = (t_far * far_scale).min(far_min);
+            far_min = t_far.min(far_min);
         }
         near_max.store(&mut enter[group..]);
         hit |= (V::bits(near_max.le(far_min)) as u32) << group;
@@ -151,37 +164,47 @@ mod tests {
         node
     }
 
-    /// The node tests this build has for `W = 8`: SSE groups of 4 (every build), AVX2 groups of
-    /// 8 (AVX2 builds), and `test`'s pick between them; with conservative slabs (`robust`
-    /// true) and plain ones.
+    /// The node tests this build has for `W = 8`, each of the ray `(o, d)`: SSE groups of 4
+    /// (every build), AVX2 groups of 8 (AVX2 builds), and `test`'s pick between them; with
+    /// conservative slabs (`robust` true) and plain ones.
     fn eight_wide_tests() -> Vec<(&'static str, bool, EightWideTest)> {
         vec![
-            ("test", true, |r, n, t0, t1| r.test::<Robust, 8>(n, t0, t1)),
-            ("sse", true, |r, n, t0, t1| {
-                test_in::<Robust, _, 8>(&sse(r), &r.rows, n, t0, t1)
+            ("test", true, |o, d, n, t0, t1| {
+                WideRayTest::<Robust>::new(o, d).test(n, t0, t1)
+            }),
+            ("sse", true, |o, d, n, t0, t1| {
+                sse::<Robust>(o, d, n, t0, t1)
             }),
             #[cfg(target_feature = "avx2")]
-            ("avx2", true, |r, n, t0, t1| {
-                test_in::<Robust, _, 8>(&r.avx, &r.rows, n, t0, t1)
+            ("avx2", true, |o, d, n, t0, t1| {
+                avx2::<Robust>(o, d, n, t0, t1)
             }),
-            ("fast test", false, |r, n, t0, t1| {
-                r.test::<Fast, 8>(n, t0, t1)
+            ("fast test", false, |o, d, n, t0, t1| {
+                WideRayTest::<Fast>::new(o, d).test(n, t0, t1)
             }),
-            ("fast sse", false, |r, n, t0, t1| {
-                test_in::<Fast, _, 8>(&sse(r), &r.rows, n, t0, t1)
+            ("fast sse", false, |o, d, n, t0, t1| {
+                sse::<Fast>(o, d, n, t0, t1)
             }),
             #[cfg(target_feature = "avx2")]
-            ("fast avx2", false, |r, n, t0, t1| {
-                test_in::<Fast, _, 8>(&r.avx, &r.rows, n, t0, t1)
+            ("fast avx2", false, |o, d, n, t0, t1| {
+                avx2::<Fast>(o, d, n, t0, t1)
             }),
         ]
     }
 
-    type EightWideTest = fn(&WideRayTest, &WideNode<8>, f32, f32) -> ([f32; 8], u32);
+    type EightWideTest = fn(Vec3, Vec3, &WideNode<8>, f32, f32) -> ([f32; 8], u32);
 
-    /// The ray's SSE lanes as `test_in` reads them.
-    fn sse(r: &WideRayTest) -> [[Lanes4; 3]; 2] {
-        [r.sse.origin, r.sse.inv_dir]
+    /// The ray's test in SSE groups of 4.
+    fn sse<R: RayTests>(o: Vec3, d: Vec3, n: &WideNode<8>, t0: f32, t1: f32) -> ([f32; 8], u32) {
+        let r = WideRayTest::<R>::new(o, d);
+        test_in::<_, 8>(&r.sse_lanes(), &r.rows, n, t0, t1)
+    }
+
+    /// The ray's test in AVX2 groups of 8.
+    #[cfg(target_feature = "avx2")]
+    fn avx2<R: RayTests>(o: Vec3, d: Vec3, n: &WideNode<8>, t0: f32, t1: f32) -> ([f32; 8], u32) {
+        let r = WideRayTest::<R>::new(o, d);
+        test_in::<_, 8>(&r.avx, &r.rows, n, t0, t1)
     }
 
     /// `tested`'s verdict and entry distance for every child of `node` (its boxes `boxes`) are
@@ -235,7 +258,7 @@ mod tests {
             for o in origins {
                 for d in dirs {
                     for interval in [(0.0, f32::INFINITY), (0.0, 1.2), (2.0, 10.0)] {
-                        let tested = test(&WideRayTest::new(o, d), &node, interval.0, interval.1);
+                        let tested = test(o, d, &node, interval.0, interval.1);
                         hits +=
                             agrees_with_scalar((tested, robust), &boxes, (o, d), interval, name);
                     }
@@ -248,7 +271,7 @@ mod tests {
             &[Triangle::new(Vec3::ZERO, Vec3::X, Vec3::Y)],
             BvhConfig::default(),
         ));
-        let (_, mask) = WideRayTest::new(Vec3::new(0.2, 0.2, 1.0), -Vec3::Z).test::<Robust, 4>(
+        let (_, mask) = WideRayTest::<Robust>::new(Vec3::new(0.2, 0.2, 1.0), -Vec3::Z).test::<4>(
             &four.nodes[0],
             0.0,
             f32::INFINITY,
@@ -287,10 +310,9 @@ mod tests {
             } else {
                 f32::INFINITY
             };
-            let ray = WideRayTest::new(o, d);
             for (name, robust, test) in eight_wide_tests() {
                 met += agrees_with_scalar(
-                    (test(&ray, &node, tmin, tmax), robust),
+                    (test(o, d, &node, tmin, tmax), robust),
                     &boxes,
                     (o, d),
                     (tmin, tmax),
