@@ -112,23 +112,18 @@ impl WatertightRay {
     #[inline(always)]
     pub fn new(origin: Vec3, dir: Vec3) -> Self {
         let a = dir.abs();
-        let kz = if a.x >= a.y && a.x >= a.z {
-            0
-        } else if a.y >= a.z {
-            1
-        } else {
-            2
-        };
-        let next = |k: usize| if k == 2 { 0 } else { k + 1 };
+        // The axis of the largest |component| (ties to x, then y) and the other two in the order
+        // that keeps the triangle's winding when that component is negative, by selects rather
+        // than branches: on incoherent rays the branches' outcome is random.
+        let is_x = (a.x >= a.y) & (a.x >= a.z);
+        let is_y = !is_x & (a.y >= a.z);
+        let kz = usize::from(!is_x) * (1 + usize::from(!is_y));
         let d = dir.to_array();
-        let pick = |k: usize| axis_component(d, k);
-        let dz = pick(kz);
-        // Swap to keep the winding of the triangle when dir[kz] is negative.
-        let (kx, ky) = if dz < 0.0 {
-            (next(next(kz)), next(kz))
-        } else {
-            (next(kz), next(next(kz)))
-        };
+        let dz = d[kz];
+        // [kx, ky] for each kz, positive then negative dz.
+        const AXES: [[usize; 2]; 6] = [[1, 2], [2, 0], [0, 1], [2, 1], [0, 2], [1, 0]];
+        let [kx, ky] = AXES[kz + 3 * usize::from(dz < 0.0)];
+        let pick = |k: usize| d[k];
         WatertightRay {
             origin: origin.to_array(),
             k: [kx, ky, kz],
@@ -318,5 +313,32 @@ mod tests {
         );
         assert!(shoot(Vec3::new(1.0, 0.2, 0.2), Vec3::new(-1.0, 0.0, -0.0), &t).is_some());
         assert!(shoot(Vec3::new(-1.0, 0.2, 0.2), Vec3::new(1.0, -0.0, -0.0), &t).is_some());
+    }
+
+    /// The frame is Woop et al.'s: `kz` the axis of the largest |component| (ties to the lower
+    /// axis), `kx, ky` the next two in cyclic order, swapped when that component is negative
+    /// (−0.0 is not), and the shear from the picked components; on ties, zeros and both signs.
+    #[test]
+    fn frame_is_the_largest_axis_with_winding_kept() {
+        let values = [0.0, -0.0, 1.0, -1.0, 0.5, -2.0, 2.0];
+        for x in values {
+            for y in values {
+                for z in values {
+                    let d = [x, y, z];
+                    let a = d.map(f32::abs);
+                    let kz = (0..3).fold(0, |best, k| if a[k] > a[best] { k } else { best });
+                    let (next, after) = ((kz + 1) % 3, (kz + 2) % 3);
+                    let (kx, ky) = if d[kz] < 0.0 {
+                        (after, next)
+                    } else {
+                        (next, after)
+                    };
+                    let (_, k, shear) = WatertightRay::new(Vec3::ZERO, Vec3::from(d)).parts();
+                    assert_eq!(k, [kx, ky, kz], "dir {d:?}");
+                    let want = [d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]];
+                    assert_eq!(shear.map(f32::to_bits), want.map(f32::to_bits), "dir {d:?}");
+                }
+            }
+        }
     }
 }
