@@ -9,7 +9,7 @@
 //! `Triangle4`), each leaf's run allocated as its wide node is made, so a node's leaf blocks lie
 //! together: the wide single-ray walk tests a block's four triangles at once, and the tracers that
 //! test triangles one at a time read the leaf's range of the binary tree's `triangles`
-//! (`WideBvh::triangles`), which each block records.
+//! (`WideBvh::triangles`), which the tree records per block.
 //!
 //! Layout: child boxes in structure-of-arrays lanes (`lo[axis][child]`, `hi[axis][child]`), so a
 //! slab test of one ray interval against all children is a handful of W-wide vector operations.
@@ -152,10 +152,9 @@ pub struct WideBvh<const W: usize> {
     pub entry: Vec<WideEntry>,
     /// The leaves' triangles, four to a block, each leaf's run of blocks starting a new block.
     pub blocks: Vec<TriangleBlock>,
-    /// Each block's first triangle in the binary tree's `triangles` (`blocks[b].triangle[0]`),
-    /// in an array of its own: 4 bytes a block, so the tracers that read a leaf's triangles one
-    /// at a time find its range without loading its 176-byte block (packets with `width = 8`
-    /// on conference's camera rays were 13% slower reading it from the block).
+    /// Each block's first triangle in the binary tree's `triangles`: where the tracers that read
+    /// a leaf's triangles one at a time find its range (`triangles`), 4 bytes a block beside the
+    /// 160-byte blocks they never load.
     first_triangle: Vec<u32>,
 }
 
@@ -224,7 +223,7 @@ impl<const W: usize> WideBvh<W> {
         let (tris, prims) = (&bvh.triangles[range.clone()], &bvh.prim_ids[range]);
         for (i, (tris, prims)) in tris.chunks(BLOCK).zip(prims.chunks(BLOCK)).enumerate() {
             let index = first + (i * BLOCK) as u32;
-            self.blocks.push(TriangleBlock::new(tris, prims, index));
+            self.blocks.push(TriangleBlock::new(tris, prims));
             self.first_triangle.push(index);
         }
         at
@@ -339,7 +338,6 @@ mod tests {
                     let b = &wide.blocks[block as usize + i / BLOCK];
                     assert_eq!(b.triangle(i % BLOCK), bvh.triangles[t]);
                     assert_eq!(b.prim[i % BLOCK], bvh.prim_ids[t]);
-                    assert_eq!(b.triangle[i % BLOCK] as usize, t);
                 }
                 // The binary leaf's box: with early split clipping or spatial splits a triangle may
                 // stick out of it (only its clipped piece is inside), so the triangles' own boxes

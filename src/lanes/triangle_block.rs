@@ -26,23 +26,23 @@ use crate::geometry::{Fast, RayTests, Robust, Triangle, WatertightRay};
 /// Triangles per block.
 pub const BLOCK: usize = 4;
 
-/// Up to four triangles: their vertices `v[vertex][axis][lane]`, the primitive id each hit
-/// reports and its index in the tree's triangle array (for the tracers that read triangles one
-/// at a time). A block of fewer than four repeats its last triangle in the unused lanes, so every
+/// Up to four triangles: their vertices `v[vertex][axis][lane]` and the primitive id each hit
+/// reports. A block of fewer than four repeats its last triangle in the unused lanes, so every
 /// lane holds a real triangle and no lane test meets an invented one; callers mask those lanes
-/// off. 176 bytes, as Embree's `Triangle4v` with its ids.
+/// off. 160 bytes at 32-byte alignment, so a block spans exactly three cache lines wherever it
+/// lies (Embree's `Triangle4v` with its ids is 176 bytes at 16, three or four lines).
 #[derive(Clone, Copy, Debug, PartialEq)]
-#[repr(C, align(16))]
+#[repr(C, align(32))]
 pub struct TriangleBlock {
     pub v: [[[f32; BLOCK]; 3]; 3],
     pub prim: [u32; BLOCK],
-    pub triangle: [u32; BLOCK],
 }
 
+const _: () = assert!(std::mem::size_of::<TriangleBlock>() == 160);
+
 impl TriangleBlock {
-    /// The block of `triangles` (1 to 4) with their primitive ids `prims`, the first being
-    /// triangle `first` of the tree's array.
-    pub fn new(triangles: &[Triangle], prims: &[u32], first: u32) -> Self {
+    /// The block of `triangles` (1 to 4) with their primitive ids `prims`.
+    pub fn new(triangles: &[Triangle], prims: &[u32]) -> Self {
         assert!(
             (1..=BLOCK).contains(&triangles.len()) && prims.len() == triangles.len(),
             "a block holds 1 to {BLOCK} triangles and their ids"
@@ -50,7 +50,6 @@ impl TriangleBlock {
         let mut block = TriangleBlock {
             v: [[[0.0; BLOCK]; 3]; 3],
             prim: [0; BLOCK],
-            triangle: [0; BLOCK],
         };
         for l in 0..BLOCK {
             let i = l.min(triangles.len() - 1);
@@ -60,7 +59,6 @@ impl TriangleBlock {
                 }
             }
             block.prim[l] = prims[i];
-            block.triangle[l] = first + i as u32;
         }
         block
     }
@@ -293,7 +291,7 @@ mod tests {
                 })
                 .collect();
             let prims: Vec<u32> = (0..count as u32).map(|i| 100 + i).collect();
-            let block = TriangleBlock::new(&tris, &prims, 7);
+            let block = TriangleBlock::new(&tris, &prims);
             let o = rng.vec3(-3.0, 3.0);
             let target = match round % 5 {
                 0 => p,
@@ -342,18 +340,16 @@ mod tests {
     }
 
     #[test]
-    fn a_short_block_repeats_its_last_triangle_and_records_ids() {
+    fn a_short_block_repeats_its_last_triangle_and_its_id() {
         let tris = [
             Triangle::new(Vec3::ZERO, Vec3::X, Vec3::Y),
             Triangle::new(Vec3::Z, Vec3::X, Vec3::Y),
         ];
-        let block = TriangleBlock::new(&tris, &[5, 9], 12);
+        let block = TriangleBlock::new(&tris, &[5, 9]);
         assert_eq!(block.prim, [5, 9, 9, 9]);
-        assert_eq!(block.triangle, [12, 13, 13, 13]);
         assert_eq!(block.triangle(0), tris[0]);
         assert_eq!(block.triangle(3), tris[1]);
         assert_eq!(used_lanes(2), 0b11);
         assert_eq!(used_lanes(9), 0b1111);
-        assert_eq!(std::mem::size_of::<TriangleBlock>(), 176);
     }
 }
