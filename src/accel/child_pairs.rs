@@ -10,7 +10,6 @@ use glam::Vec3;
 use super::bvh::BvhNode;
 use crate::geometry::{RayTests, Robust};
 use crate::lanes::vector::{Lanes4, Vector};
-use crate::lanes::BroadcastRay;
 
 #[derive(Clone, Copy, Debug, Default)]
 #[repr(C, align(64))]
@@ -53,7 +52,8 @@ pub fn child_pairs(nodes: &[BvhNode]) -> Vec<ChildPair> {
 /// `[near_l, near_r, −far_l, −far_r]` either way.
 #[derive(Clone, Copy)]
 pub struct PairRayTest {
-    ray: BroadcastRay<Lanes4>,
+    origin: [Lanes4; 3],
+    negative: [bool; 3],
     factor: [Lanes4; 3],
 }
 
@@ -68,16 +68,20 @@ impl PairRayTest {
     #[inline(always)]
     pub fn with<R: RayTests>(origin: Vec3, dir: Vec3) -> Self {
         let inv = Vec3::ONE / dir;
-        let ray = BroadcastRay::from_inv(origin, inv);
+        let negative = [0, 1, 2].map(|a| inv[a].is_sign_negative());
         let factor = [0, 1, 2].map(|a| {
             let (near, far) = (inv[a], -(inv[a] * R::FAR_SCALE));
-            Lanes4::new(if ray.negative[a] {
+            Lanes4::new(if negative[a] {
                 [far, far, near, near]
             } else {
                 [near, near, far, far]
             })
         });
-        PairRayTest { ray, factor }
+        PairRayTest {
+            origin: origin.to_array().map(Lanes4::splat),
+            negative,
+            factor,
+        }
     }
 
     /// Entry distances into the left and right child and which of them the ray hits within
@@ -90,8 +94,8 @@ impl PairRayTest {
     pub fn test(&self, pair: &ChildPair, tmin: f32, tmax: f32) -> ([f32; 2], u32) {
         let mut acc = Lanes4::new([tmin, tmin, -tmax, -tmax]);
         for (axis, planes) in [&pair.x, &pair.y, &pair.z].into_iter().enumerate() {
-            let t = (Lanes4::load(planes, 0) - self.ray.origin[axis]) * self.factor[axis];
-            let t = if self.ray.negative[axis] {
+            let t = (Lanes4::load(planes, 0) - self.origin[axis]) * self.factor[axis];
+            let t = if self.negative[axis] {
                 t.swap_halves()
             } else {
                 t

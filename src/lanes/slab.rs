@@ -1,9 +1,10 @@
 //! The ray–box slab test (as `RayBoxTest::hit_with`) for `L` rays at once: near and far planes
 //! chosen by the sign bit of each lane's direction, far distances taken by the reciprocal
 //! direction scaled by the tests' `FAR_SCALE` (`R = Robust`: the conservative test of Ize 2013;
-//! `Fast`: plain slabs), and running max/min written `if t > acc { t } else { acc }`, which ignores a NaN
-//! `t` like `f32::max` does (0·∞ when an origin lies on a slab plane). Each lane performs the
-//! scalar test's operations in its order, so each lane's verdict is the scalar test's.
+//! `Fast`: plain slabs), and running max/min written `if t > acc { t } else { acc }`, which
+//! ignores a NaN `t` like `f32::max` does (0·∞ when an origin lies on a slab plane). Each lane
+//! performs the scalar test's operations in its order, so each lane's verdict is the scalar
+//! test's.
 
 // Lane loops index several lane arrays in lock step: the indexed form is what LLVM vectorizes.
 #![allow(clippy::needless_range_loop)]

@@ -4,10 +4,11 @@
 //! slab test run on intervals gives a range of entry and exit distances that contains every ray's.
 //! When even the earliest possible entry lies beyond the latest possible exit, no ray hits the box.
 //!
-//! Exactness: the slab test's rounded operations (`(plane − o)·inv`, and `(plane − o)·(inv·FAR_SCALE)`
-//! for the far plane) are monotone in each argument, so the rounded products at the corners of
-//! the intervals (the far ones with each reciprocal bound scaled as the ray's is) bound each
-//! ray's own rounded values, and the cull never rejects a box the ray's `RayBoxTest` would accept.
+//! Exactness: the slab test's rounded operations (`(plane − o)·inv`, and for the far plane
+//! `(plane − o)·(inv·FAR_SCALE)`) are monotone in each argument, so the rounded products at the
+//! corners of the intervals (the far ones with each reciprocal bound scaled as a ray's is) bound
+//! each ray's own rounded values, and the cull never rejects a box the ray's `RayBoxTest` would
+//! accept.
 //! An axis is used only when every ray's reciprocal direction on it is finite and has the same sign
 //! bit (mixed signs or zero components: that axis does not restrict the packet).
 //!
